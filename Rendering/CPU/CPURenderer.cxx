@@ -1,0 +1,117 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "mcvol/CPURenderer.h"
+
+#include "mcvol/Integrator.h"
+
+#include <stdexcept>
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+namespace mcvol
+{
+namespace
+{
+CameraView toView(const Camera& c)
+{
+  CameraView v;
+  v.width = c.width;
+  v.height = c.height;
+  for (int i = 0; i < 16; ++i)
+  {
+    v.invViewProj[i] = c.invViewProj[i];
+  }
+  for (int i = 0; i < 12; ++i)
+  {
+    v.worldToIndex[i] = c.worldToIndex[i];
+  }
+  return v;
+}
+
+template <BlendMode Mode>
+void renderRows(const SceneView& s, const CameraView& cam, const FrameParams& fp, const float* depth, float* rgba,
+  uint32_t previous, int threads, RenderCounters* counters)
+{
+  uint64_t dda = 0, tentative = 0, real = 0, samples = 0;
+  const int W = cam.width;
+  const int H = cam.height;
+#pragma omp parallel num_threads(threads > 0 ? threads : omp_get_max_threads()) \
+  reduction(+ : dda, tentative, real, samples)
+  {
+    RayCounters c;
+#pragma omp for schedule(dynamic, 1)
+    for (int y = 0; y < H; ++y)
+    {
+      for (int x = 0; x < W; ++x)
+      {
+        const size_t p = size_t(y) * size_t(W) + size_t(x);
+        const float z = depth ? depth[p] : 1.f;
+        const Vec4f sum = renderPixel<Mode>(s, cam, fp, x, y, z, c);
+        accumulate(rgba + 4 * p, sum, previous, fp.samplesPerPixel);
+      }
+    }
+    dda += c.ddaSteps;
+    tentative += c.tentative;
+    real += c.real;
+    samples += c.samples;
+  }
+  if (counters)
+  {
+    counters->rays += uint64_t(W) * uint64_t(H) * uint64_t(fp.samplesPerPixel);
+    counters->ddaSteps += dda;
+    counters->tentativeCollisions += tentative;
+    counters->realCollisions += real;
+    counters->channelSamples += samples;
+  }
+}
+} // namespace
+
+void CPURenderer::render(const Scene& scene, const Camera& camera, const RenderSettings& settings,
+  const float* depth, Accumulator& accum, RenderCounters* counters)
+{
+  if (camera.width <= 0 || camera.height <= 0)
+  {
+    throw std::invalid_argument("mcvol: the image size must be positive");
+  }
+  if (accum.width() != camera.width || accum.height() != camera.height)
+  {
+    accum.resize(camera.width, camera.height);
+  }
+  if (settings.samplesPerPixel < 1)
+  {
+    throw std::invalid_argument("mcvol: samples per pixel must be at least 1");
+  }
+  const SceneView& s = scene.view();
+  if (s.volume.numChannels == 0 || s.tables.size < 2 || !s.grid.majorants)
+  {
+    throw std::logic_error("mcvol: Scene::update() must succeed before rendering");
+  }
+  const CameraView cam = toView(camera);
+  FrameParams fp;
+  fp.samplesPerPixel = settings.samplesPerPixel;
+  fp.firstSample = accum.samples();
+  fp.seed = settings.seed;
+  fp.tracker = settings.tracker;
+  fp.jitter = settings.jitterPixels;
+  float* rgba = accum.rgba();
+  const uint32_t previous = accum.samples();
+  switch (s.blend.mode)
+  {
+    case BlendMode::Max:
+      renderRows<BlendMode::Max>(s, cam, fp, depth, rgba, previous, this->Threads, counters);
+      break;
+    case BlendMode::Mix:
+      renderRows<BlendMode::Mix>(s, cam, fp, depth, rgba, previous, this->Threads, counters);
+      break;
+    case BlendMode::Composite:
+      renderRows<BlendMode::Composite>(s, cam, fp, depth, rgba, previous, this->Threads, counters);
+      break;
+    case BlendMode::Density:
+    default:
+      renderRows<BlendMode::Density>(s, cam, fp, depth, rgba, previous, this->Threads, counters);
+      break;
+  }
+  accum.addSamples(uint32_t(settings.samplesPerPixel));
+}
+} // namespace mcvol

@@ -1,0 +1,23 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#pragma once
+
+#include "mcvol/Renderer.h"
+
+namespace mcvol
+{
+/// OpenMP backend: runs the core's per-pixel code over rows of the image.
+/// Threads never share random numbers, so the image does not depend on the
+/// thread count (OMP_NUM_THREADS or setThreads()).
+class CPURenderer final : public Renderer
+{
+public:
+  void render(const Scene& scene, const Camera& camera, const RenderSettings& settings, const float* depth,
+    Accumulator& accum, RenderCounters* counters = nullptr) override;
+  const char* name() const override { return "cpu"; }
+  /// 0 = OpenMP's default.
+  void setThreads(int n) { this->Threads = n; }
+
+private:
+  int Threads = 0;
+};
+} // namespace mcvol

@@ -1,0 +1,454 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "mcvol/Scene.h"
+
+#include "mcvol/Renderer.h"
+#include "mcvol/Sampling.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+namespace mcvol
+{
+namespace
+{
+double secondsSince(std::chrono::steady_clock::time_point t0)
+{
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+std::string channelText(int n)
+{
+  return "channel " + std::to_string(n);
+}
+
+template <typename T>
+void rangeOf(const T* data, int64_t stride, const int dims[3], const int lo[3], const int hi[3], float& mn, float& mx)
+{
+  for (int k = lo[2]; k <= hi[2]; ++k)
+  {
+    for (int j = lo[1]; j <= hi[1]; ++j)
+    {
+      const int64_t row = (int64_t(k) * dims[1] + j) * dims[0];
+      for (int i = lo[0]; i <= hi[0]; ++i)
+      {
+        const float v = float(data[(row + i) * stride]);
+        if (v == v) // NaN voxels are transparent: they do not widen the range
+        {
+          mn = v < mn ? v : mn;
+          mx = v > mx ? v : mx;
+        }
+      }
+    }
+  }
+}
+} // namespace
+
+float opacityToExtinction(float opacity, float unitDistance)
+{
+  const float a = std::min(std::max(opacity, 0.f), kMaxOpacity);
+  return float(-std::log1p(-double(a)) / double(unitDistance));
+}
+
+void Accumulator::resize(int width, int height)
+{
+  if (width < 0 || height < 0)
+  {
+    throw std::invalid_argument("mcvol: negative image size");
+  }
+  if (width != this->Width || height != this->Height)
+  {
+    this->Width = width;
+    this->Height = height;
+    this->RGBA.assign(size_t(width) * size_t(height) * 4, 0.f);
+    this->Samples = 0;
+  }
+}
+
+void Accumulator::reset()
+{
+  std::fill(this->RGBA.begin(), this->RGBA.end(), 0.f);
+  this->Samples = 0;
+}
+
+Scene::Scene()
+{
+  this->MixWeights.fill(0.f);
+}
+
+void Scene::setVolume(const int dims[3], int numChannels, const ChannelSource* channels)
+{
+  for (int a = 0; a < 3; ++a)
+  {
+    if (dims[a] < 1)
+    {
+      throw std::invalid_argument("mcvol: the volume has an empty extent (dimension " + std::to_string(a) + " is " +
+        std::to_string(dims[a]) + ")");
+    }
+  }
+  if (numChannels < 1 || numChannels > kMaxChannels)
+  {
+    throw std::invalid_argument("mcvol: " + std::to_string(numChannels) + " channels given; 1 to " +
+      std::to_string(kMaxChannels) + " are supported");
+  }
+  for (int n = 0; n < numChannels; ++n)
+  {
+    if (!channels[n].data)
+    {
+      throw std::invalid_argument("mcvol: " + channelText(n) + " has no data");
+    }
+    if (channels[n].stride < 1)
+    {
+      throw std::invalid_argument("mcvol: " + channelText(n) + " has a stride below 1");
+    }
+  }
+  const bool sameShape = numChannels == this->NumChannels && dims[0] == this->Dims[0] &&
+    dims[1] == this->Dims[1] && dims[2] == this->Dims[2];
+  std::copy(dims, dims + 3, this->Dims);
+  if (!sameShape)
+  {
+    this->HasTF.fill(false);
+  }
+  this->NumChannels = numChannels;
+  std::copy(channels, channels + numChannels, this->Channels.begin());
+  this->MacrocellsDirty = true;
+}
+
+void Scene::dataModified()
+{
+  this->MacrocellsDirty = true;
+}
+
+void Scene::setTransferFunction(int channel, const TransferFunctionDesc& tf)
+{
+  if (channel < 0 || channel >= this->NumChannels)
+  {
+    throw std::invalid_argument("mcvol: transfer function for " + channelText(channel) + ", but the volume has " +
+      std::to_string(this->NumChannels) + " channels");
+  }
+  const size_t K = tf.opacity.size();
+  if (K < 2 || tf.rgb.size() != 3 * K)
+  {
+    throw std::invalid_argument("mcvol: the transfer function of " + channelText(channel) +
+      " needs at least 2 opacity entries and 3 colour values per entry");
+  }
+  if (!(tf.unitDistance > 0.f) || !std::isfinite(tf.unitDistance))
+  {
+    throw std::invalid_argument(
+      "mcvol: the opacity unit distance of " + channelText(channel) + " must be a positive finite number");
+  }
+  if (!std::isfinite(tf.scalarMin) || !std::isfinite(tf.scalarMax) || !(tf.scalarMax >= tf.scalarMin))
+  {
+    throw std::invalid_argument("mcvol: the scalar range of " + channelText(channel) + "'s transfer function is invalid");
+  }
+  for (size_t i = 0; i < K; ++i)
+  {
+    if (!std::isfinite(tf.opacity[i]) || !std::isfinite(tf.rgb[3 * i]) || !std::isfinite(tf.rgb[3 * i + 1]) ||
+      !std::isfinite(tf.rgb[3 * i + 2]))
+    {
+      throw std::invalid_argument("mcvol: the transfer function of " + channelText(channel) + " has a non-finite entry");
+    }
+  }
+  const int Kcur = this->View.tables.size;
+  if (int(K) != Kcur)
+  {
+    for (int n = 0; n < this->NumChannels; ++n)
+    {
+      if (n != channel && this->HasTF[n])
+      {
+        throw std::invalid_argument("mcvol: all channels' transfer-function tables must have the same size (" +
+          std::to_string(Kcur) + " entries, " + channelText(channel) + " has " + std::to_string(K) + ")");
+      }
+    }
+    this->Tables.assign(size_t(kMaxChannels) * K * 4, 0.f);
+    this->View.tables.size = int(K);
+  }
+  float* t = this->Tables.data() + size_t(channel) * K * 4;
+  for (size_t i = 0; i < K; ++i)
+  {
+    t[4 * i + 0] = std::min(std::max(tf.rgb[3 * i + 0], 0.f), 1.f);
+    t[4 * i + 1] = std::min(std::max(tf.rgb[3 * i + 1], 0.f), 1.f);
+    t[4 * i + 2] = std::min(std::max(tf.rgb[3 * i + 2], 0.f), 1.f);
+    t[4 * i + 3] = opacityToExtinction(tf.opacity[i], tf.unitDistance);
+  }
+  float lo = tf.scalarMin;
+  float hi = tf.scalarMax;
+  if (!(hi > lo))
+  {
+    hi = lo + 1.f; // a constant channel: any positive width maps it to texel 0
+  }
+  this->View.tables.scalarMin[channel] = lo;
+  this->View.tables.scale[channel] = float(double(K - 1) / (double(hi) - double(lo)));
+  this->HasTF[channel] = true;
+  this->MajorantDirty[channel] = true;
+  ++this->TableVersion;
+}
+
+void Scene::setMacrocellSize(int voxels)
+{
+  if (voxels < 1)
+  {
+    throw std::invalid_argument("mcvol: the macrocell size must be at least 1 voxel");
+  }
+  if (voxels != this->MacrocellSize)
+  {
+    this->MacrocellSize = voxels;
+    this->MacrocellsDirty = true;
+  }
+}
+
+void Scene::setBlendMode(BlendMode mode)
+{
+  this->Mode = mode;
+  this->View.blend.mode = mode;
+}
+
+void Scene::setMixWeights(const float* weights, int count)
+{
+  if (count < 0 || count > kMaxChannels)
+  {
+    throw std::invalid_argument("mcvol: too many mix weights");
+  }
+  this->MixWeights.fill(0.f);
+  for (int i = 0; i < count; ++i)
+  {
+    if (!(weights[i] >= 0.f) || !std::isfinite(weights[i]))
+    {
+      throw std::invalid_argument("mcvol: mix weight " + std::to_string(i) + " must be a finite number >= 0");
+    }
+    this->MixWeights[i] = weights[i];
+  }
+  this->MixWeightsSet = count > 0;
+}
+
+MemoryStats Scene::memory() const
+{
+  MemoryStats m;
+  const size_t voxels = size_t(this->Dims[0]) * this->Dims[1] * this->Dims[2];
+  for (int n = 0; n < this->NumChannels; ++n)
+  {
+    m.dataBytes += voxels * size_t(scalarTypeSize(this->Channels[n].type));
+  }
+  m.macrocellBytes = this->Ranges.size() * sizeof(float);
+  m.majorantBytes = this->Majorants.size() * sizeof(float);
+  m.tableBytes = size_t(this->NumChannels) * size_t(this->View.tables.size) * 4 * sizeof(float);
+  return m;
+}
+
+void Scene::rebuildMacrocells()
+{
+  const auto t0 = std::chrono::steady_clock::now();
+  GridView& g = this->View.grid;
+  VolumeView& v = this->View.volume;
+  for (int a = 0; a < 3; ++a)
+  {
+    v.dims[a] = this->Dims[a];
+    if (this->Dims[a] == 1)
+    {
+      // One voxel along this axis: give it one spacing of thickness so a
+      // single slice (or a single voxel) is visible rather than zero-width.
+      v.boxLo[a] = -0.5f;
+      v.boxHi[a] = 0.5f;
+      g.dims[a] = 1;
+      g.lo[a] = -0.5f;
+      g.cellSize[a] = 1.f;
+    }
+    else
+    {
+      v.boxLo[a] = 0.f;
+      v.boxHi[a] = float(this->Dims[a] - 1);
+      const int cells = (this->Dims[a] - 1 + this->MacrocellSize - 1) / this->MacrocellSize;
+      g.dims[a] = std::max(1, cells);
+      g.lo[a] = 0.f;
+      g.cellSize[a] = float(this->MacrocellSize);
+    }
+    g.invCellSize[a] = 1.f / g.cellSize[a];
+  }
+  v.numChannels = this->NumChannels;
+  for (int n = 0; n < this->NumChannels; ++n)
+  {
+    v.channels[n].data = this->Channels[n].data;
+    v.channels[n].stride = this->Channels[n].stride;
+    v.channels[n].type = this->Channels[n].type;
+  }
+  g.numChannels = this->NumChannels;
+  const int N = this->NumChannels;
+  const int64_t cells = int64_t(g.dims[0]) * g.dims[1] * g.dims[2];
+  this->Ranges.assign(size_t(cells) * N * 2, 0.f);
+  const int M = this->MacrocellSize;
+  const int* D = this->Dims;
+  float* ranges = this->Ranges.data();
+  const ChannelSource* ch = this->Channels.data();
+  const int gd0 = g.dims[0], gd1 = g.dims[1];
+#pragma omp parallel for schedule(dynamic, 4)
+  for (int64_t c = 0; c < cells; ++c)
+  {
+    const int cell[3] = { int(c % gd0), int((c / gd0) % gd1), int(c / (int64_t(gd0) * gd1)) };
+    int lo[3];
+    int hi[3];
+    for (int a = 0; a < 3; ++a)
+    {
+      if (D[a] == 1)
+      {
+        lo[a] = hi[a] = 0;
+        continue;
+      }
+      // Voxels whose trilinear footprint reaches the cell, plus one more on
+      // each side (the 27-neighbourhood), so the range stays conservative
+      // under interpolation and under rounding of the DDA's cell boundaries.
+      lo[a] = std::max(0, cell[a] * M - 1);
+      hi[a] = std::min(D[a] - 1, (cell[a] + 1) * M + 1);
+    }
+    for (int n = 0; n < N; ++n)
+    {
+      float mn = std::numeric_limits<float>::infinity();
+      float mx = -std::numeric_limits<float>::infinity();
+      switch (ch[n].type)
+      {
+        case ScalarType::UInt8:
+          rangeOf(static_cast<const uint8_t*>(ch[n].data), ch[n].stride, D, lo, hi, mn, mx);
+          break;
+        case ScalarType::Int16:
+          rangeOf(static_cast<const int16_t*>(ch[n].data), ch[n].stride, D, lo, hi, mn, mx);
+          break;
+        case ScalarType::UInt16:
+          rangeOf(static_cast<const uint16_t*>(ch[n].data), ch[n].stride, D, lo, hi, mn, mx);
+          break;
+        case ScalarType::Float32:
+          rangeOf(static_cast<const float*>(ch[n].data), ch[n].stride, D, lo, hi, mn, mx);
+          break;
+        case ScalarType::Float64:
+          rangeOf(static_cast<const double*>(ch[n].data), ch[n].stride, D, lo, hi, mn, mx);
+          break;
+      }
+      ranges[(c * N + n) * 2 + 0] = mn;
+      ranges[(c * N + n) * 2 + 1] = mx;
+    }
+  }
+  this->Majorants.assign(size_t(cells) * N, 0.f);
+  g.majorants = this->Majorants.data();
+  this->LastMacrocellSeconds = secondsSince(t0);
+  ++this->DataVersion;
+}
+
+void Scene::rebuildMajorants(int channel)
+{
+  const GridView& g = this->View.grid;
+  const TableView& tv = this->View.tables;
+  const int N = this->NumChannels;
+  const int K = tv.size;
+  const int64_t cells = int64_t(g.dims[0]) * g.dims[1] * g.dims[2];
+  const float* table = this->Tables.data() + size_t(channel) * K * 4;
+  const float* ranges = this->Ranges.data();
+  float* maj = this->Majorants.data();
+  // Majorants are inflated by a relative 2^-16 so float rounding in the
+  // interpolation can never push a sampled extinction above them.
+  const float inflate = 1.f + 0x1p-16f;
+#pragma omp parallel for schedule(static)
+  for (int64_t c = 0; c < cells; ++c)
+  {
+    const float mn = ranges[(c * N + channel) * 2 + 0];
+    const float mx = ranges[(c * N + channel) * 2 + 1];
+    float m = 0.f;
+    if (mn <= mx)
+    {
+      // Both ends included: the table is interpolated linearly between texels.
+      const int i0 = int(std::floor(texelCoord(tv, channel, mn)));
+      const int i1 = int(std::ceil(texelCoord(tv, channel, mx)));
+      for (int i = std::max(i0, 0); i <= std::min(i1, K - 1); ++i)
+      {
+        m = std::max(m, table[4 * i + 3]);
+      }
+    }
+    maj[c * N + channel] = m * inflate;
+  }
+}
+
+void Scene::refreshView(bool majorantsChanged)
+{
+  this->View.tables.texels = this->Tables.data();
+  this->View.grid.majorants = this->Majorants.data();
+  // Mix weights normalised to sum 1 (Eq. 10); none or all zero: equal.
+  float sum = 0.f;
+  for (int n = 0; n < this->NumChannels; ++n)
+  {
+    sum += this->MixWeights[n];
+  }
+  for (int n = 0; n < kMaxChannels; ++n)
+  {
+    this->View.blend.mixWeights[n] = n < this->NumChannels
+      ? (sum > 0.f ? this->MixWeights[n] / sum : 1.f / float(this->NumChannels))
+      : 0.f;
+  }
+  this->View.blend.mode = this->Mode;
+  if (!majorantsChanged)
+  {
+    return;
+  }
+  const int64_t cells =
+    int64_t(this->View.grid.dims[0]) * this->View.grid.dims[1] * this->View.grid.dims[2];
+  this->View.numActive = 0;
+  for (int n = 0; n < this->NumChannels; ++n)
+  {
+    bool any = false;
+    for (int64_t c = 0; c < cells && !any; ++c)
+    {
+      any = this->Majorants[size_t(c) * this->NumChannels + n] > 0.f;
+    }
+    if (any)
+    {
+      this->View.active[this->View.numActive++] = n;
+    }
+  }
+}
+
+bool Scene::update()
+{
+  if (this->NumChannels == 0)
+  {
+    throw std::invalid_argument("mcvol: no volume was given");
+  }
+  for (int n = 0; n < this->NumChannels; ++n)
+  {
+    if (!this->HasTF[n])
+    {
+      throw std::invalid_argument("mcvol: " + channelText(n) + " has no transfer function (" +
+        std::to_string(this->NumChannels) + " channels need " + std::to_string(this->NumChannels) + ")");
+    }
+  }
+  bool changed = false;
+  if (this->MacrocellsDirty)
+  {
+    this->rebuildMacrocells();
+    this->MacrocellsDirty = false;
+    for (int n = 0; n < this->NumChannels; ++n)
+    {
+      this->MajorantDirty[n] = true;
+    }
+    changed = true;
+  }
+  const auto t0 = std::chrono::steady_clock::now();
+  int rebuilt = 0;
+  for (int n = 0; n < this->NumChannels; ++n)
+  {
+    if (this->MajorantDirty[n])
+    {
+      this->rebuildMajorants(n);
+      this->MajorantDirty[n] = false;
+      ++rebuilt;
+    }
+  }
+  if (rebuilt > 0)
+  {
+    this->LastMajorantSeconds = secondsSince(t0);
+    this->LastMajorantChannels = rebuilt;
+    ++this->TableVersion;
+    changed = true;
+  }
+  this->refreshView(changed);
+  return changed;
+}
+} // namespace mcvol

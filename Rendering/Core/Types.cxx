@@ -1,0 +1,75 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "mcvol/Types.h"
+
+namespace mcvol
+{
+const char* toString(ScalarType t)
+{
+  switch (t)
+  {
+    case ScalarType::UInt8:
+      return "uint8";
+    case ScalarType::Int16:
+      return "int16";
+    case ScalarType::UInt16:
+      return "uint16";
+    case ScalarType::Float32:
+      return "float32";
+    case ScalarType::Float64:
+      return "float64";
+  }
+  return "unknown";
+}
+
+const char* toString(BlendMode m)
+{
+  switch (m)
+  {
+    case BlendMode::Density:
+      return "density";
+    case BlendMode::Max:
+      return "max";
+    case BlendMode::Mix:
+      return "mix";
+    case BlendMode::Composite:
+      return "composite";
+  }
+  return "unknown";
+}
+
+const char* toString(Tracker t)
+{
+  return t == Tracker::NDDA ? "N-DDA" : "1-DDA";
+}
+
+const char* toString(Backend b)
+{
+  switch (b)
+  {
+    case Backend::Auto:
+      return "auto";
+    case Backend::CPU:
+      return "cpu";
+    case Backend::CUDA:
+      return "cuda";
+  }
+  return "unknown";
+}
+
+int scalarTypeSize(ScalarType t)
+{
+  switch (t)
+  {
+    case ScalarType::UInt8:
+      return 1;
+    case ScalarType::Int16:
+    case ScalarType::UInt16:
+      return 2;
+    case ScalarType::Float32:
+      return 4;
+    case ScalarType::Float64:
+      return 8;
+  }
+  return 0;
+}
+} // namespace mcvol

@@ -1,0 +1,156 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#pragma once
+
+#include "mcvol/SceneView.h"
+
+#include <cfloat>
+#include <cmath>
+
+namespace mcvol
+{
+/**
+ * Clips a ray to an axis-aligned box; returns false if it misses. Handles
+ * direction components that are exactly zero (axis-parallel rays) without
+ * dividing by zero: such a ray is inside the slab or misses it entirely.
+ */
+MCVOL_HOT bool intersectBox(Vec3f lo, Vec3f hi, Vec3f o, Vec3f d, float& t0, float& t1)
+{
+  for (int a = 0; a < 3; ++a)
+  {
+    if (d[a] == 0.f)
+    {
+      if (o[a] < lo[a] || o[a] > hi[a])
+      {
+        return false;
+      }
+      continue;
+    }
+    const float inv = 1.f / d[a];
+    float ta = (lo[a] - o[a]) * inv;
+    float tb = (hi[a] - o[a]) * inv;
+    if (ta > tb)
+    {
+      const float tmp = ta;
+      ta = tb;
+      tb = tmp;
+    }
+    t0 = ta > t0 ? ta : t0;
+    t1 = tb < t1 ? tb : t1;
+  }
+  return t0 < t1;
+}
+
+/**
+ * 3D DDA (Amanatides and Woo) over the macrocell grid. It yields the cells a
+ * ray crosses as segments [t0, t1] of the ray parameter, in order, covering
+ * [tmin, tmax] without gaps. Crossing distances are recomputed from the cell
+ * boundary at each step (not accumulated), so long traversals do not drift,
+ * and a zero direction component never produces a step along that axis.
+ * (MDWTracker sets t_near.x twice instead of t_far.x; axis-parallel rays are
+ * tested against brute-force walking in DDA_test.)
+ */
+struct DDA
+{
+  int cell[3];
+  int step[3];
+  float tNext[3];
+  float t0 = 0.f; ///< entry of the current cell
+  float t1 = 0.f; ///< exit of the current cell (or tEnd)
+  float tEnd = 0.f;
+  bool done = true;
+
+  MCVOL_HOT void init(const GridView& g, Vec3f o, Vec3f d, float tmin, float tmax)
+  {
+    this->O = o;
+    this->tEnd = tmax;
+    this->t0 = tmin;
+    this->done = !(tmin < tmax);
+    const Vec3f p = o + d * tmin;
+    for (int a = 0; a < 3; ++a)
+    {
+      const float x = (p[a] - g.lo[a]) * g.invCellSize[a];
+      int c = x >= 0.f ? int(x) : -1;
+      c = clampi(c, 0, g.dims[a] - 1);
+      this->cell[a] = c;
+      this->Lo[a] = g.lo[a];
+      this->Cs[a] = g.cellSize[a];
+      if (d[a] > 0.f)
+      {
+        this->step[a] = 1;
+        this->InvD[a] = 1.f / d[a];
+      }
+      else if (d[a] < 0.f)
+      {
+        this->step[a] = -1;
+        this->InvD[a] = 1.f / d[a];
+      }
+      else
+      {
+        this->step[a] = 0;
+        this->InvD[a] = 0.f;
+      }
+      this->tNext[a] = this->crossing(a, tmin);
+    }
+    this->t1 = fminf(fminf(fminf(this->tNext[0], this->tNext[1]), this->tNext[2]), this->tEnd);
+    this->Dims[0] = g.dims[0];
+    this->Dims[1] = g.dims[1];
+    this->Dims[2] = g.dims[2];
+  }
+
+  MCVOL_HOT int cellIndex() const
+  {
+    return this->cell[0] + this->Dims[0] * (this->cell[1] + this->Dims[1] * this->cell[2]);
+  }
+
+  /// Moves to the next cell; returns false when the ray has left the grid or
+  /// passed tEnd.
+  MCVOL_HOT bool next()
+  {
+    if (this->t1 >= this->tEnd)
+    {
+      this->done = true;
+      return false;
+    }
+    int a = 0;
+    if (this->tNext[1] < this->tNext[a])
+    {
+      a = 1;
+    }
+    if (this->tNext[2] < this->tNext[a])
+    {
+      a = 2;
+    }
+    this->cell[a] += this->step[a];
+    if (this->cell[a] < 0 || this->cell[a] >= this->Dims[a])
+    {
+      this->done = true;
+      return false;
+    }
+    this->t0 = this->t1;
+    this->tNext[a] = this->crossing(a, this->t0);
+    this->t1 = fminf(fminf(fminf(this->tNext[0], this->tNext[1]), this->tNext[2]), this->tEnd);
+    return true;
+  }
+
+  /// Stops the traversal (a collision was accepted).
+  MCVOL_HOT void stop() { this->done = true; }
+
+private:
+  MCVOL_HOT float crossing(int a, float tmin) const
+  {
+    if (this->step[a] == 0)
+    {
+      return FLT_MAX;
+    }
+    const int b = this->cell[a] + (this->step[a] > 0 ? 1 : 0);
+    const float t = (this->Lo[a] + float(b) * this->Cs[a] - this->O[a]) * this->InvD[a];
+    return t > tmin ? t : tmin;
+  }
+
+  Vec3f O;
+  Vec3f Lo;
+  Vec3f Cs;
+  Vec3f InvD;
+  int Dims[3];
+};
+} // namespace mcvol

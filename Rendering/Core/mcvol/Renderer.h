@@ -1,0 +1,93 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#pragma once
+
+#include "mcvol/Scene.h"
+#include "mcvol/Types.h"
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace mcvol
+{
+/**
+ * Camera of one render. Rays are built by unprojecting pixel positions with
+ * invViewProj (row-major, normalised device coordinates in [-1,1]^3 to world,
+ * homogeneous), which serves perspective and parallel projection alike.
+ * worldToIndex maps world points to continuous voxel indices (voxel i at i).
+ */
+struct Camera
+{
+  int width = 0;
+  int height = 0;
+  double invViewProj[16] = { 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1 };
+  double worldToIndex[12] = { 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0 };
+};
+
+struct RenderSettings
+{
+  int samplesPerPixel = 1; ///< added to the accumulation per render
+  uint32_t seed = 0;
+  Tracker tracker = Tracker::OneDDA;
+  bool jitterPixels = true; ///< sub-pixel jitter (anti-aliasing)
+};
+
+/// Work counters a render adds up (tests read them; the benchmark prints them).
+struct RenderCounters
+{
+  uint64_t rays = 0;
+  uint64_t ddaSteps = 0;            ///< macrocells visited, summed over traversals
+  uint64_t tentativeCollisions = 0; ///< Woodcock steps that landed inside a cell
+  uint64_t realCollisions = 0;
+  uint64_t channelSamples = 0; ///< channel values interpolated
+};
+
+/**
+ * Running mean of premultiplied RGBA per pixel. Each render adds K samples
+ * per pixel; reset() starts over (the caller resets when the image changes).
+ */
+class Accumulator
+{
+public:
+  void resize(int width, int height);
+  void reset();
+  int width() const { return this->Width; }
+  int height() const { return this->Height; }
+  /// Samples per pixel accumulated so far.
+  uint32_t samples() const { return this->Samples; }
+  const float* rgba() const { return this->RGBA.data(); }
+  float* rgba() { return this->RGBA.data(); }
+  /// Called by backends after adding `k` samples per pixel.
+  void addSamples(uint32_t k) { this->Samples += k; }
+
+private:
+  int Width = 0;
+  int Height = 0;
+  uint32_t Samples = 0;
+  std::vector<float> RGBA;
+};
+
+/**
+ * A backend renders a Scene into an Accumulator. create() picks one:
+ * Auto takes CUDA when a usable device exists, otherwise the CPU.
+ */
+class Renderer
+{
+public:
+  virtual ~Renderer() = default;
+
+  /// Adds settings.samplesPerPixel samples to every pixel of `accum` (which
+  /// must be sized to the camera). depth: optional window depth in [0,1] per
+  /// pixel (row-major from the bottom row, like glReadPixels); rays stop at
+  /// that depth (opaque geometry already drawn). 1 means no geometry.
+  virtual void render(const Scene& scene, const Camera& camera, const RenderSettings& settings,
+    const float* depth, Accumulator& accum, RenderCounters* counters = nullptr) = 0;
+  virtual const char* name() const = 0;
+
+  /// Throws std::runtime_error naming the cause if the requested backend is
+  /// unavailable. `why` (optional) receives a sentence on the choice made.
+  static std::unique_ptr<Renderer> create(Backend requested, std::string* why = nullptr);
+  static bool cudaAvailable(std::string* why = nullptr);
+};
+} // namespace mcvol

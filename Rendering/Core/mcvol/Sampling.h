@@ -1,0 +1,138 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#pragma once
+
+#include "mcvol/SceneView.h"
+
+#include <cstdint>
+
+namespace mcvol
+{
+/// One voxel of a channel, converted to float.
+MCVOL_HOT float fetchVoxel(const ChannelView& c, int64_t v)
+{
+  const int64_t i = v * c.stride;
+  switch (c.type)
+  {
+    case ScalarType::UInt8:
+      return float(static_cast<const uint8_t*>(c.data)[i]);
+    case ScalarType::Int16:
+      return float(static_cast<const int16_t*>(c.data)[i]);
+    case ScalarType::UInt16:
+      return float(static_cast<const uint16_t*>(c.data)[i]);
+    case ScalarType::Float32:
+      return static_cast<const float*>(c.data)[i];
+    case ScalarType::Float64:
+      return float(static_cast<const double*>(c.data)[i]);
+  }
+  return 0.f;
+}
+
+/**
+ * Trilinear interpolation of channel n at continuous index p, clamped to the
+ * grid (axes with one voxel are constant). A NaN voxel among the 8 corners
+ * gives NaN, which the transfer-function lookup maps to zero extinction.
+ */
+MCVOL_HOT float sampleChannel(const VolumeView& vol, int n, Vec3f p)
+{
+  const ChannelView& c = vol.channels[n];
+  int i0[3];
+  int i1[3];
+  float f[3];
+  for (int a = 0; a < 3; ++a)
+  {
+    const float hi = float(vol.dims[a] - 1);
+    const float x = clampf(p[a], 0.f, hi);
+    int i = int(x);
+    if (i > vol.dims[a] - 2)
+    {
+      i = vol.dims[a] - 2 < 0 ? 0 : vol.dims[a] - 2;
+    }
+    i0[a] = i;
+    i1[a] = vol.dims[a] > 1 ? i + 1 : i;
+    f[a] = vol.dims[a] > 1 ? x - float(i) : 0.f;
+  }
+  const int64_t sx = 1;
+  const int64_t sy = vol.dims[0];
+  const int64_t sz = int64_t(vol.dims[0]) * vol.dims[1];
+  const int64_t b00 = i0[1] * sy + i0[2] * sz;
+  const int64_t b10 = i1[1] * sy + i0[2] * sz;
+  const int64_t b01 = i0[1] * sy + i1[2] * sz;
+  const int64_t b11 = i1[1] * sy + i1[2] * sz;
+  const float v000 = fetchVoxel(c, i0[0] * sx + b00);
+  const float v100 = fetchVoxel(c, i1[0] * sx + b00);
+  const float v010 = fetchVoxel(c, i0[0] * sx + b10);
+  const float v110 = fetchVoxel(c, i1[0] * sx + b10);
+  const float v001 = fetchVoxel(c, i0[0] * sx + b01);
+  const float v101 = fetchVoxel(c, i1[0] * sx + b01);
+  const float v011 = fetchVoxel(c, i0[0] * sx + b11);
+  const float v111 = fetchVoxel(c, i1[0] * sx + b11);
+  const float x00 = v000 + f[0] * (v100 - v000);
+  const float x10 = v010 + f[0] * (v110 - v010);
+  const float x01 = v001 + f[0] * (v101 - v001);
+  const float x11 = v011 + f[0] * (v111 - v011);
+  const float y0 = x00 + f[1] * (x10 - x00);
+  const float y1 = x01 + f[1] * (x11 - x01);
+  return y0 + f[2] * (y1 - y0);
+}
+
+/// Transfer-function sample: linear RGB and extinction (world units^-1).
+struct TFSample
+{
+  Vec3f rgb;
+  float sigma = 0.f;
+};
+
+/// Continuous texel coordinate of scalar s in channel n's table, in [0, K-1];
+/// NaN maps to -1 (no texel).
+MCVOL_HOT float texelCoord(const TableView& t, int n, float s)
+{
+  const float x = (s - t.scalarMin[n]) * t.scale[n];
+  if (!(x == x))
+  {
+    return -1.f;
+  }
+  return clampf(x, 0.f, float(t.size - 1));
+}
+
+/// Linear interpolation between texels of (r, g, b, extinction). Extinction,
+/// not opacity, is interpolated, so a majorant taken over the covered texels
+/// bounds every interpolated value.
+MCVOL_HOT TFSample lookupTF(const TableView& t, int n, float s)
+{
+  TFSample out;
+  const float x = texelCoord(t, n, s);
+  if (x < 0.f)
+  {
+    return out; // NaN scalar: transparent
+  }
+  int i = int(x);
+  if (i > t.size - 2)
+  {
+    i = t.size - 2;
+  }
+  const float f = x - float(i);
+  const float* a = t.texels + (int64_t(n) * t.size + i) * 4;
+  const float* b = a + 4;
+  out.rgb = Vec3f(a[0] + f * (b[0] - a[0]), a[1] + f * (b[1] - a[1]), a[2] + f * (b[2] - a[2]));
+  out.sigma = a[3] + f * (b[3] - a[3]);
+  return out;
+}
+
+/// Extinction only (the common case of a null-collision test).
+MCVOL_HOT float lookupSigma(const TableView& t, int n, float s)
+{
+  const float x = texelCoord(t, n, s);
+  if (x < 0.f)
+  {
+    return 0.f;
+  }
+  int i = int(x);
+  if (i > t.size - 2)
+  {
+    i = t.size - 2;
+  }
+  const float f = x - float(i);
+  const float* a = t.texels + (int64_t(n) * t.size + i) * 4;
+  return a[3] + f * (a[7] - a[3]);
+}
+} // namespace mcvol

@@ -1,0 +1,135 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#pragma once
+
+#include "mcvol/SceneView.h"
+#include "mcvol/Types.h"
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace mcvol
+{
+/// Where one channel's voxels live: value of voxel v is data[v * stride].
+struct ChannelSource
+{
+  const void* data = nullptr;
+  ScalarType type = ScalarType::Float32;
+  int64_t stride = 1; ///< in elements; N for the components of an interleaved array
+};
+
+/**
+ * One channel's transfer function, sampled at `opacity.size()` evenly spaced
+ * scalars over [scalarMin, scalarMax] (values outside clamp to the ends).
+ * Opacity is VTK's: the opacity accumulated over `unitDistance` world units.
+ */
+struct TransferFunctionDesc
+{
+  float scalarMin = 0.f;
+  float scalarMax = 1.f;
+  std::vector<float> rgb;     ///< 3 * K linear RGB in [0,1]
+  std::vector<float> opacity; ///< K opacities in [0,1]
+  float unitDistance = 1.f;   ///< world units, > 0
+};
+
+/**
+ * Opacity 1 would be infinite extinction. Opacities are clamped to
+ * kMaxOpacity = 1 - 2^-20 first, so an "opaque" transfer function lets
+ * 2^-20 (about 1e-6) of the light through one unit distance: sigma is then
+ * 13.86 / unitDistance, finite, and indistinguishable from opaque in 8-bit
+ * images.
+ */
+constexpr float kMaxOpacity = 1.f - 0x1p-20f;
+
+/// VTK's ScalarOpacityUnitDistance meaning: sigma = -ln(1 - a) / u.
+float opacityToExtinction(float opacity, float unitDistance);
+
+/// Memory of the acceleration structures, for the benchmark (paper Table 1).
+struct MemoryStats
+{
+  size_t dataBytes = 0;
+  size_t macrocellBytes = 0;
+  size_t majorantBytes = 0;
+  size_t tableBytes = 0;
+};
+
+/**
+ * Host-side owner of everything a render needs except the camera: the
+ * channels (not copied), transfer-function tables, the macrocell grid of
+ * per-channel scalar ranges and the per-channel majorant grids.
+ *
+ * Changing one channel's transfer function rebuilds only that channel's
+ * majorants; changing the data or the macrocell size rebuilds the ranges and
+ * all majorants. Nothing is rebuilt until update().
+ *
+ * Bad arguments throw std::invalid_argument with a message naming the cause.
+ */
+class Scene
+{
+public:
+  Scene();
+
+  /// dims: voxels per axis (each >= 1). The data must outlive the Scene.
+  void setVolume(const int dims[3], int numChannels, const ChannelSource* channels);
+  /// Marks the data as changed (same pointers, new values).
+  void dataModified();
+  void setTransferFunction(int channel, const TransferFunctionDesc& tf);
+  /// Macrocell edge in voxels (>= 1).
+  void setMacrocellSize(int voxels);
+  void setBlendMode(BlendMode mode);
+  /// Non-negative weights, one per channel; normalised to sum 1 (Eq. 10).
+  /// All zero means equal weights.
+  void setMixWeights(const float* weights, int count);
+
+  /// Builds what is out of date. Returns true if anything was rebuilt.
+  bool update();
+
+  int numChannels() const { return this->NumChannels; }
+  const int* dims() const { return this->Dims; }
+  int macrocellSize() const { return this->MacrocellSize; }
+  BlendMode blendMode() const { return this->Mode; }
+  const int* macrocellDims() const { return this->View.grid.dims; }
+  /// Seconds spent in the last majorant (re)build, and how many channels it touched.
+  double lastMajorantBuildSeconds() const { return this->LastMajorantSeconds; }
+  int lastMajorantChannelsRebuilt() const { return this->LastMajorantChannels; }
+  double lastMacrocellBuildSeconds() const { return this->LastMacrocellSeconds; }
+  MemoryStats memory() const;
+  /// Increments whenever update() changes anything a backend caches.
+  uint64_t dataVersion() const { return this->DataVersion; }
+  uint64_t tableVersion() const { return this->TableVersion; }
+
+  /// The plain view the per-ray code reads (valid after update()).
+  const SceneView& view() const { return this->View; }
+
+  const std::vector<float>& macrocellRanges() const { return this->Ranges; }
+  const std::vector<float>& majorants() const { return this->Majorants; }
+  const std::vector<float>& tables() const { return this->Tables; }
+
+private:
+  void rebuildMacrocells();
+  void rebuildMajorants(int channel);
+  void refreshView(bool majorantsChanged);
+
+  int Dims[3] = { 0, 0, 0 };
+  int NumChannels = 0;
+  std::array<ChannelSource, kMaxChannels> Channels{};
+  std::array<bool, kMaxChannels> HasTF{};
+  std::array<bool, kMaxChannels> MajorantDirty{};
+  bool MacrocellsDirty = true;
+  int MacrocellSize = 8;
+  BlendMode Mode = BlendMode::Density;
+  std::array<float, kMaxChannels> MixWeights{};
+  bool MixWeightsSet = false;
+
+  std::vector<float> Tables;    ///< [channel][K][4]: r, g, b, extinction
+  std::vector<float> Ranges;    ///< [cell][channel][2]: min, max
+  std::vector<float> Majorants; ///< [cell][channel]
+  SceneView View;
+  double LastMajorantSeconds = 0.0;
+  int LastMajorantChannels = 0;
+  double LastMacrocellSeconds = 0.0;
+  uint64_t DataVersion = 0;
+  uint64_t TableVersion = 0;
+};
+} // namespace mcvol

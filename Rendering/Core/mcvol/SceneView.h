@@ -1,0 +1,72 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#pragma once
+
+#include "mcvol/Macros.h"
+#include "mcvol/Types.h"
+#include "mcvol/Vec.h"
+
+#include <cstdint>
+
+namespace mcvol
+{
+/**
+ * Plain data the per-ray code reads, written down once for both backends
+ * (like OSPRay's *Shared.h). Pointers are host pointers on the CPU backend and
+ * device pointers in the copy the CUDA backend uploads.
+ */
+struct ChannelView
+{
+  const void* data = nullptr;
+  int64_t stride = 1; ///< elements between consecutive voxels
+  ScalarType type = ScalarType::Float32;
+};
+
+struct VolumeView
+{
+  int dims[3] = { 0, 0, 0 };
+  int numChannels = 0;
+  ChannelView channels[kMaxChannels];
+  /// Index-space box the volume occupies: [0, dim-1] per axis, except that an
+  /// axis with a single voxel gets [-0.5, 0.5] (one spacing of thickness).
+  Vec3f boxLo;
+  Vec3f boxHi;
+};
+
+/// Transfer-function tables: per channel K texels of (r, g, b, extinction).
+struct TableView
+{
+  int size = 0; ///< K >= 2
+  const float* texels = nullptr;
+  float scalarMin[kMaxChannels];
+  float scale[kMaxChannels]; ///< (K - 1) / (max - min)
+};
+
+/// Regular grid of macrocells in index space; majorants[cell * N + n].
+struct GridView
+{
+  int dims[3] = { 0, 0, 0 };
+  Vec3f lo;
+  Vec3f cellSize;
+  Vec3f invCellSize;
+  int numChannels = 0;
+  const float* majorants = nullptr;
+};
+
+struct BlendView
+{
+  BlendMode mode = BlendMode::Density;
+  float mixWeights[kMaxChannels]; ///< sum to 1
+};
+
+struct SceneView
+{
+  VolumeView volume;
+  TableView tables;
+  GridView grid;
+  BlendView blend;
+  /// Channels whose majorant is non-zero somewhere; the others are never
+  /// traversed (a channel with zero opacity costs nothing).
+  int numActive = 0;
+  int active[kMaxChannels];
+};
+} // namespace mcvol

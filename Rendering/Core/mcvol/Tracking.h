@@ -1,0 +1,263 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#pragma once
+
+#include "mcvol/DDA.h"
+#include "mcvol/Random.h"
+#include "mcvol/Sampling.h"
+
+#include <cfloat>
+#include <cstdint>
+
+namespace mcvol
+{
+/// Per-ray work counters, summed by the backends.
+struct RayCounters
+{
+  uint32_t ddaSteps = 0;
+  uint32_t tentative = 0;
+  uint32_t real = 0;
+  uint32_t samples = 0;
+};
+
+/// Result of tracking one ray: the accepted collision, if any.
+struct Hit
+{
+  float t = FLT_MAX;
+  Vec3f rgb;
+  int channel = -1;
+  MCVOL_FUNC bool found() const { return this->channel >= 0; }
+};
+
+/// Listing 1: free-flight distance for majorant `maj` (Eq. 3). Rng::next()
+/// never returns 1, so the logarithm is finite.
+MCVOL_HOT float woodcockStep(float maj, Rng& rng)
+{
+  return -logf(1.f - rng.next()) / maj;
+}
+
+/**
+ * Null-collision test of channel n at p under the blend mode (Eq. 7 for
+ * density; Eq. 8-10 for max and mix, which redefine sigma_a and L_e).
+ * `xiMaj` is xi * majorant: a collision is real when it is below the
+ * channel's effective extinction. On a real collision `rgb` gets L_e.
+ */
+template <BlendMode Mode>
+MCVOL_HOT bool realCollision(const SceneView& s, int n, Vec3f p, float xiMaj, Vec3f& rgb, RayCounters& c)
+{
+  const TFSample own = lookupTF(s.tables, n, sampleChannel(s.volume, n, p));
+  ++c.samples;
+  // Cheap rejection first: the effective extinction never exceeds sigma_n.
+  if (!(xiMaj < own.sigma))
+  {
+    return false;
+  }
+  if (Mode == BlendMode::Density || Mode == BlendMode::Composite)
+  {
+    rgb = own.rgb;
+    return true;
+  }
+  // Max and mix: channel n exists at p only if its extinction is the largest
+  // (ties go to the lowest channel index, so equal channels do not vanish).
+  Vec3f mix = own.rgb * (own.sigma * s.blend.mixWeights[n]);
+  for (int i = 0; i < s.numActive; ++i)
+  {
+    const int k = s.active[i];
+    if (k == n)
+    {
+      continue;
+    }
+    const TFSample other = lookupTF(s.tables, k, sampleChannel(s.volume, k, p));
+    ++c.samples;
+    if (other.sigma > own.sigma || (other.sigma == own.sigma && k < n))
+    {
+      return false;
+    }
+    if (Mode == BlendMode::Mix)
+    {
+      mix += other.rgb * (other.sigma * s.blend.mixWeights[k]);
+    }
+  }
+  // Eq. 10: sum_k w_k sigma_k c_k / max_k sigma_k (sigma_n is the max).
+  rgb = Mode == BlendMode::Max ? own.rgb : mix * (1.f / own.sigma);
+  return true;
+}
+
+/**
+ * Method #2 (Section 4.5, Listing 4): one DDA over the macrocells; in each
+ * cell every active channel takes Woodcock steps from the cell entry with its
+ * own majorant until it leaves the cell, passes the closest hit so far, or
+ * collides. The traversal stops after the first cell with a collision.
+ */
+template <BlendMode Mode>
+MCVOL_HOT Hit track1DDA(const SceneView& s, Vec3f o, Vec3f d, float tmin, float tmax, Rng& rng, RayCounters& c)
+{
+  Hit hit;
+  hit.t = tmax;
+  DDA dda;
+  dda.init(s.grid, o, d, tmin, tmax);
+  const int N = s.grid.numChannels;
+  while (!dda.done)
+  {
+    ++c.ddaSteps;
+    const float* maj = s.grid.majorants + int64_t(dda.cellIndex()) * N;
+    for (int i = 0; i < s.numActive; ++i)
+    {
+      const int n = s.active[i];
+      const float m = maj[n];
+      if (m <= 0.f)
+      {
+        continue; // empty for this channel: no sampling at all
+      }
+      const float tStop = fminf(dda.t1, hit.t);
+      float t = dda.t0;
+      while (true)
+      {
+        t += woodcockStep(m, rng);
+        if (!(t < tStop))
+        {
+          break;
+        }
+        ++c.tentative;
+        Vec3f rgb;
+        if (realCollision<Mode>(s, n, o + d * t, rng.next() * m, rgb, c))
+        {
+          hit.t = t;
+          hit.rgb = rgb;
+          hit.channel = n;
+          break;
+        }
+      }
+    }
+    if (hit.found())
+    {
+      ++c.real;
+      break;
+    }
+    dda.next();
+  }
+  return hit;
+}
+
+/// Woodcock tracking of one channel alone over [tmin, tmax] (used by N-DDA
+/// for each channel and by post-render compositing).
+template <BlendMode Mode>
+MCVOL_HOT bool trackChannel(
+  const SceneView& s, int n, Vec3f o, Vec3f d, float tmin, float tmax, Rng& rng, RayCounters& c, Hit& hit)
+{
+  DDA dda;
+  dda.init(s.grid, o, d, tmin, tmax);
+  const int N = s.grid.numChannels;
+  while (!dda.done)
+  {
+    ++c.ddaSteps;
+    const float m = s.grid.majorants[int64_t(dda.cellIndex()) * N + n];
+    if (m > 0.f)
+    {
+      float t = dda.t0;
+      while (true)
+      {
+        t += woodcockStep(m, rng);
+        if (!(t < dda.t1))
+        {
+          break;
+        }
+        ++c.tentative;
+        Vec3f rgb;
+        if (realCollision<Mode>(s, n, o + d * t, rng.next() * m, rgb, c))
+        {
+          hit.t = t;
+          hit.rgb = rgb;
+          hit.channel = n;
+          return true;
+        }
+      }
+    }
+    dda.next();
+  }
+  return false;
+}
+
+/**
+ * Method #1 (Section 4.4, Listing 3): a separate DDA traversal per channel,
+ * each ending at the closest collision found so far; the closest wins.
+ */
+template <BlendMode Mode>
+MCVOL_HOT Hit trackNDDA(const SceneView& s, Vec3f o, Vec3f d, float tmin, float tmax, Rng& rng, RayCounters& c)
+{
+  Hit hit;
+  hit.t = tmax;
+  for (int i = 0; i < s.numActive; ++i)
+  {
+    trackChannel<Mode>(s, s.active[i], o, d, tmin, hit.t, rng, c, hit);
+  }
+  if (hit.found())
+  {
+    ++c.real;
+  }
+  return hit;
+}
+
+/**
+ * Post-render compositing: every channel rendered on its own, the
+ * premultiplied results added (alpha combines as 1 - prod(1 - alpha_n), which
+ * "any channel collided" estimates without bias since channels draw
+ * independent random numbers).
+ */
+MCVOL_HOT Vec4f trackComposite(const SceneView& s, Vec3f o, Vec3f d, float tmin, float tmax, Rng& rng, RayCounters& c)
+{
+  Vec4f out;
+  for (int i = 0; i < s.numActive; ++i)
+  {
+    Hit hit;
+    if (trackChannel<BlendMode::Composite>(s, s.active[i], o, d, tmin, tmax, rng, c, hit))
+    {
+      ++c.real;
+      out.r += hit.rgb.x;
+      out.g += hit.rgb.y;
+      out.b += hit.rgb.z;
+      out.a = 1.f;
+    }
+  }
+  return out;
+}
+
+/// One Monte Carlo sample of a ray: premultiplied RGB and alpha (1 if the
+/// path collided, else 0).
+template <BlendMode Mode>
+MCVOL_HOT Vec4f traceSample(
+  const SceneView& s, Tracker tracker, Vec3f o, Vec3f d, float tmin, float tmax, Rng& rng, RayCounters& c)
+{
+  if (Mode == BlendMode::Composite)
+  {
+    return trackComposite(s, o, d, tmin, tmax, rng, c);
+  }
+  const Hit hit = tracker == Tracker::OneDDA ? track1DDA<Mode>(s, o, d, tmin, tmax, rng, c)
+                                             : trackNDDA<Mode>(s, o, d, tmin, tmax, rng, c);
+  Vec4f out;
+  if (hit.found())
+  {
+    out.r = hit.rgb.x;
+    out.g = hit.rgb.y;
+    out.b = hit.rgb.z;
+    out.a = 1.f;
+  }
+  return out;
+}
+
+MCVOL_HOT Vec4f traceSample(
+  const SceneView& s, Tracker tracker, Vec3f o, Vec3f d, float tmin, float tmax, Rng& rng, RayCounters& c)
+{
+  switch (s.blend.mode)
+  {
+    case BlendMode::Max:
+      return traceSample<BlendMode::Max>(s, tracker, o, d, tmin, tmax, rng, c);
+    case BlendMode::Mix:
+      return traceSample<BlendMode::Mix>(s, tracker, o, d, tmin, tmax, rng, c);
+    case BlendMode::Composite:
+      return traceSample<BlendMode::Composite>(s, tracker, o, d, tmin, tmax, rng, c);
+    case BlendMode::Density:
+    default:
+      return traceSample<BlendMode::Density>(s, tracker, o, d, tmin, tmax, rng, c);
+  }
+}
+} // namespace mcvol

@@ -1,0 +1,93 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#pragma once
+
+#include "mcvol/Macros.h"
+
+#include <cmath>
+
+namespace mcvol
+{
+/// Small float vector used by the per-ray code on CPU and GPU.
+struct Vec3f
+{
+  float x = 0.f, y = 0.f, z = 0.f;
+
+  Vec3f() = default;
+  MCVOL_HOST_DEVICE constexpr Vec3f(float a, float b, float c)
+    : x(a)
+    , y(b)
+    , z(c)
+  {
+  }
+  MCVOL_FUNC float operator[](int i) const { return i == 0 ? x : (i == 1 ? y : z); }
+  MCVOL_FUNC float& operator[](int i) { return i == 0 ? x : (i == 1 ? y : z); }
+};
+
+MCVOL_FUNC Vec3f operator+(Vec3f a, Vec3f b)
+{
+  return { a.x + b.x, a.y + b.y, a.z + b.z };
+}
+MCVOL_FUNC Vec3f operator-(Vec3f a, Vec3f b)
+{
+  return { a.x - b.x, a.y - b.y, a.z - b.z };
+}
+MCVOL_FUNC Vec3f operator*(Vec3f a, float s)
+{
+  return { a.x * s, a.y * s, a.z * s };
+}
+MCVOL_FUNC Vec3f operator*(float s, Vec3f a)
+{
+  return a * s;
+}
+MCVOL_FUNC Vec3f operator*(Vec3f a, Vec3f b)
+{
+  return { a.x * b.x, a.y * b.y, a.z * b.z };
+}
+MCVOL_FUNC Vec3f& operator+=(Vec3f& a, Vec3f b)
+{
+  a.x += b.x;
+  a.y += b.y;
+  a.z += b.z;
+  return a;
+}
+MCVOL_FUNC float dot(Vec3f a, Vec3f b)
+{
+  return a.x * b.x + a.y * b.y + a.z * b.z;
+}
+MCVOL_FUNC float length(Vec3f a)
+{
+  return sqrtf(dot(a, a));
+}
+
+/// Premultiplied RGB plus alpha.
+struct Vec4f
+{
+  float r = 0.f, g = 0.f, b = 0.f, a = 0.f;
+};
+
+/// Row-major 3x4 affine map (linear part plus translation).
+struct Affine3f
+{
+  float m[12] = { 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0 };
+
+  MCVOL_FUNC Vec3f point(Vec3f p) const
+  {
+    return { m[0] * p.x + m[1] * p.y + m[2] * p.z + m[3], m[4] * p.x + m[5] * p.y + m[6] * p.z + m[7],
+      m[8] * p.x + m[9] * p.y + m[10] * p.z + m[11] };
+  }
+  MCVOL_FUNC Vec3f vector(Vec3f v) const
+  {
+    return { m[0] * v.x + m[1] * v.y + m[2] * v.z, m[4] * v.x + m[5] * v.y + m[6] * v.z,
+      m[8] * v.x + m[9] * v.y + m[10] * v.z };
+  }
+};
+
+MCVOL_FUNC float clampf(float v, float lo, float hi)
+{
+  return v < lo ? lo : (v > hi ? hi : v);
+}
+MCVOL_FUNC int clampi(int v, int lo, int hi)
+{
+  return v < lo ? lo : (v > hi ? hi : v);
+}
+} // namespace mcvol
