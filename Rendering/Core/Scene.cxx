@@ -344,10 +344,31 @@ void Scene::rebuildMajorants(int channel)
   const float* table = this->Tables.data() + size_t(channel) * K * 4;
   const float* ranges = this->Ranges.data();
   float* maj = this->Majorants.data();
+  // Range-maximum queries over the table's extinctions in O(1) per cell: a
+  // sparse table, level L holding the maximum of 2^L texels from each index.
+  // A cell's scalar range can cover most of the table, so a per-cell loop
+  // over texels would make a rebuild cost cells x K.
+  std::vector<std::vector<float>> sparse(1, std::vector<float>(size_t(K)));
+  for (int i = 0; i < K; ++i)
+  {
+    sparse[0][size_t(i)] = table[4 * i + 3];
+  }
+  for (int L = 1; (1 << L) <= K; ++L)
+  {
+    const std::vector<float>& prev = sparse.back();
+    std::vector<float> next(size_t(K - (1 << L) + 1));
+    for (size_t i = 0; i < next.size(); ++i)
+    {
+      next[i] = std::max(prev[i], prev[i + (size_t(1) << (L - 1))]);
+    }
+    sparse.push_back(std::move(next));
+  }
   // Majorants are inflated by a relative 2^-16 so float rounding in the
   // interpolation can never push a sampled extinction above them.
   const float inflate = 1.f + 0x1p-16f;
-#pragma omp parallel for schedule(static)
+  // Threads only pay off on large grids; a small rebuild is sub-millisecond
+  // on one core and would otherwise wait for busy threads to wake.
+#pragma omp parallel for schedule(static) if (cells > 100000)
   for (int64_t c = 0; c < cells; ++c)
   {
     const float mn = ranges[(c * N + channel) * 2 + 0];
@@ -356,12 +377,14 @@ void Scene::rebuildMajorants(int channel)
     if (mn <= mx)
     {
       // Both ends included: the table is interpolated linearly between texels.
-      const int i0 = int(std::floor(texelCoord(tv, channel, mn)));
-      const int i1 = int(std::ceil(texelCoord(tv, channel, mx)));
-      for (int i = std::max(i0, 0); i <= std::min(i1, K - 1); ++i)
+      const int i0 = std::max(0, int(std::floor(texelCoord(tv, channel, mn))));
+      const int i1 = std::min(K - 1, int(std::ceil(texelCoord(tv, channel, mx))));
+      int L = 0;
+      while ((2 << L) <= i1 - i0 + 1)
       {
-        m = std::max(m, table[4 * i + 3]);
+        ++L;
       }
+      m = std::max(sparse[size_t(L)][size_t(i0)], sparse[size_t(L)][size_t(i1 - (1 << L) + 1)]);
     }
     maj[c * N + channel] = m * inflate;
   }

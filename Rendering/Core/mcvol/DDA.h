@@ -91,7 +91,7 @@ struct DDA
       }
       this->tNext[a] = this->crossing(a, tmin);
     }
-    this->t1 = fminf(fminf(fminf(this->tNext[0], this->tNext[1]), this->tNext[2]), this->tEnd);
+    this->t1 = minf(minf(minf(this->tNext[0], this->tNext[1]), this->tNext[2]), this->tEnd);
     this->Dims[0] = g.dims[0];
     this->Dims[1] = g.dims[1];
     this->Dims[2] = g.dims[2];
@@ -128,7 +128,7 @@ struct DDA
     }
     this->t0 = this->t1;
     this->tNext[a] = this->crossing(a, this->t0);
-    this->t1 = fminf(fminf(fminf(this->tNext[0], this->tNext[1]), this->tNext[2]), this->tEnd);
+    this->t1 = minf(minf(minf(this->tNext[0], this->tNext[1]), this->tNext[2]), this->tEnd);
     return true;
   }
 

@@ -82,17 +82,35 @@ MCVOL_HOT bool realCollision(const SceneView& s, int n, Vec3f p, float xiMaj, Ve
   return true;
 }
 
+/// An exponential optical depth -ln(1 - u): the free flight of Eq. 3 in
+/// units of majorant times distance.
+MCVOL_HOT float sampleOpticalDepth(Rng& rng)
+{
+  return -logf(1.f - rng.next());
+}
+
 /**
  * Method #2 (Section 4.5, Listing 4): one DDA over the macrocells; in each
- * cell every active channel takes Woodcock steps from the cell entry with its
- * own majorant until it leaves the cell, passes the closest hit so far, or
- * collides. The traversal stops after the first cell with a collision.
+ * cell every active channel takes Woodcock steps with its own majorant until
+ * it leaves the cell, passes the closest hit so far, or collides. The
+ * traversal stops after the first cell with a collision.
+ *
+ * Each channel carries its sampled optical depth across cells instead of
+ * drawing a new free flight at every cell entry (Listing 4 restarts at
+ * dda.cellEntryT()). Both are exact because the exponential is memoryless;
+ * carrying it costs one logarithm per tentative collision rather than one per
+ * channel per cell, which is most of the work in sparse regions.
  */
 template <BlendMode Mode>
 MCVOL_HOT Hit track1DDA(const SceneView& s, Vec3f o, Vec3f d, float tmin, float tmax, Rng& rng, RayCounters& c)
 {
   Hit hit;
   hit.t = tmax;
+  float tau[kMaxChannels];
+  for (int i = 0; i < s.numActive; ++i)
+  {
+    tau[i] = sampleOpticalDepth(rng);
+  }
   DDA dda;
   dda.init(s.grid, o, d, tmin, tmax);
   const int N = s.grid.numChannels;
@@ -108,15 +126,18 @@ MCVOL_HOT Hit track1DDA(const SceneView& s, Vec3f o, Vec3f d, float tmin, float 
       {
         continue; // empty for this channel: no sampling at all
       }
-      const float tStop = fminf(dda.t1, hit.t);
+      const float tStop = minf(dda.t1, hit.t);
       float t = dda.t0;
       while (true)
       {
-        t += woodcockStep(m, rng);
-        if (!(t < tStop))
+        const float room = (tStop - t) * m; // optical depth left in this cell
+        if (!(tau[i] < room))
         {
+          tau[i] -= room > 0.f ? room : 0.f;
           break;
         }
+        t += tau[i] / m;
+        tau[i] = sampleOpticalDepth(rng);
         ++c.tentative;
         Vec3f rgb;
         if (realCollision<Mode>(s, n, o + d * t, rng.next() * m, rgb, c))
@@ -139,7 +160,8 @@ MCVOL_HOT Hit track1DDA(const SceneView& s, Vec3f o, Vec3f d, float tmin, float 
 }
 
 /// Woodcock tracking of one channel alone over [tmin, tmax] (used by N-DDA
-/// for each channel and by post-render compositing).
+/// for each channel and by post-render compositing); the optical depth is
+/// carried across cells as in track1DDA.
 template <BlendMode Mode>
 MCVOL_HOT bool trackChannel(
   const SceneView& s, int n, Vec3f o, Vec3f d, float tmin, float tmax, Rng& rng, RayCounters& c, Hit& hit)
@@ -147,6 +169,7 @@ MCVOL_HOT bool trackChannel(
   DDA dda;
   dda.init(s.grid, o, d, tmin, tmax);
   const int N = s.grid.numChannels;
+  float tau = sampleOpticalDepth(rng);
   while (!dda.done)
   {
     ++c.ddaSteps;
@@ -156,11 +179,14 @@ MCVOL_HOT bool trackChannel(
       float t = dda.t0;
       while (true)
       {
-        t += woodcockStep(m, rng);
-        if (!(t < dda.t1))
+        const float room = (dda.t1 - t) * m;
+        if (!(tau < room))
         {
+          tau -= room > 0.f ? room : 0.f;
           break;
         }
+        t += tau / m;
+        tau = sampleOpticalDepth(rng);
         ++c.tentative;
         Vec3f rgb;
         if (realCollision<Mode>(s, n, o + d * t, rng.next() * m, rgb, c))

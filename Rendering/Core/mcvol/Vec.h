@@ -19,8 +19,9 @@ struct Vec3f
     , z(c)
   {
   }
-  MCVOL_FUNC float operator[](int i) const { return i == 0 ? x : (i == 1 ? y : z); }
-  MCVOL_FUNC float& operator[](int i) { return i == 0 ? x : (i == 1 ? y : z); }
+  // x, y, z are laid out contiguously (standard layout, no padding).
+  MCVOL_FUNC float operator[](int i) const { return (&this->x)[i]; }
+  MCVOL_FUNC float& operator[](int i) { return (&this->x)[i]; }
 };
 
 MCVOL_FUNC Vec3f operator+(Vec3f a, Vec3f b)
@@ -82,6 +83,15 @@ struct Affine3f
   }
 };
 
+/// min/max without fminf's NaN rules, which compilers turn into library calls.
+MCVOL_FUNC float minf(float a, float b)
+{
+  return a < b ? a : b;
+}
+MCVOL_FUNC float maxf(float a, float b)
+{
+  return a > b ? a : b;
+}
 MCVOL_FUNC float clampf(float v, float lo, float hi)
 {
   return v < lo ? lo : (v > hi ? hi : v);

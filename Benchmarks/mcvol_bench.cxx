@@ -1,0 +1,433 @@
+// SPDX-License-Identifier: BSD-3-Clause
+//
+// mcvol-bench: VTK-free benchmark of the core and its backends. It builds on
+// any machine with a C++17 compiler and OpenMP (the GPU machine included) and
+// prints Markdown tables; --csv also writes the rows as CSV.
+//
+// Sections (select with --sections a,b,...):
+//   trackers   frame time at 1 spp, 1-DDA and N-DDA
+//   channels   frame time against channel count (1, 2, 4, 8, 12, 16)
+//   macrocell  frame time against macrocell size, plus memory (paper Fig. 8)
+//   rebuild    majorant rebuild time after one channel's transfer function changes
+//   memory     data, macrocell and majorant bytes (paper Table 1)
+
+#include "mcvol/CameraMath.h"
+#include "mcvol/DemoData.h"
+#include "mcvol/Renderer.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+namespace
+{
+struct Options
+{
+  std::string dataset = "cosmology";
+  std::array<int, 3> dims = { 256, 256, 256 };
+  int channels = 0;
+  int width = 512;
+  int height = 512;
+  int warmup = 3;
+  int frames = 10;
+  int macrocell = 8;
+  int tableSize = 1024;
+  mcvol::Backend backend = mcvol::Backend::CPU;
+  std::vector<std::string> sections = { "trackers", "channels", "macrocell", "rebuild", "memory" };
+  std::vector<int> channelCounts = { 1, 2, 4, 8, 12, 16 };
+  std::vector<int> macrocellSizes = { 2, 4, 8, 16, 32, 64 };
+  std::string csv;
+};
+
+using Clock = std::chrono::steady_clock;
+
+double seconds(Clock::time_point t0)
+{
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+double median(std::vector<double> v)
+{
+  std::sort(v.begin(), v.end());
+  const size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+std::vector<std::string> split(const std::string& s, char sep)
+{
+  std::vector<std::string> out;
+  std::stringstream ss(s);
+  std::string item;
+  while (std::getline(ss, item, sep))
+  {
+    if (!item.empty())
+    {
+      out.push_back(item);
+    }
+  }
+  return out;
+}
+
+std::vector<int> splitInts(const std::string& s)
+{
+  std::vector<int> out;
+  for (const auto& t : split(s, ','))
+  {
+    out.push_back(std::stoi(t));
+  }
+  return out;
+}
+
+void usage()
+{
+  std::puts("usage: mcvol-bench [--dataset NAME] [--dims X Y Z] [--channels N] [--size W H]\n"
+            "                   [--warmup N] [--frames N] [--macrocell M] [--backend cpu|cuda|auto]\n"
+            "                   [--sections trackers,channels,macrocell,rebuild,memory]\n"
+            "                   [--channel-counts 1,2,4] [--macrocell-sizes 4,8,16] [--csv FILE]");
+}
+
+Options parse(int argc, char** argv)
+{
+  Options o;
+  for (int i = 1; i < argc; ++i)
+  {
+    const std::string a = argv[i];
+    auto need = [&](int n) {
+      if (i + n >= argc)
+      {
+        throw std::invalid_argument(a + " needs " + std::to_string(n) + " value(s)");
+      }
+    };
+    if (a == "--dataset")
+    {
+      need(1);
+      o.dataset = argv[++i];
+    }
+    else if (a == "--dims")
+    {
+      need(3);
+      for (int k = 0; k < 3; ++k)
+        o.dims[size_t(k)] = std::stoi(argv[++i]);
+    }
+    else if (a == "--channels")
+    {
+      need(1);
+      o.channels = std::stoi(argv[++i]);
+    }
+    else if (a == "--size")
+    {
+      need(2);
+      o.width = std::stoi(argv[++i]);
+      o.height = std::stoi(argv[++i]);
+    }
+    else if (a == "--warmup")
+    {
+      need(1);
+      o.warmup = std::stoi(argv[++i]);
+    }
+    else if (a == "--frames")
+    {
+      need(1);
+      o.frames = std::stoi(argv[++i]);
+    }
+    else if (a == "--macrocell")
+    {
+      need(1);
+      o.macrocell = std::stoi(argv[++i]);
+    }
+    else if (a == "--backend")
+    {
+      need(1);
+      const std::string b = argv[++i];
+      o.backend = b == "cuda" ? mcvol::Backend::CUDA : (b == "auto" ? mcvol::Backend::Auto : mcvol::Backend::CPU);
+    }
+    else if (a == "--sections")
+    {
+      need(1);
+      o.sections = split(argv[++i], ',');
+    }
+    else if (a == "--channel-counts")
+    {
+      need(1);
+      o.channelCounts = splitInts(argv[++i]);
+    }
+    else if (a == "--macrocell-sizes")
+    {
+      need(1);
+      o.macrocellSizes = splitInts(argv[++i]);
+    }
+    else if (a == "--csv")
+    {
+      need(1);
+      o.csv = argv[++i];
+    }
+    else if (a == "--help" || a == "-h")
+    {
+      usage();
+      std::exit(0);
+    }
+    else
+    {
+      throw std::invalid_argument("unknown option " + a);
+    }
+  }
+  return o;
+}
+
+/// A loaded dataset with its scene.
+struct Setup
+{
+  mcvol::DemoVolume volume;
+  std::vector<std::array<float, 2>> ranges;
+  mcvol::Scene scene;
+
+  void load(const Options& o, int channels, int macrocell)
+  {
+    this->volume = mcvol::makeDemo(o.dataset, o.dims, channels);
+    this->ranges.clear();
+    std::vector<mcvol::ChannelSource> src;
+    for (int n = 0; n < this->volume.numChannels(); ++n)
+    {
+      src.push_back(this->volume.source(n));
+      this->ranges.push_back(this->volume.range(n));
+    }
+    this->scene = mcvol::Scene();
+    this->scene.setVolume(this->volume.dims, this->volume.numChannels(), src.data());
+    this->scene.setMacrocellSize(macrocell);
+    for (int n = 0; n < this->volume.numChannels(); ++n)
+    {
+      this->scene.setTransferFunction(n,
+        mcvol::sampleTransferFunction(this->volume.transferFunctions[size_t(n)], this->ranges[size_t(n)][0],
+          this->ranges[size_t(n)][1], o.tableSize, this->volume.spacing[0]));
+    }
+    this->scene.update();
+  }
+};
+
+struct FrameStats
+{
+  double medianMs = 0;
+  double minMs = 0;
+  double tentativePerRay = 0;
+  double ddaPerRay = 0;
+  double alpha = 0;
+};
+
+FrameStats timeFrames(const Options& o, mcvol::Renderer& r, const mcvol::Scene& scene, mcvol::Tracker tracker)
+{
+  const mcvol::Camera cam =
+    mcvol::orbitCamera(scene.dims(), std::array<double, 3>{ 1, 1, 1 }.data(), o.width, o.height, 30, 20);
+  mcvol::Accumulator acc;
+  mcvol::RenderSettings st;
+  st.samplesPerPixel = 1;
+  st.tracker = tracker;
+  for (int i = 0; i < o.warmup; ++i)
+  {
+    r.render(scene, cam, st, nullptr, acc);
+  }
+  acc.reset();
+  std::vector<double> ms;
+  mcvol::RenderCounters c;
+  for (int i = 0; i < o.frames; ++i)
+  {
+    const auto t0 = Clock::now();
+    r.render(scene, cam, st, nullptr, acc, &c);
+    ms.push_back(1e3 * seconds(t0));
+  }
+  FrameStats s;
+  s.medianMs = median(ms);
+  s.minMs = *std::min_element(ms.begin(), ms.end());
+  s.tentativePerRay = double(c.tentativeCollisions) / double(c.rays);
+  s.ddaPerRay = double(c.ddaSteps) / double(c.rays);
+  double a = 0;
+  for (int p = 0; p < acc.width() * acc.height(); ++p)
+  {
+    a += acc.rgba()[4 * p + 3];
+  }
+  s.alpha = a / double(acc.width() * acc.height());
+  return s;
+}
+
+std::string describe(const Options& o, const Setup& s)
+{
+  std::ostringstream ss;
+  ss << o.dataset << " " << s.volume.dims[0] << "x" << s.volume.dims[1] << "x" << s.volume.dims[2] << " "
+     << mcvol::toString(s.volume.type);
+  return ss.str();
+}
+
+bool wants(const Options& o, const std::string& s)
+{
+  return std::find(o.sections.begin(), o.sections.end(), s) != o.sections.end();
+}
+} // namespace
+
+int main(int argc, char** argv)
+{
+  Options o;
+  try
+  {
+    o = parse(argc, argv);
+  }
+  catch (const std::exception& e)
+  {
+    std::fprintf(stderr, "mcvol-bench: %s\n", e.what());
+    usage();
+    return 2;
+  }
+  std::string why;
+  std::unique_ptr<mcvol::Renderer> r;
+  try
+  {
+    r = mcvol::Renderer::create(o.backend, &why);
+  }
+  catch (const std::exception& e)
+  {
+    std::fprintf(stderr, "mcvol-bench: %s\n", e.what());
+    return 3;
+  }
+  std::vector<std::string> csv = { "section,dataset,channels,macrocell,tracker,backend,value,unit,extra" };
+  auto row = [&](const std::string& section, const std::string& ds, int ch, int mc, const std::string& tr,
+               double value, const std::string& unit, const std::string& extra) {
+    std::ostringstream ss;
+    ss << section << "," << ds << "," << ch << "," << mc << "," << tr << "," << r->name() << "," << value << ","
+       << unit << "," << extra;
+    csv.push_back(ss.str());
+  };
+  int threads = 1;
+#ifdef _OPENMP
+  threads = omp_get_max_threads();
+#endif
+  std::printf("# mcvol-bench\n\nbackend: %s (%s); threads: %d; image %dx%d; 1 spp per frame; %d warm-up + %d timed "
+              "frames (median)\n\n",
+    r->name(), why.c_str(), threads, o.width, o.height, o.warmup, o.frames);
+
+  Setup s;
+  if (wants(o, "trackers"))
+  {
+    s.load(o, o.channels, o.macrocell);
+    const std::string ds = describe(o, s);
+    std::printf("## Frame time at 1 spp: %s, %d channels, macrocell %d\n\n", ds.c_str(), s.volume.numChannels(),
+      o.macrocell);
+    std::printf("| tracker | median ms | min ms | tentative collisions/ray | DDA steps/ray | mean alpha |\n|---|---|---|---|---|---|\n");
+    for (auto t : { mcvol::Tracker::OneDDA, mcvol::Tracker::NDDA })
+    {
+      const FrameStats f = timeFrames(o, *r, s.scene, t);
+      std::printf("| %s | %.2f | %.2f | %.2f | %.2f | %.3f |\n", mcvol::toString(t), f.medianMs, f.minMs,
+        f.tentativePerRay, f.ddaPerRay, f.alpha);
+      row("trackers", ds, s.volume.numChannels(), o.macrocell, mcvol::toString(t), f.medianMs, "ms", "");
+    }
+    std::printf("\n");
+    std::fflush(stdout);
+  }
+  if (wants(o, "channels"))
+  {
+    std::printf("## Frame time against channel count (%s, macrocell %d)\n\n", o.dataset.c_str(), o.macrocell);
+    std::printf("| channels | 1-DDA ms | N-DDA ms | 1-DDA / 1 channel | mean alpha |\n|---|---|---|---|---|\n");
+    double base = 0;
+    for (int n : o.channelCounts)
+    {
+      s.load(o, n, o.macrocell);
+      const FrameStats a = timeFrames(o, *r, s.scene, mcvol::Tracker::OneDDA);
+      const FrameStats b = timeFrames(o, *r, s.scene, mcvol::Tracker::NDDA);
+      if (base == 0)
+      {
+        base = a.medianMs;
+      }
+      std::printf("| %d | %.2f | %.2f | %.2fx | %.3f |\n", n, a.medianMs, b.medianMs, a.medianMs / base, a.alpha);
+      row("channels", describe(o, s), n, o.macrocell, "1-DDA", a.medianMs, "ms", "");
+      row("channels", describe(o, s), n, o.macrocell, "N-DDA", b.medianMs, "ms", "");
+      std::fflush(stdout);
+    }
+    std::printf("\n");
+  }
+  if (wants(o, "macrocell"))
+  {
+    s.load(o, o.channels, o.macrocell);
+    std::printf("## Frame time and memory against macrocell size (%s, %d channels)\n\n", describe(o, s).c_str(),
+      s.volume.numChannels());
+    std::printf("| macrocell (voxels) | grid | 1-DDA ms | N-DDA ms | macrocells+majorants / data | build ms |\n"
+                "|---|---|---|---|---|---|\n");
+    for (int m : o.macrocellSizes)
+    {
+      const auto t0 = Clock::now();
+      s.scene.setMacrocellSize(m);
+      s.scene.update();
+      const double buildMs = 1e3 * seconds(t0);
+      const FrameStats a = timeFrames(o, *r, s.scene, mcvol::Tracker::OneDDA);
+      const FrameStats b = timeFrames(o, *r, s.scene, mcvol::Tracker::NDDA);
+      const mcvol::MemoryStats mem = s.scene.memory();
+      const double frac = double(mem.macrocellBytes + mem.majorantBytes) / double(mem.dataBytes);
+      const int* g = s.scene.macrocellDims();
+      std::printf("| %d | %dx%dx%d | %.2f | %.2f | %.2f%% | %.1f |\n", m, g[0], g[1], g[2], a.medianMs, b.medianMs,
+        100 * frac, buildMs);
+      row("macrocell", describe(o, s), s.volume.numChannels(), m, "1-DDA", a.medianMs, "ms", "");
+      row("macrocell", describe(o, s), s.volume.numChannels(), m, "N-DDA", b.medianMs, "ms", "");
+      row("macrocell", describe(o, s), s.volume.numChannels(), m, "-", 100 * frac, "percent_of_data", "memory");
+      std::fflush(stdout);
+    }
+    std::printf("\n");
+  }
+  if (wants(o, "rebuild"))
+  {
+    s.load(o, o.channels, o.macrocell);
+    // Alternate between two transfer functions of channel 0 and time the
+    // update() that rebuilds its majorants (only that channel).
+    mcvol::DemoTransferFunction alt = s.volume.transferFunctions[0];
+    for (auto& p : alt.opacity)
+    {
+      p[1] = std::min(1.f, p[1] * 0.5f + 0.05f);
+    }
+    std::vector<double> ms;
+    int rebuilt = 0;
+    for (int i = 0; i < 21; ++i)
+    {
+      const auto& tf = (i % 2) ? alt : s.volume.transferFunctions[0];
+      s.scene.setTransferFunction(0,
+        mcvol::sampleTransferFunction(tf, s.ranges[0][0], s.ranges[0][1], o.tableSize, s.volume.spacing[0]));
+      s.scene.update();
+      ms.push_back(1e3 * s.scene.lastMajorantBuildSeconds());
+      rebuilt = s.scene.lastMajorantChannelsRebuilt();
+    }
+    const int* g = s.scene.macrocellDims();
+    std::printf("## Majorant rebuild after one transfer-function change (%s, macrocell %d, grid %dx%dx%d, table %d)\n\n"
+                "| channels rebuilt | median ms | max ms |\n|---|---|---|\n| %d | %.3f | %.3f |\n\n",
+      describe(o, s).c_str(), o.macrocell, g[0], g[1], g[2], o.tableSize, rebuilt, median(ms),
+      *std::max_element(ms.begin(), ms.end()));
+    row("rebuild", describe(o, s), s.volume.numChannels(), o.macrocell, "-", median(ms), "ms", "one channel");
+    std::fflush(stdout);
+  }
+  if (wants(o, "memory"))
+  {
+    s.load(o, o.channels, o.macrocell);
+    const mcvol::MemoryStats m = s.scene.memory();
+    const double MiB = 1024.0 * 1024.0;
+    std::printf("## Memory (%s, %d channels, macrocell %d; paper Table 1)\n\n| data MiB | macrocells MiB | majorants MiB "
+                "| total MiB | (macrocells+majorants)/data |\n|---|---|---|---|---|\n| %.2f | %.2f | %.2f | %.2f | %.2f%% |\n\n",
+      describe(o, s).c_str(), s.volume.numChannels(), o.macrocell, m.dataBytes / MiB, m.macrocellBytes / MiB,
+      m.majorantBytes / MiB, (m.dataBytes + m.macrocellBytes + m.majorantBytes) / MiB,
+      100.0 * double(m.macrocellBytes + m.majorantBytes) / double(m.dataBytes));
+    row("memory", describe(o, s), s.volume.numChannels(), o.macrocell, "-",
+      100.0 * double(m.macrocellBytes + m.majorantBytes) / double(m.dataBytes), "percent_of_data", "");
+  }
+  if (!o.csv.empty())
+  {
+    std::ofstream f(o.csv);
+    for (const auto& l : csv)
+    {
+      f << l << "\n";
+    }
+  }
+  return 0;
+}

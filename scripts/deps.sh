@@ -1,0 +1,29 @@
+#!/usr/bin/env bash
+# Installs the Debian packages mcvol needs, only those missing. Sourced by
+# scripts/demo.sh and scripts/test.sh; safe to run again.
+set -euo pipefail
+
+MCVOL_PACKAGES=(
+  cmake make g++ pkg-config
+  # ParaView 5.11 and its own VTK 9.2 (DESIGN.md: we build against it)
+  paraview paraview-dev python3-paraview
+  # find_package(ParaView) needs these Qt development packages
+  qtbase5-dev qttools5-dev libqt5svg5-dev libqt5x11extras5-dev libqt5opengl5-dev
+  # tests: an X server for OpenGL, GoogleTest sources, numpy/matplotlib/scikit-image
+  xvfb xauth googletest python3-numpy python3-matplotlib python3-skimage
+)
+
+mcvol_missing=()
+for p in "${MCVOL_PACKAGES[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+    mcvol_missing+=("$p")
+  fi
+done
+if [ ${#mcvol_missing[@]} -gt 0 ]; then
+  echo "mcvol: installing missing packages: ${mcvol_missing[*]}"
+  SUDO=""
+  if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+  export DEBIAN_FRONTEND=noninteractive
+  $SUDO apt-get update -q
+  $SUDO apt-get install -y -q --no-install-recommends "${mcvol_missing[@]}"
+fi
