@@ -254,7 +254,7 @@ void makeCosmology(DemoVolume& v)
   const float u = 0.05f * float(std::max({ d[0], d[1], d[2] }));
   v.transferFunctions = {
     ramp({ { 0.f, 0.2f, 0.2f, 0.6f }, { 0.3f, 0.8f, 0.3f, 0.5f }, { 1.f, 1.f, 0.9f, 0.7f } },
-      { { 0.f, 0.f }, { 0.02f, 0.f }, { 0.15f, 0.5f }, { 1.f, 0.9f } }, u),
+      { { 0.f, 0.f }, { 0.05f, 0.f }, { 0.3f, 0.6f }, { 1.f, 0.9f } }, u),
     ramp({ { 0.f, 0.1f, 0.5f, 0.9f }, { 1.f, 0.6f, 0.9f, 1.f } }, { { 0.f, 0.f }, { 0.05f, 0.f }, { 1.f, 0.6f } }, u),
     ramp({ { 0.f, 0.9f, 0.4f, 0.1f }, { 1.f, 1.f, 0.9f, 0.3f } }, { { 0.f, 0.f }, { 0.1f, 0.f }, { 1.f, 0.5f } }, u),
     ramp({ { 0.f, 0.3f, 0.9f, 0.4f }, { 1.f, 0.8f, 1.f, 0.6f } }, { { 0.f, 0.f }, { 0.6f, 0.f }, { 1.f, 0.3f } }, u),
@@ -306,14 +306,20 @@ void makeWeather(DemoVolume& v)
   for (int n = 0; n < 12; ++n)
   {
     const float* col = kPalette[n % 8];
-    // Fields with a background level (pressure, temperature, vapour) show
-    // only their extremes; the hydrometeors show wherever they are present.
-    const bool extremes = n < 2 || n == 6;
-    v.transferFunctions.push_back(extremes
-        ? ramp({ { 0.f, col[0], col[1], col[2] }, { 1.f, col[0], col[1], col[2] } },
-            { { 0.f, 0.15f }, { 0.1f, 0.f }, { 0.9f, 0.f }, { 1.f, 0.15f } }, u)
-        : ramp({ { 0.f, col[0] * 0.5f, col[1] * 0.5f, col[2] * 0.5f }, { 1.f, col[0], col[1], col[2] } },
-            { { 0.f, 0.f }, { 0.3f, 0.f }, { 1.f, 0.4f } }, u));
+    // Fields with a background level (pressure, temperature, vapour) show a
+    // thin shell around their mid value (a surface that dips in the eye);
+    // signed winds show both extremes; the rest shows where it is strong.
+    const bool shell = n < 2 || n == 6;
+    const bool signedWind = n == 2 || n == 3;
+    std::vector<std::array<float, 2>> op;
+    if (shell)
+      op = { { 0.f, 0.f }, { 0.45f, 0.f }, { 0.5f, 0.25f }, { 0.55f, 0.f }, { 1.f, 0.f } };
+    else if (signedWind)
+      op = { { 0.f, 0.3f }, { 0.2f, 0.f }, { 0.8f, 0.f }, { 1.f, 0.3f } };
+    else
+      op = { { 0.f, 0.f }, { 0.3f, 0.f }, { 1.f, 0.4f } };
+    v.transferFunctions.push_back(
+      ramp({ { 0.f, col[0] * 0.6f, col[1] * 0.6f, col[2] * 0.6f }, { 1.f, col[0], col[1], col[2] } }, op, u));
   }
 }
 
