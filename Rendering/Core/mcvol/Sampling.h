@@ -28,13 +28,27 @@ MCVOL_HOT float fetchVoxel(const ChannelView& c, int64_t v)
 }
 
 /**
- * Trilinear interpolation of channel n at continuous index p, clamped to the
- * grid (axes with one voxel are constant). A NaN voxel among the 8 corners
+ * Trilinear interpolation (or the nearest voxel, if vol.nearest) of channel n
+ * at continuous index p, clamped to the grid (axes with one voxel are
+ * constant). Both stay within the macrocell ranges, which cover every voxel
+ * a cell's points can read. A NaN voxel among the 8 corners
  * gives NaN, which the transfer-function lookup maps to zero extinction.
  */
 MCVOL_HOT float sampleChannel(const VolumeView& vol, int n, Vec3f p)
 {
   const ChannelView& c = vol.channels[n];
+  if (vol.nearest)
+  {
+    int64_t v = 0;
+    int64_t stride = 1;
+    for (int a = 0; a < 3; ++a)
+    {
+      const int i = int(clampf(p[a], 0.f, float(vol.dims[a] - 1)) + 0.5f);
+      v += stride * int64_t(i < vol.dims[a] ? i : vol.dims[a] - 1);
+      stride *= vol.dims[a];
+    }
+    return fetchVoxel(c, v);
+  }
   int i0[3];
   int i1[3];
   float f[3];

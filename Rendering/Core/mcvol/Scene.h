@@ -78,6 +78,8 @@ public:
   /// Macrocell edge in voxels (>= 1).
   void setMacrocellSize(int voxels);
   void setBlendMode(BlendMode mode);
+  /// Nearest-voxel sampling instead of trilinear (default false).
+  void setNearestInterpolation(bool nearest) { this->View.volume.nearest = nearest; }
   /// Non-negative weights, one per channel; normalised to sum 1 (Eq. 10).
   /// All zero means equal weights.
   void setMixWeights(const float* weights, int count);

@@ -30,6 +30,9 @@ struct VolumeView
   /// axis with a single voxel gets [-0.5, 0.5] (one spacing of thickness).
   Vec3f boxLo;
   Vec3f boxHi;
+  /// Nearest-voxel instead of trilinear sampling (vtkVolumeProperty's
+  /// VTK_NEAREST_INTERPOLATION).
+  bool nearest = false;
 };
 
 /// Transfer-function tables: per channel K texels of (r, g, b, extinction).

@@ -106,6 +106,10 @@ MCVOL_HOT Hit track1DDA(const SceneView& s, Vec3f o, Vec3f d, float tmin, float 
 {
   Hit hit;
   hit.t = tmax;
+  if (s.numActive == 0)
+  {
+    return hit; // nothing visible: no traversal (as N-DDA)
+  }
   float tau[kMaxChannels];
   for (int i = 0; i < s.numActive; ++i)
   {

@@ -1,0 +1,57 @@
+# Body of the mcvol::RenderingMonteCarlo VTK module.
+#
+# vtk_module_build() adds the folder holding the scanned vtk.module as a
+# subdirectory and expects its CMakeLists.txt to call vtk_module_add_module().
+# The vtk.module lives at the repository root (so the repository also works as
+# a VTK remote module), which the standalone build cannot add as its own
+# subdirectory. So the module body lives here, with absolute paths, and is
+# include()d from whichever folder vtk_module_build() added:
+#   - standalone build: a generated folder in the build tree holding a copy
+#     of vtk.module (top-level CMakeLists.txt, cmake/mcvolModuleDir.CMakeLists.txt.in);
+#   - VTK remote module: the repository root CMakeLists.txt.
+
+set(_mcvol_rendering_dir "${CMAKE_CURRENT_LIST_DIR}")
+
+# The VTK-free core and its CPU backend (static, position independent, linked
+# privately into the module library). The standalone build adds them from the
+# top level; inside a VTK build nobody has yet.
+set(CMAKE_POSITION_INDEPENDENT_CODE ON)
+foreach (_mcvol_part IN ITEMS Core CPU)
+  if (EXISTS "${_mcvol_rendering_dir}/${_mcvol_part}/CMakeLists.txt")
+    string(TOLOWER "mcvol_${_mcvol_part}" _mcvol_part_target)
+    if (NOT TARGET "${_mcvol_part_target}")
+      add_subdirectory("${_mcvol_rendering_dir}/${_mcvol_part}"
+        "${CMAKE_CURRENT_BINARY_DIR}/mcvol${_mcvol_part}")
+    endif ()
+  endif ()
+endforeach ()
+
+set(classes
+  vtkMultiChannelDemoSource
+  vtkMultiChannelVolumeMapper)
+list(TRANSFORM classes PREPEND "${_mcvol_rendering_dir}/")
+
+vtk_module_add_module(mcvol::RenderingMonteCarlo
+  CLASSES ${classes})
+# vtk_module_add_module() exports the folder it is called from; the headers
+# are here (the Python wrappers and users compile against them).
+vtk_module_include(mcvol::RenderingMonteCarlo
+  PUBLIC
+    "$<BUILD_INTERFACE:${_mcvol_rendering_dir}>")
+
+foreach (_mcvol_core_target IN ITEMS mcvol_core mcvol_cpu)
+  if (NOT TARGET "${_mcvol_core_target}")
+    message(FATAL_ERROR
+      "mcvol::RenderingMonteCarlo needs the target ${_mcvol_core_target} "
+      "(Rendering/Core and Rendering/CPU).")
+  endif ()
+  set_property(TARGET "${_mcvol_core_target}" PROPERTY POSITION_INDEPENDENT_CODE ON)
+endforeach ()
+vtk_module_link(mcvol::RenderingMonteCarlo
+  PRIVATE
+    mcvol_cpu
+    mcvol_core)
+# The CUDA backend, when the build has one.
+if (TARGET mcvol_cuda)
+  vtk_module_link(mcvol::RenderingMonteCarlo PRIVATE mcvol_cuda)
+endif ()

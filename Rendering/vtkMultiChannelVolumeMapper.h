@@ -1,0 +1,294 @@
+// SPDX-License-Identifier: BSD-3-Clause
+/**
+ * @class   vtkMultiChannelVolumeMapper
+ * @brief   Progressive Monte Carlo volume mapper for N-channel image data.
+ *
+ * vtkMultiChannelVolumeMapper renders a vtkImageData whose point data holds N
+ * scalar channels (1 to 32), each with its own colour and opacity transfer
+ * function, by multi-density Woodcock (delta) tracking (Sahistan et al.). It
+ * runs on the CPU (OpenMP) or on an NVIDIA GPU (CUDA), picked with SetBackend.
+ *
+ * Rendering is progressive: every Render() adds SamplesPerPixel samples per
+ * pixel to a running mean, which is drawn over the frame. The mean starts over
+ * whenever anything that changes the image changes: the camera, the volume's
+ * matrix, the input data, the vtkVolumeProperty or any transfer function, a
+ * parameter of this mapper, the viewport size, or the depth of the opaque
+ * geometry drawn before the volume (rays stop at that depth, so geometry
+ * inside the volume occludes it correctly). Rendering again with nothing
+ * changed refines the image; GetTotalSamples() says how far.
+ *
+ * Channels: by default the components of the point scalars (as selected with
+ * SetScalarMode/SelectScalarArray) are the channels. Alternatively list N
+ * single-component point arrays with AddChannelArray(). Supported types are
+ * unsigned char, short, unsigned short, float and double; the data is read in
+ * place, never copied. Cell data is not supported.
+ *
+ * Transfer functions: channel i < 4 takes its colour (RGB or gray), scalar
+ * opacity and opacity unit distance from the vtkVolumeProperty's component i,
+ * as VTK's other mappers do with IndependentComponentsOn (components are
+ * always treated as independent channels here). SetChannelColor,
+ * SetChannelScalarOpacity and SetChannelScalarOpacityUnitDistance override
+ * the property for one channel; channels 4 and above (vtkVolumeProperty holds
+ * at most VTK_MAX_VRCOMP = 4) must be given both functions this way. Each
+ * function is sampled over the channel's finite data range.
+ *
+ * How channels combine is SetChannelBlendMode (density, max, mix, composite).
+ * This is separate from, and ignores, vtkVolumeMapper::SetBlendMode.
+ * The vtkVolumeProperty's interpolation type (nearest or linear) selects
+ * the sampling. Cropping, clipping planes, gradient opacity and its shading
+ * settings are not used by this mapper (lighting comes in a later release).
+ *
+ * Bad input (no input, no scalars, an unsupported type, an empty extent, more
+ * than 32 channels, a channel without transfer functions) is reported with
+ * vtkErrorMacro and nothing is drawn.
+ *
+ * @sa vtkVolumeMapper vtkVolumeProperty vtkFixedPointVolumeRayCastMapper
+ */
+
+#ifndef vtkMultiChannelVolumeMapper_h
+#define vtkMultiChannelVolumeMapper_h
+
+#include "mcvolRenderingMonteCarloModule.h" // For export macro
+#include "vtkVolumeMapper.h"
+
+#include <memory> // For std::unique_ptr
+
+class vtkColorTransferFunction;
+class vtkImageData;
+class vtkPiecewiseFunction;
+class vtkRenderer;
+class vtkVolume;
+class vtkWindow;
+
+class MCVOLRENDERINGMONTECARLO_EXPORT vtkMultiChannelVolumeMapper : public vtkVolumeMapper
+{
+public:
+  static vtkMultiChannelVolumeMapper* New();
+  vtkTypeMacro(vtkMultiChannelVolumeMapper, vtkVolumeMapper);
+  void PrintSelf(ostream& os, vtkIndent indent) override;
+
+  enum ChannelLimits
+  {
+    /// Most channels a volume may have.
+    MAX_CHANNELS = 32
+  };
+
+  enum ChannelBlendModes
+  {
+    MC_DENSITY_BLEND = 0,
+    MC_MAX_BLEND = 1,
+    MC_MIX_BLEND = 2,
+    MC_COMPOSITE_BLEND = 3
+  };
+
+  ///@{
+  /**
+   * How the channels combine (Sahistan et al., Sections 4.1, 4.2):
+   * - MC_DENSITY_BLEND (default): extinctions add; a collision picks a channel
+   *   in proportion to its extinction (physically based).
+   * - MC_MAX_BLEND: at each point only the channel of largest extinction.
+   * - MC_MIX_BLEND: max extinction, colour mixed with the channels' weights
+   *   (SetMixWeight).
+   * - MC_COMPOSITE_BLEND: each channel rendered alone and the images added.
+   * Named "ChannelBlendMode" so as not to clash with vtkVolumeMapper's
+   * BlendMode (composite/MIP/...), which this mapper ignores.
+   */
+  vtkSetClampMacro(ChannelBlendMode, int, MC_DENSITY_BLEND, MC_COMPOSITE_BLEND);
+  vtkGetMacro(ChannelBlendMode, int);
+  void SetChannelBlendModeToDensity() { this->SetChannelBlendMode(MC_DENSITY_BLEND); }
+  void SetChannelBlendModeToMax() { this->SetChannelBlendMode(MC_MAX_BLEND); }
+  void SetChannelBlendModeToMix() { this->SetChannelBlendMode(MC_MIX_BLEND); }
+  void SetChannelBlendModeToComposite() { this->SetChannelBlendMode(MC_COMPOSITE_BLEND); }
+  const char* GetChannelBlendModeAsString();
+  ///@}
+
+  enum TrackingMethods
+  {
+    ONE_DDA = 0,
+    N_DDA = 1
+  };
+
+  ///@{
+  /**
+   * Macrocell traversal: ONE_DDA (default) walks one DDA with the summed
+   * majorant of all channels; N_DDA walks one DDA per channel (Sahistan et al.,
+   * Sections 4.5 and 4.4). Both give the same image in expectation.
+   */
+  vtkSetClampMacro(TrackingMethod, int, ONE_DDA, N_DDA);
+  vtkGetMacro(TrackingMethod, int);
+  void SetTrackingMethodToOneDDA() { this->SetTrackingMethod(ONE_DDA); }
+  void SetTrackingMethodToNDDA() { this->SetTrackingMethod(N_DDA); }
+  const char* GetTrackingMethodAsString();
+  ///@}
+
+  ///@{
+  /**
+   * Samples per pixel added by each Render() (default 1, 1..4096).
+   */
+  vtkSetClampMacro(SamplesPerPixel, int, 1, 4096);
+  vtkGetMacro(SamplesPerPixel, int);
+  ///@}
+
+  ///@{
+  /**
+   * Seed of the random sequences (default 0). The same seed, scene and
+   * backend give the same image.
+   */
+  vtkSetMacro(Seed, unsigned int);
+  vtkGetMacro(Seed, unsigned int);
+  ///@}
+
+  ///@{
+  /**
+   * Edge of a macrocell of the majorant grid, in voxels (default 8, 1..256).
+   */
+  vtkSetClampMacro(MacrocellSize, int, 1, 256);
+  vtkGetMacro(MacrocellSize, int);
+  ///@}
+
+  enum Backends
+  {
+    BACKEND_AUTO = 0,
+    BACKEND_CPU = 1,
+    BACKEND_CUDA = 2
+  };
+
+  ///@{
+  /**
+   * Where rays are traced. BACKEND_AUTO (default) takes CUDA when a usable
+   * device exists and the CPU otherwise; BACKEND_CUDA without a device is an
+   * error (nothing drawn).
+   */
+  vtkSetClampMacro(Backend, int, BACKEND_AUTO, BACKEND_CUDA);
+  vtkGetMacro(Backend, int);
+  void SetBackendToAuto() { this->SetBackend(BACKEND_AUTO); }
+  void SetBackendToCPU() { this->SetBackend(BACKEND_CPU); }
+  void SetBackendToCUDA() { this->SetBackend(BACKEND_CUDA); }
+  const char* GetBackendAsString();
+  ///@}
+
+  /**
+   * Name of the backend in use ("cpu", "cuda", ...): the one the last render
+   * used, or the one SetBackend would pick now if none has rendered yet.
+   * "none" when the requested backend is not available.
+   */
+  const char* GetActiveBackendName();
+
+  ///@{
+  /**
+   * Weight of a channel in MC_MIX_BLEND (default 1, >= 0). Weights are
+   * normalised to sum 1; all zero means equal weights.
+   */
+  void SetMixWeight(int channel, double weight);
+  double GetMixWeight(int channel);
+  ///@}
+
+  /**
+   * Samples per pixel accumulated in the current image.
+   */
+  int GetTotalSamples();
+
+  /**
+   * Starts the accumulation over at the next Render().
+   */
+  void ResetAccumulation();
+
+  ///@{
+  /**
+   * Named single-component point arrays used as the channels, in order,
+   * instead of the components of the scalars. None listed (default): the
+   * scalars' components are the channels.
+   */
+  void AddChannelArray(const char* name);
+  void RemoveAllChannelArrays();
+  int GetNumberOfChannelArrays();
+  const char* GetChannelArray(int index);
+  ///@}
+
+  ///@{
+  /**
+   * Per-channel transfer functions that override the vtkVolumeProperty's for
+   * that channel (nullptr: use the property's). Required for channels >= 4.
+   * Channel must be in [0, 32).
+   */
+  void SetChannelColor(int channel, vtkColorTransferFunction* function);
+  vtkColorTransferFunction* GetChannelColor(int channel);
+  void SetChannelScalarOpacity(int channel, vtkPiecewiseFunction* function);
+  vtkPiecewiseFunction* GetChannelScalarOpacity(int channel);
+  ///@}
+
+  ///@{
+  /**
+   * Opacity unit distance of one channel (world units), overriding the
+   * vtkVolumeProperty's. 0 (default) means unset: the property's for channels
+   * < 4, 1 for the others.
+   */
+  void SetChannelScalarOpacityUnitDistance(int channel, double distance);
+  double GetChannelScalarOpacityUnitDistance(int channel);
+  ///@}
+
+  /**
+   * Removes every per-channel transfer function and unit distance set on the
+   * mapper.
+   */
+  void RemoveAllChannelTransferFunctions();
+
+  /**
+   * Number of channels of the last successful render (0 before or after a
+   * failed one).
+   */
+  vtkGetMacro(NumberOfChannels, int);
+
+  /**
+   * How many channels' transfer-function tables the last render rebuilt
+   * (only channels whose functions, unit distance or data range changed).
+   */
+  vtkGetMacro(LastTransferFunctionUpdates, int);
+
+  /**
+   * Includes the modification times of the per-channel transfer functions set
+   * on the mapper.
+   */
+  vtkMTimeType GetMTime() override;
+
+  /**
+   * Bounds of the volume. An axis with a single voxel gets a thickness of one
+   * spacing, centred on that voxel, as the renderer gives it.
+   */
+  double* GetBounds() VTK_SIZEHINT(6) override;
+  void GetBounds(double bounds[6]) override { this->vtkVolumeMapper::GetBounds(bounds); }
+
+  /**
+   * WARNING: INTERNAL METHOD - NOT INTENDED FOR GENERAL USE
+   * Renders the volume into the current viewport.
+   */
+  void Render(vtkRenderer* ren, vtkVolume* vol) override;
+
+  /**
+   * WARNING: INTERNAL METHOD - NOT INTENDED FOR GENERAL USE
+   * Releases the OpenGL texture and shader used to draw the image.
+   */
+  void ReleaseGraphicsResources(vtkWindow* window) override;
+
+protected:
+  vtkMultiChannelVolumeMapper();
+  ~vtkMultiChannelVolumeMapper() override;
+
+  int ChannelBlendMode = MC_DENSITY_BLEND;
+  int TrackingMethod = ONE_DDA;
+  int SamplesPerPixel = 1;
+  unsigned int Seed = 0;
+  int MacrocellSize = 8;
+  int Backend = BACKEND_AUTO;
+  int NumberOfChannels = 0;
+  int LastTransferFunctionUpdates = 0;
+
+private:
+  vtkMultiChannelVolumeMapper(const vtkMultiChannelVolumeMapper&) = delete;
+  void operator=(const vtkMultiChannelVolumeMapper&) = delete;
+
+  struct vtkInternals;
+  std::unique_ptr<vtkInternals> Internals;
+};
+
+#endif

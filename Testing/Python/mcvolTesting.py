@@ -1,0 +1,76 @@
+"""Helpers shared by the Python tests of the VTK adapter."""
+
+import sys
+
+from vtkmodules.vtkCommonCore import VTK_STRING
+from vtkmodules.vtkRenderingCore import vtkWindowToImageFilter
+from vtkmodules.util.misc import calldata_type
+from vtkmodules.util.numpy_support import vtk_to_numpy
+
+
+def capture_rgba(window):
+    """Renders once more and returns the window as an (H, W, 4) uint8 array,
+    row 0 at the bottom (OpenGL order)."""
+    window.Render()
+    grabber = vtkWindowToImageFilter()
+    grabber.SetInput(window)
+    grabber.ShouldRerenderOff()
+    grabber.ReadFrontBufferOff()
+    grabber.SetInputBufferTypeToRGBA()
+    grabber.Update()
+    image = grabber.GetOutput()
+    w, h, _ = image.GetDimensions()
+    return vtk_to_numpy(image.GetPointData().GetScalars()).reshape(h, w, 4).copy()
+
+
+def world_to_pixel(renderer, point):
+    """Display (x, y) pixel of a world point."""
+    renderer.SetWorldPoint(point[0], point[1], point[2], 1.0)
+    renderer.WorldToDisplay()
+    x, y, _ = renderer.GetDisplayPoint()
+    return int(round(x)), int(round(y))
+
+
+class Checker:
+    """Collects failed checks so one run reports all of them."""
+
+    def __init__(self):
+        self.failures = []
+
+    def check(self, condition, message):
+        if not condition:
+            self.failures.append(message)
+            print("FAIL:", message)
+        return condition
+
+    def finish(self):
+        if self.failures:
+            print("%d check(s) failed" % len(self.failures))
+            sys.exit(1)
+        print("all checks passed")
+        sys.exit(0)
+
+
+class ErrorCatcher:
+    """Observes ErrorEvent/WarningEvent on a VTK object and keeps the messages
+    (so expected errors neither abort nor clutter the test output)."""
+
+    def __init__(self, obj):
+        self.errors = []
+        self.warnings = []
+
+        # The decorator makes VTK pass the message as call data.
+        @calldata_type(VTK_STRING)
+        def on_error(caller, event, message):
+            self.errors.append(str(message))
+
+        @calldata_type(VTK_STRING)
+        def on_warning(caller, event, message):
+            self.warnings.append(str(message))
+
+        obj.AddObserver("ErrorEvent", on_error)
+        obj.AddObserver("WarningEvent", on_warning)
+
+    def clear(self):
+        self.errors = []
+        self.warnings = []
