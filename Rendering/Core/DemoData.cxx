@@ -413,7 +413,7 @@ std::array<int, 3> demoDefaultDims(const std::string& name)
   if (name == "microscopy")
     return { 128, 128, 40 };
   if (name == "cosmology")
-    return { 96, 96, 96 };
+    return { 64, 64, 64 };
   if (name == "weather")
     return { 100, 100, 20 };
   throw std::invalid_argument("mcvol: unknown demo dataset '" + name + "' (known: figure3, microscopy, cosmology, weather)");

@@ -1,0 +1,194 @@
+"""mcvol-render, the scene-file renderer: every example scene under
+Data/scenes renders (at a low sample count and a small size) to a PNG of the
+requested size that is not blank, with --raw/--raw-alpha PFMs that agree with
+it; a render is reproducible; bad scene files and arguments exit with status 2
+and a message that names the offending key, without a Python traceback.
+
+    TestSceneFile.py [--mcvol-render PROGRAM] [--scenes DIR] [--work DIR]
+
+Registered by Tools/CMakeLists.txt (it runs the build's bin/mcvol-render).
+"""
+
+import argparse
+import glob
+import json
+import os
+import subprocess
+import sys
+import tempfile
+
+import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+
+from vtkmodules.util.numpy_support import vtk_to_numpy
+from vtkmodules.vtkIOImage import vtkPNGReader
+
+from mcvolTesting import Checker
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+SOURCE = os.path.dirname(os.path.dirname(HERE))
+WIDTH, HEIGHT = 64, 48
+
+
+def read_png(filename):
+    reader = vtkPNGReader()
+    if not reader.CanReadFile(filename):
+        return None
+    reader.SetFileName(filename)
+    reader.Update()
+    image = reader.GetOutput()
+    w, h, _ = image.GetDimensions()
+    pixels = vtk_to_numpy(image.GetPointData().GetScalars())
+    return pixels.reshape(h, w, -1)
+
+
+def read_pfm(filename):
+    with open(filename, "rb") as f:
+        data = f.read()
+    kind, size, scale, body = data.split(b"\n", 3)
+    w, h = (int(v) for v in size.split())
+    channels = 3 if kind == b"PF" else 1
+    order = "<" if float(scale) < 0 else ">"
+    return np.frombuffer(body, order + "f4").reshape(h, w, channels)
+
+
+def run(program, args):
+    return subprocess.run(
+        [sys.executable, program] + args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, timeout=300
+    )
+
+
+# (name, scene, key the message must name). Inputs are demos or Data files.
+BAD_SCENES = [
+    ("unknown-top-key", {"input": {"demo": "figure3"}, "colour": 1}, "colour: unknown key"),
+    ("unknown-channel-key", {"input": {"demo": "figure3"}, "channels": [{"component": 0, "opacty": []}]},
+     "channels[0].opacty: unknown key"),
+    ("unknown-camera-key", {"input": {"demo": "figure3"}, "camera": {"pos": [0, 0, 1]}}, "camera.pos: unknown key"),
+    ("missing-input", {"blend": "max"}, "missing required key 'input'"),
+    ("bad-demo", {"input": {"demo": "galaxy"}}, "input.demo:"),
+    ("bad-demo-dims", {"input": {"demo": "figure3", "dimensions": [8, 8]}}, "input.dimensions:"),
+    ("missing-file", {"input": "no-such-file.vti", "channels": [{"component": 0}]}, "input: file not found"),
+    ("bad-blend", {"input": {"demo": "figure3"}, "blend": "sum"}, "blend:"),
+    ("bad-tracking", {"input": {"demo": "figure3"}, "tracking": "2-dda"}, "tracking:"),
+    ("bad-spp-type", {"input": {"demo": "figure3"}, "samples_per_pixel": "many"}, "samples_per_pixel:"),
+    ("bad-spp-range", {"input": {"demo": "figure3"}, "samples_per_pixel": 0}, "samples_per_pixel:"),
+    ("bad-size", {"input": {"demo": "figure3"}, "image_size": [64]}, "image_size:"),
+    ("bad-background", {"input": {"demo": "figure3"}, "background": [0, 0, 2]}, "background[2]:"),
+    ("bad-zoom", {"input": {"demo": "figure3"}, "camera": {"zoom": 0}}, "camera.zoom:"),
+    ("bad-opacity-shape",
+     {"input": {"demo": "figure3"}, "channels": [{"component": 0}, {"component": 1}, {"component": 2, "opacity": [0, 1]}]},
+     "channels[2].opacity: expected a list of [x, a] pairs"),
+    ("bad-opacity-value", {"input": {"demo": "figure3"}, "channels": [{"component": 0, "opacity": [[0, 0], [1, 2]]}]},
+     "channels[0].opacity[1][1]:"),
+    ("bad-color", {"input": {"demo": "figure3"}, "channels": [{"component": 0, "color": "red"}]},
+     "channels[0].color:"),
+    ("unknown-preset", {"input": {"demo": "figure3"}, "channels": [{"component": 0, "color": {"preset": "No Such Map"}}]},
+     "channels[0].color.preset: unknown preset"),
+    ("component-out-of-range", {"input": {"demo": "figure3"}, "channels": [{"component": 3}]},
+     "channels[0].component: component 3 out of range"),
+    ("unknown-component-name", {"input": {"demo": "figure3"}, "channels": [{"component": "purple_cube"}]},
+     "channels[0].component: no component named"),
+    ("unknown-array", {"input": {"demo": "figure3"}, "channels": [{"array": "nope"}]},
+     "channels[0].array: no point array named"),
+    ("bad-unit-distance", {"input": {"demo": "figure3"}, "channels": [{"component": 0, "unit_distance": -1}]},
+     "channels[0].unit_distance:"),
+    ("bad-mix-weight", {"input": {"demo": "figure3"}, "channels": [{"component": 0, "mix_weight": "heavy"}]},
+     "channels[0].mix_weight:"),
+    ("file-needs-channels", {"input": "../../Data/figure3.vti"}, "channels: required for a file input"),
+    ("file-needs-opacity", {"input": "../../Data/figure3.vti", "channels": [{"component": 0, "color": [[0, 1, 0, 0]]}]},
+     "channels[0]: missing key 'opacity'"),
+]
+
+
+def main():
+    p = argparse.ArgumentParser()
+    p.add_argument("--mcvol-render", default=os.path.join(SOURCE, "Tools", "mcvol-render.py"))
+    p.add_argument("--scenes", default=os.path.join(SOURCE, "Data", "scenes"))
+    p.add_argument("--work", default=None)
+    args = p.parse_args()
+    work = args.work or tempfile.mkdtemp(prefix="TestSceneFile-")
+    os.makedirs(work, exist_ok=True)
+    program = args.mcvol_render
+    t = Checker()
+
+    scenes = sorted(glob.glob(os.path.join(args.scenes, "*.json")))
+    t.check(len(scenes) >= 5, "expected at least 5 example scenes in %s, found %d" % (args.scenes, len(scenes)))
+    blends = set()
+    for scene in scenes:
+        name = os.path.splitext(os.path.basename(scene))[0]
+        with open(scene) as f:
+            blends.add(json.load(f).get("blend", "density"))
+        png = os.path.join(work, name + ".png")
+        pfm = os.path.join(work, name + ".pfm")
+        alpha = os.path.join(work, name + "-alpha.pfm")
+        for fn in (png, pfm, alpha):
+            if os.path.exists(fn):
+                os.remove(fn)
+        r = run(
+            program,
+            [scene, "-o", png, "--spp", "2", "--size", "%dx%d" % (WIDTH, HEIGHT), "--raw", pfm, "--raw-alpha", alpha,
+             "--backend", "cpu"],
+        )
+        if not t.check(r.returncode == 0, "%s: exit status %d: %s" % (name, r.returncode, r.stderr.strip())):
+            continue
+        image = read_png(png)
+        if not t.check(image is not None, "%s: no PNG written" % name):
+            continue
+        t.check(image.shape == (HEIGHT, WIDTH, 3), "%s: PNG is %s, expected %dx%d RGB" % (name, image.shape, WIDTH, HEIGHT))
+        # Not blank: the volume covers part of the frame, so pixels differ.
+        spread = float(image.reshape(-1, 3).astype(float).std(axis=0).max())
+        t.check(spread > 2.0, "%s: PNG looks blank (pixel std %.2f)" % (name, spread))
+        rgb, a = read_pfm(pfm), read_pfm(alpha)
+        t.check(rgb.shape == (HEIGHT, WIDTH, 3) and a.shape == (HEIGHT, WIDTH, 1), "%s: PFM sizes %s %s" % (name, rgb.shape, a.shape))
+        if rgb.shape == (HEIGHT, WIDTH, 3):
+            # Same framebuffer, same row order (bottom first) as the PNG reader.
+            err = float(np.abs(rgb * 255.0 - image.astype(np.float32)).max())
+            t.check(err <= 1.0, "%s: PFM and PNG differ by %.2f levels" % (name, err))
+        t.check(bool(np.all(np.isfinite(rgb))) and float(a.max()) > 0.0 and float(a.min()) >= 0.0,
+                "%s: alpha range [%g, %g]" % (name, float(a.min()), float(a.max())))
+    t.check(blends >= {"density", "max", "mix", "composite"}, "example scenes cover blend modes %s" % sorted(blends))
+
+    # Reproducible: the same scene, seed and backend give the same PNG.
+    if scenes:
+        outs = []
+        for i in range(2):
+            out = os.path.join(work, "repeat%d.png" % i)
+            r = run(program, [scenes[0], "-o", out, "--spp", "2", "--size", "32x32", "--backend", "cpu", "--quiet"])
+            t.check(r.returncode == 0 and r.stderr == "", "repeat %d: status %d, output %r" % (i, r.returncode, r.stderr))
+            outs.append(read_png(out))
+        if outs[0] is not None and outs[1] is not None:
+            t.check(np.array_equal(outs[0], outs[1]), "two renders of %s differ" % scenes[0])
+
+    # Bad scenes: status 2, the key named, no traceback, no image.
+    bad_dir = os.path.join(work, "bad")
+    os.makedirs(bad_dir, exist_ok=True)
+    for name, scene, expected in BAD_SCENES:
+        # Inputs resolve against the scene's folder: point Data files at Data/.
+        if isinstance(scene.get("input"), str) and scene["input"].startswith("../../Data/"):
+            scene = dict(scene, input=os.path.join(SOURCE, "Data", os.path.basename(scene["input"])))
+        fn = os.path.join(bad_dir, name + ".json")
+        with open(fn, "w") as f:
+            json.dump(scene, f)
+        out = os.path.join(bad_dir, name + ".png")
+        r = run(program, [fn, "-o", out, "--spp", "1", "--size", "16x16"])
+        t.check(r.returncode == 2, "%s: exit status %d, expected 2 (%s)" % (name, r.returncode, r.stderr.strip()))
+        t.check(expected in r.stderr, "%s: message %r does not contain %r" % (name, r.stderr.strip(), expected))
+        t.check("Traceback" not in r.stderr, "%s: traceback printed" % name)
+        t.check(not os.path.exists(out), "%s: an image was written" % name)
+
+    # Invalid JSON and bad arguments: status 2 too.
+    fn = os.path.join(bad_dir, "invalid.json")
+    with open(fn, "w") as f:
+        f.write('{"input": {"demo": "figure3"},\n "blend": }\n')
+    r = run(program, [fn, "-o", os.path.join(bad_dir, "invalid.png")])
+    t.check(r.returncode == 2 and "invalid JSON" in r.stderr and "line 2" in r.stderr, "invalid JSON: %d %r" % (r.returncode, r.stderr))
+    if scenes:
+        for extra, what in ((["--size", "64"], "--size"), (["--spp", "0"], "--spp"), (["--raw", "x.exr"], "--raw")):
+            r = run(program, [scenes[0], "-o", os.path.join(bad_dir, "arg.png")] + extra)
+            t.check(r.returncode == 2 and what in r.stderr, "argument %s: %d %r" % (extra, r.returncode, r.stderr.strip()))
+    t.finish()
+
+
+if __name__ == "__main__":
+    main()
