@@ -4,6 +4,7 @@
 #include "vtkCamera.h"
 #include "vtkColorTransferFunction.h"
 #include "vtkDataArray.h"
+#include "vtkFloatArray.h"
 #include "vtkImageData.h"
 #include "vtkMath.h"
 #include "vtkMatrix4x4.h"
@@ -300,6 +301,35 @@ double vtkMultiChannelVolumeMapper::GetMixWeight(int channel)
 int vtkMultiChannelVolumeMapper::GetTotalSamples()
 {
   return static_cast<int>(this->Internals->Accum.samples());
+}
+
+//------------------------------------------------------------------------------
+void vtkMultiChannelVolumeMapper::GetAccumulatedImage(vtkFloatArray* rgba)
+{
+  if (!rgba)
+  {
+    return;
+  }
+  const mcvol::Accumulator& acc = this->Internals->Accum;
+  const vtkIdType pixels = static_cast<vtkIdType>(acc.width()) * acc.height();
+  rgba->SetNumberOfComponents(4);
+  rgba->SetNumberOfTuples(pixels);
+  if (pixels > 0)
+  {
+    std::copy(acc.rgba(), acc.rgba() + 4 * pixels, rgba->GetPointer(0));
+  }
+}
+
+//------------------------------------------------------------------------------
+int vtkMultiChannelVolumeMapper::GetAccumulatedImageWidth()
+{
+  return this->Internals->Accum.width();
+}
+
+//------------------------------------------------------------------------------
+int vtkMultiChannelVolumeMapper::GetAccumulatedImageHeight()
+{
+  return this->Internals->Accum.height();
 }
 
 //------------------------------------------------------------------------------

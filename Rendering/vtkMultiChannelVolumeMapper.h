@@ -54,6 +54,7 @@
 #include <memory> // For std::unique_ptr
 
 class vtkColorTransferFunction;
+class vtkFloatArray;
 class vtkImageData;
 class vtkPiecewiseFunction;
 class vtkRenderer;
@@ -192,6 +193,19 @@ public:
    * Starts the accumulation over at the next Render().
    */
   void ResetAccumulation();
+
+  ///@{
+  /**
+   * The accumulated image in full float precision, for measurements: linear
+   * premultiplied RGB and alpha (the fraction of paths that collided), one
+   * 4-component tuple per pixel of the viewport, rows from the bottom. It is
+   * what Render() draws over the frame, before any 8-bit quantisation or
+   * compositing over the background. Empty before the first render.
+   */
+  void GetAccumulatedImage(vtkFloatArray* rgba);
+  int GetAccumulatedImageWidth();
+  int GetAccumulatedImageHeight();
+  ///@}
 
   ///@{
   /**

@@ -843,14 +843,24 @@ def render(scene, args, errors, log):
 
     w, h = scene["image_size"]
     if args.raw or args.raw_alpha:
+        # Full float precision from the mapper's accumulation buffer
+        # (premultiplied), not the 8-bit window.
         rgba = vtkFloatArray()
-        window.GetRGBAPixelData(0, 0, w - 1, h - 1, 0, rgba)
+        mapper.GetAccumulatedImage(rgba)
+        if (mapper.GetAccumulatedImageWidth(), mapper.GetAccumulatedImageHeight()) != (w, h):
+            raise RenderError("the accumulated image is %dx%d, expected %dx%d" % (
+                mapper.GetAccumulatedImageWidth(), mapper.GetAccumulatedImageHeight(), w, h))
         values = [rgba.GetValue(i) for i in range(rgba.GetNumberOfValues())]
+        alpha = values[3::4]
         if args.raw:
-            rgb = [v for i, v in enumerate(values) if i % 4 != 3]
+            bg = scene["background"]
+            rgb = []
+            for i, a in enumerate(alpha):
+                for k in range(3):
+                    rgb.append(values[4 * i + k] + bg[k] * (1.0 - a))
             write_pfm(args.raw, w, h, 3, rgb)
         if args.raw_alpha:
-            write_pfm(args.raw_alpha, w, h, 1, values[3::4])
+            write_pfm(args.raw_alpha, w, h, 1, alpha)
     log(
         "%s: %d spp (%d per render) at %dx%d, %d channel(s), %s blend, %s, backend %s: %.2f s -> %s"
         % (

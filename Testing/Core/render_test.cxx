@@ -1,0 +1,305 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Test 6: N-DDA and 1-DDA render the same image (statistically).
+// Test 7: images do not depend on the thread count; progressive accumulation
+//         equals one render of all samples.
+// Test 8: blend modes (Max, Mix Eq. 10, post-render compositing).
+// Significance: each TEST has a family-wise level kAlpha = 0.001, split evenly
+// (Bonferroni) over its statistical checks; seeds are fixed.
+#include "TestUtil.h"
+
+#include <cstring>
+
+using namespace mcvol;
+using namespace mcvol::test;
+
+namespace
+{
+constexpr double kAlpha = 1e-3;
+
+Camera demoCamera(const DemoVolume& v, int W, int H, double az = 30, double el = 20)
+{
+  return orbitCamera(v.dims, v.spacing, W, H, az, el);
+}
+} // namespace
+
+// ---------------------------------------------------------------- Test 6
+
+// Per-pixel pooled two-sample z-scores of 64 independent samples per pixel
+// and tracker (different seeds): image-mean difference, sum of z^2
+// (chi-square) and the largest |z| (Bonferroni over pixels) per component
+// (see expectZeroDifference): 2 scenes x 4 components x 3 = 24 checks.
+TEST(Trackers, NDDAMatches1DDA)
+{
+  for (const char* name : { "figure3", "cosmology" })
+  {
+    const DemoVolume v = makeDemo(name, { 24, 24, 24 });
+    Scene scene;
+    configureDemo(scene, v, 4);
+    const Camera cam = demoCamera(v, 40, 40);
+    RenderSettings rs;
+    rs.tracker = Tracker::OneDDA;
+    const Moments one = renderMoments(scene, cam, rs, 64, 1000);
+    rs.tracker = Tracker::NDDA;
+    const Moments many = renderMoments(scene, cam, rs, 64, 5000);
+    double alphaSum = 0;
+    for (size_t p = 3; p < one.size(); p += 4)
+      alphaSum += one.mean(p);
+    EXPECT_GT(alphaSum / (40 * 40), 0.05) << name << ": the image is nearly empty; the test would be weak";
+    expectSameImage(one, many, kAlpha / 24, std::string(name) + " 1-DDA vs N-DDA");
+  }
+}
+
+// ---------------------------------------------------------------- Test 7
+
+TEST(Reproducibility, ThreadCountDoesNotChangeImage)
+{
+  const DemoVolume v = makeDemo("cosmology", { 32, 32, 32 });
+  Scene scene;
+  configureDemo(scene, v, 8);
+  const Camera cam = demoCamera(v, 48, 37);
+  for (BlendMode mode : { BlendMode::Density, BlendMode::Mix, BlendMode::Composite })
+  {
+    scene.setBlendMode(mode);
+    scene.update();
+    for (Tracker t : { Tracker::OneDDA, Tracker::NDDA })
+    {
+      RenderSettings rs;
+      rs.samplesPerPixel = 4;
+      rs.seed = 77;
+      rs.tracker = t;
+      std::vector<float> ref;
+      RenderCounters refCounters;
+      for (int threads : { 1, 2, 3 })
+      {
+        CPURenderer r;
+        r.setThreads(threads);
+        Accumulator acc;
+        RenderCounters counters;
+        r.render(scene, cam, rs, nullptr, acc, &counters);
+        std::vector<float> img(acc.rgba(), acc.rgba() + size_t(cam.width) * cam.height * 4);
+        if (threads == 1)
+        {
+          ref = img;
+          refCounters = counters;
+          continue;
+        }
+        EXPECT_EQ(0, std::memcmp(ref.data(), img.data(), ref.size() * sizeof(float)))
+          << toString(mode) << " " << toString(t) << ": " << threads << " threads differ from 1 thread";
+        EXPECT_EQ(counters.tentativeCollisions, refCounters.tentativeCollisions);
+        EXPECT_EQ(counters.ddaSteps, refCounters.ddaSteps);
+        EXPECT_EQ(counters.realCollisions, refCounters.realCollisions);
+      }
+    }
+  }
+}
+
+TEST(Reproducibility, ProgressiveEqualsOneRender)
+{
+  const DemoVolume v = makeDemo("figure3", { 32, 32, 32 });
+  Scene scene;
+  configureDemo(scene, v, 8);
+  const Camera cam = demoCamera(v, 40, 40, 60, -15);
+  CPURenderer r;
+  for (Tracker t : { Tracker::OneDDA, Tracker::NDDA })
+  {
+    RenderSettings rs;
+    rs.seed = 5;
+    rs.tracker = t;
+    Accumulator progressive, once;
+    rs.samplesPerPixel = 1;
+    for (int k = 0; k < 4; ++k)
+    {
+      r.render(scene, cam, rs, nullptr, progressive);
+    }
+    EXPECT_EQ(progressive.samples(), 4u);
+    rs.samplesPerPixel = 4;
+    r.render(scene, cam, rs, nullptr, once);
+    EXPECT_EQ(once.samples(), 4u);
+    double maxDiff = 0, sum = 0;
+    for (size_t i = 0; i < size_t(cam.width) * cam.height * 4; ++i)
+    {
+      maxDiff = std::max(maxDiff, double(std::fabs(progressive.rgba()[i] - once.rgba()[i])));
+      sum += once.rgba()[i];
+    }
+    EXPECT_LE(maxDiff, 1e-5) << toString(t);
+    EXPECT_GT(sum, 10.0) << "empty image";
+  }
+}
+
+// ---------------------------------------------------------------- Test 8
+
+namespace
+{
+/// Two overlapping homogeneous channels filling an 8 x 8 x 17 volume, seen
+/// along z by an orthographic camera, so every ray crosses 16 units.
+struct TwoChannelSlab
+{
+  TestVolume v{ 8, 8, 17, 2, 0.5f };
+  Scene scene;
+  Camera cam = orthoAlongZ(16, 16, 0.5, 6.5, 0.5, 6.5, 20.0, 40.0);
+  static constexpr double kThickness = 16.0;
+
+  TwoChannelSlab(double sigma0, double sigma1, BlendMode mode)
+  {
+    configure(scene, v,
+      { flatTF(opacityFor(sigma0, 1.0), 1, 0, 0), flatTF(opacityFor(sigma1, 1.0), 0, 1, 0) }, 4, mode);
+  }
+
+  /// One render of `spp` samples; returns total alpha (= number of
+  /// collided samples) and checks per-pixel colour against `rgb` * alpha.
+  double render(Tracker t, int spp, uint32_t seed, const float rgb[3], const std::string& what)
+  {
+    CPURenderer r;
+    Accumulator acc;
+    RenderSettings rs;
+    rs.samplesPerPixel = spp;
+    rs.seed = seed;
+    rs.tracker = t;
+    r.render(scene, cam, rs, nullptr, acc);
+    double hits = 0;
+    for (int p = 0; p < cam.width * cam.height; ++p)
+    {
+      const float* px = acc.rgba() + 4 * p;
+      for (int c = 0; c < 3; ++c)
+      {
+        EXPECT_NEAR(px[c], rgb[c] * px[3], 1e-5) << what << " pixel " << p << " component " << c;
+      }
+      hits += double(px[3]) * spp;
+    }
+    return std::round(hits);
+  }
+};
+} // namespace
+
+// Max (Eq. 8/9): only the channel of larger extinction exists: its colour
+// alone appears, and alpha follows 1 - exp(-sigma_max d) (binomial tests,
+// 8 checks). Density adds the extinctions (Eq. 6) for contrast.
+TEST(BlendModes, MaxShowsOnlyTheDenserChannel)
+{
+  uint32_t seed = 1;
+  for (Tracker t : { Tracker::OneDDA, Tracker::NDDA })
+  {
+    for (int order = 0; order < 2; ++order)
+    {
+      const double s0 = order == 0 ? 0.04 : 0.1, s1 = order == 0 ? 0.1 : 0.04;
+      TwoChannelSlab slab(s0, s1, BlendMode::Max);
+      const float rgb[3] = { order == 0 ? 0.f : 1.f, order == 0 ? 1.f : 0.f, 0.f };
+      const int spp = 64;
+      const double n = double(slab.cam.width * slab.cam.height * spp);
+      const std::string what = std::string("max ") + toString(t) + " order " + std::to_string(order);
+      const double hits = slab.render(t, spp, ++seed, rgb, what);
+      expectBinomial(hits, n, -std::expm1(-0.1 * slab.kThickness), kAlpha / 8, what);
+
+      TwoChannelSlab density(s0, s1, BlendMode::Density);
+      CPURenderer r;
+      Accumulator acc;
+      RenderSettings rs;
+      rs.samplesPerPixel = spp;
+      rs.seed = ++seed;
+      rs.tracker = t;
+      r.render(density.scene, density.cam, rs, nullptr, acc);
+      double dh = 0;
+      for (int p = 0; p < density.cam.width * density.cam.height; ++p)
+        dh += double(acc.rgba()[4 * p + 3]) * spp;
+      expectBinomial(std::round(dh), n, -std::expm1(-0.14 * slab.kThickness), kAlpha / 8,
+        std::string("density ") + toString(t));
+    }
+  }
+}
+
+// Mix (Eq. 8 and 10): extinction max_n sigma_n, colour
+// sum_n w_n sigma_n c_n / max_n sigma_n with weights (3, 1) normalised to
+// (0.75, 0.25). Colour is checked per pixel (deterministic per collision),
+// alpha by binomial tests (4 checks).
+TEST(BlendModes, MixFollowsEquation10)
+{
+  uint32_t seed = 50;
+  const float w[2] = { 3.f, 1.f };
+  for (Tracker t : { Tracker::OneDDA, Tracker::NDDA })
+  {
+    for (int order = 0; order < 2; ++order)
+    {
+      const double s0 = order == 0 ? 0.04 : 0.1, s1 = order == 0 ? 0.1 : 0.04;
+      TwoChannelSlab slab(s0, s1, BlendMode::Mix);
+      slab.scene.setMixWeights(w, 2);
+      slab.scene.update();
+      EXPECT_FLOAT_EQ(slab.scene.view().blend.mixWeights[0], 0.75f);
+      EXPECT_FLOAT_EQ(slab.scene.view().blend.mixWeights[1], 0.25f);
+      // Red from channel 0, green from channel 1.
+      const float rgb[3] = { float(0.75 * s0 / 0.1), float(0.25 * s1 / 0.1), 0.f };
+      const int spp = 64;
+      const double n = double(slab.cam.width * slab.cam.height * spp);
+      const std::string what = std::string("mix ") + toString(t) + " order " + std::to_string(order);
+      const double hits = slab.render(t, spp, ++seed, rgb, what);
+      expectBinomial(hits, n, -std::expm1(-0.1 * slab.kThickness), kAlpha / 4, what);
+    }
+  }
+}
+
+// Post-render compositing: the composite's RGB equals the sum of the
+// channels rendered alone (the others at zero opacity), and its alpha
+// 1 - prod(1 - alpha_n). Per-pixel z-scores with unpooled variances (the
+// alpha product's by the delta method; the product of independent unbiased
+// estimates is unbiased): image mean, chi-square and largest |z| per
+// component (12 checks). No pixel jitter: every sample of a pixel is the
+// same ray (with jitter, the channels' hit probabilities would be correlated
+// through the shared sub-pixel position and the product would not hold).
+TEST(BlendModes, CompositeIsSumOfChannels)
+{
+  const DemoVolume v = makeDemo("cosmology", { 24, 24, 24 });
+  const int N = v.numChannels();
+  const Camera cam = demoCamera(v, 32, 32);
+  const int n = 128;
+  Scene scene;
+  configureDemo(scene, v, 4, 64, 1.0, BlendMode::Composite);
+  RenderSettings rs;
+  rs.jitterPixels = false;
+  const Moments C = renderMoments(scene, cam, rs, n, 100);
+  std::vector<Moments> S;
+  for (int k = 0; k < N; ++k)
+  {
+    Scene alone;
+    configureDemo(alone, v, 4, 64, 1.0, BlendMode::Density);
+    for (int m = 0; m < N; ++m)
+    {
+      if (m != k)
+      {
+        alone.setTransferFunction(m, flatTF(0.f, 1, 1, 1, 1.f, 64));
+      }
+    }
+    alone.update();
+    ASSERT_EQ(alone.view().numActive, 1);
+    S.push_back(renderMoments(alone, cam, rs, n, 1000 + 1000 * uint32_t(k)));
+  }
+  std::vector<double> D(C.size()), V(C.size());
+  for (size_t p = 0; p < C.size() / 4; ++p)
+  {
+    for (int c = 0; c < 3; ++c)
+    {
+      const size_t i = p * 4 + size_t(c);
+      double sum = 0, var = C.var(i) / n;
+      for (const Moments& s : S)
+      {
+        sum += s.mean(i);
+        var += s.var(i) / n;
+      }
+      D[i] = C.mean(i) - sum;
+      V[i] = var;
+    }
+    const size_t i = p * 4 + 3;
+    double prod = 1;
+    for (const Moments& s : S)
+      prod *= 1 - s.mean(i);
+    double var = C.var(i) / n;
+    for (size_t k = 0; k < S.size(); ++k)
+    {
+      double others = 1;
+      for (size_t m = 0; m < S.size(); ++m)
+        others *= m == k ? 1.0 : 1 - S[m].mean(i);
+      var += others * others * S[k].var(i) / n;
+    }
+    D[i] = C.mean(i) - (1 - prod);
+    V[i] = var;
+  }
+  expectZeroDifference(D, V, kAlpha / 12, "composite vs sum of channels");
+}
