@@ -22,7 +22,7 @@ EXPECTED = {
     "figure3": ((64, 64, 64), "float", ["red_cube", "green_cube", "blue_cube"]),
     "microscopy": ((128, 128, 40), "unsigned char", ["membranes", "nuclei", "puncta"]),
     "cosmology": (
-        (96, 96, 96),
+        (64, 64, 64),
         "float",
         ["dark_matter_density", "baryon_density", "temperature", "velocity_magnitude"],
     ),
