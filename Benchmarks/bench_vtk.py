@@ -49,6 +49,17 @@ def make_property(source, channels):
     return prop
 
 
+def save_window(win, path):
+    w2i = vtkWindowToImageFilter()
+    w2i.SetInput(win)
+    w2i.ReadFrontBufferOff()
+    w2i.Update()
+    png = vtkPNGWriter()
+    png.SetFileName(path)
+    png.SetInputConnection(w2i.GetOutputPort())
+    png.Write()
+
+
 def time_mapper(name, mapper, data, prop, args, out_dir):
     ren = vtkRenderer()
     ren.SetBackground(0.1, 0.1, 0.1)
@@ -74,14 +85,13 @@ def time_mapper(name, mapper, data, prop, args, out_dir):
         win.Render()
         times.append(1e3 * (time.perf_counter() - t0))
     if out_dir:
-        w2i = vtkWindowToImageFilter()
-        w2i.SetInput(win)
-        w2i.ReadFrontBufferOff()
-        w2i.Update()
-        png = vtkPNGWriter()
-        png.SetFileName(os.path.join(out_dir, "vtk_peer_%s.png" % name))
-        png.SetInputConnection(w2i.GetOutputPort())
-        png.Write()
+        save_window(win, os.path.join(out_dir, "vtk_peer_%s.png" % name))
+        if hasattr(mapper, "GetTotalSamples"):
+            # The progressive image after more renders with nothing changed.
+            mapper.SetSamplesPerPixel(16)
+            while mapper.GetTotalSamples() < args.converged_spp:
+                win.Render()
+            save_window(win, os.path.join(out_dir, "vtk_peer_%s_%dspp.png" % (name, mapper.GetTotalSamples())))
     win.Finalize()
     return statistics.median(times), min(times)
 
@@ -95,6 +105,8 @@ def main():
     ap.add_argument("--warmup", type=int, default=2)
     ap.add_argument("--frames", type=int, default=5)
     ap.add_argument("--images", default="", help="folder for a picture of each mapper's last frame")
+    ap.add_argument("--converged-spp", type=int, default=256,
+                    help="samples per pixel of the converged mcvol picture (with --images)")
     ap.add_argument("--skip", default="", help="comma-separated mapper names to skip")
     args = ap.parse_args()
 
@@ -110,7 +122,7 @@ def main():
 
     skip = set(filter(None, args.skip.split(",")))
     rows = []
-    for name in ["mcvol-1DDA", "mcvol-NDDA", "FixedPointRayCast", "GPURayCast(llvmpipe)"]:
+    for name in ["mcvol-1DDA", "mcvol-NDDA", "FixedPointRayCast", "GPURayCast-llvmpipe"]:
         if name in skip:
             continue
         if name.startswith("mcvol"):
