@@ -82,12 +82,14 @@ void CPURenderer::render(const Scene& scene, const Camera& camera, const RenderS
   {
     throw std::invalid_argument("mcvol: samples per pixel must be at least 1");
   }
-  const SceneView& s = scene.view();
+  // A copy: the extinction limit belongs to this render's camera.
+  SceneView s = scene.view();
   if (s.volume.numChannels == 0 || s.tables.size < 2 || !s.grid.majorants)
   {
     throw std::logic_error("mcvol: Scene::update() must succeed before rendering");
   }
   const CameraView cam = toView(camera);
+  s.sigmaLimit = extinctionLimit(cam);
   FrameParams fp;
   fp.samplesPerPixel = settings.samplesPerPixel;
   fp.firstSample = accum.samples();

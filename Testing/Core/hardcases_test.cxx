@@ -656,3 +656,56 @@ TEST(HardCases, ZeroMajorantChannelCostsNothing)
     EXPECT_GT(full.tentative, 0u) << toString(t);
   }
 }
+
+// Opacity 1 over a unit distance of 1e-4 voxel (extinction 1.4e5 per voxel)
+// inside mostly empty macrocells: without the per-render extinction limit a
+// ray takes ~1e5 null collisions per macrocell (the mapper test of such a box
+// ran for hours). With it: the opaque box is still exactly opaque and
+// uniformly coloured, the surroundings transparent, and the work per ray is
+// bounded (kMaxOpticalDepthPerVoxel per voxel crossed, at most).
+TEST(HardCases, HugeExtinctionStaysBounded)
+{
+  TestVolume v(24, 24, 24, 1, 0.f);
+  for (int k = 8; k <= 15; ++k)
+    for (int j = 8; j <= 15; ++j)
+      for (int i = 8; i <= 15; ++i)
+        v.channels[0][v.index(i, j, k)] = 1.f;
+  // Opacity 0 below 0.5, 1 above (K = 3 texels over [0, 1]: 0, 1, 1).
+  TransferFunctionDesc tf = flatTF(1.f, 0.9f, 0.5f, 0.1f, 1e-4f, 3);
+  tf.opacity[0] = 0.f;
+  Scene scene;
+  configure(scene, v, { tf }, 16);
+  EXPECT_GT(scene.tables()[7], 1e5f); // the table itself is not clamped
+  const double spacing[3] = { 1, 1, 1 };
+  // Film over index [0, 23] on x and y, looking down -z: the box covers the
+  // film's middle third.
+  const Camera cam = axisCamera(2, v.dims, spacing, 0.0, 23.0, 23, 23);
+  for (Tracker t : { Tracker::OneDDA, Tracker::NDDA })
+  {
+    RenderCounters c;
+    const Image img = render(scene, cam, t, 8, 5, &c, false);
+    expectFinite(img, "huge extinction");
+    // Rays cross at most 24 voxels (sqrt(3) per voxel along a diagonal): the
+    // expected null collisions per ray are bounded by 24 * 16 * sqrt(3) * 2.
+    EXPECT_LT(double(c.tentativeCollisions) / double(c.rays), 24 * 16 * 1.8 * 2) << toString(t);
+    // Pixel centres x + 0.5 in film index units [0, 23]: 23 pixels of one
+    // index unit. Pixels whose rays pass through voxels 9..14 (away from the
+    // 0.5 iso-surface at 7.5 and 15.5 by more than a voxel) are opaque.
+    for (int y = 0; y < 23; ++y)
+      for (int x = 0; x < 23; ++x)
+      {
+        const float* px = img.at(x, y);
+        const bool inside = x >= 9 && x <= 14 && y >= 9 && y <= 14;
+        const bool outside = x <= 5 || x >= 18 || y <= 5 || y >= 18;
+        if (inside)
+        {
+          EXPECT_EQ(px[3], 1.f) << toString(t) << " at " << x << "," << y;
+          EXPECT_NEAR(px[0], 0.9f, 1e-6);
+        }
+        if (outside)
+        {
+          EXPECT_EQ(px[3], 0.f) << toString(t) << " at " << x << "," << y;
+        }
+      }
+  }
+}

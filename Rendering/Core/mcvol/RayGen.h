@@ -40,6 +40,33 @@ MCVOL_FUNC Dvec3 unproject(const double* m, double x, double y, double z)
   return { X / W, Y / W, Z / W };
 }
 
+/// Optical depth one voxel may hold at most (transmittance e^-16, about 1e-7,
+/// across it: opaque for every image, yet finite work per macrocell).
+constexpr float kMaxOpticalDepthPerVoxel = 16.f;
+
+/**
+ * Extinction limit for a render: kMaxOpticalDepthPerVoxel over the smallest
+ * world length of a voxel. That length is bounded below by 1 / ||A||_F, A the
+ * linear part of worldToIndex, so no voxel, along any direction, holds more
+ * than a few times 16 optical depths. Without a limit, opacity 1 over a unit
+ * distance of a thousandth of a voxel makes Woodcock tracking take hundreds
+ * of thousands of null collisions per macrocell.
+ */
+MCVOL_FUNC float extinctionLimit(const CameraView& cam)
+{
+  const double* w = cam.worldToIndex;
+  double f2 = 0.0;
+  for (int r = 0; r < 3; ++r)
+  {
+    for (int c = 0; c < 3; ++c)
+    {
+      f2 += w[4 * r + c] * w[4 * r + c];
+    }
+  }
+  const double limit = double(kMaxOpticalDepthPerVoxel) * sqrt(f2);
+  return limit > 0.0 && limit < 3.4e38 ? float(limit) : 3.4e38f;
+}
+
 /**
  * Builds the ray through film position (px, py) (pixel units, origin at the
  * bottom-left corner) and clips it to the volume box and to the window depth

@@ -71,5 +71,10 @@ struct SceneView
   /// traversed (a channel with zero opacity costs nothing).
   int numActive = 0;
   int active[kMaxChannels];
+  /// Upper limit on any channel's extinction (world units^-1), set per render
+  /// by the backend from the camera's worldToIndex (extinctionLimit()). It
+  /// keeps the number of null collisions in a macrocell bounded when a
+  /// transfer function is opaque over a tiny unit distance.
+  float sigmaLimit = 3.4e38f;
 };
 } // namespace mcvol

@@ -44,7 +44,8 @@ MCVOL_HOT float woodcockStep(float maj, Rng& rng)
 template <BlendMode Mode>
 MCVOL_HOT bool realCollision(const SceneView& s, int n, Vec3f p, float xiMaj, Vec3f& rgb, RayCounters& c)
 {
-  const TFSample own = lookupTF(s.tables, n, sampleChannel(s.volume, n, p));
+  TFSample own = lookupTF(s.tables, n, sampleChannel(s.volume, n, p));
+  own.sigma = minf(own.sigma, s.sigmaLimit);
   ++c.samples;
   // Cheap rejection first: the effective extinction never exceeds sigma_n.
   if (!(xiMaj < own.sigma))
@@ -66,7 +67,8 @@ MCVOL_HOT bool realCollision(const SceneView& s, int n, Vec3f p, float xiMaj, Ve
     {
       continue;
     }
-    const TFSample other = lookupTF(s.tables, k, sampleChannel(s.volume, k, p));
+    TFSample other = lookupTF(s.tables, k, sampleChannel(s.volume, k, p));
+    other.sigma = minf(other.sigma, s.sigmaLimit);
     ++c.samples;
     if (other.sigma > own.sigma || (other.sigma == own.sigma && k < n))
     {
@@ -80,6 +82,14 @@ MCVOL_HOT bool realCollision(const SceneView& s, int n, Vec3f p, float xiMaj, Ve
   // Eq. 10: sum_k w_k sigma_k c_k / max_k sigma_k (sigma_n is the max).
   rgb = Mode == BlendMode::Max ? own.rgb : mix * (1.f / own.sigma);
   return true;
+}
+
+/// t + dt, but at least one float step further: a free flight shorter than
+/// t's rounding step would otherwise leave t where it was.
+MCVOL_HOT float advance(float t, float dt)
+{
+  const float next = t + dt;
+  return next > t ? next : nextafterf(t, 3.4e38f);
 }
 
 /// An exponential optical depth -ln(1 - u): the free flight of Eq. 3 in
@@ -125,7 +135,7 @@ MCVOL_HOT Hit track1DDA(const SceneView& s, Vec3f o, Vec3f d, float tmin, float 
     for (int i = 0; i < s.numActive; ++i)
     {
       const int n = s.active[i];
-      const float m = maj[n];
+      const float m = minf(maj[n], s.sigmaLimit);
       if (m <= 0.f)
       {
         continue; // empty for this channel: no sampling at all
@@ -140,7 +150,7 @@ MCVOL_HOT Hit track1DDA(const SceneView& s, Vec3f o, Vec3f d, float tmin, float 
           tau[i] -= room > 0.f ? room : 0.f;
           break;
         }
-        t += tau[i] / m;
+        t = advance(t, tau[i] / m);
         tau[i] = sampleOpticalDepth(rng);
         ++c.tentative;
         Vec3f rgb;
@@ -177,7 +187,7 @@ MCVOL_HOT bool trackChannel(
   while (!dda.done)
   {
     ++c.ddaSteps;
-    const float m = s.grid.majorants[int64_t(dda.cellIndex()) * N + n];
+    const float m = minf(s.grid.majorants[int64_t(dda.cellIndex()) * N + n], s.sigmaLimit);
     if (m > 0.f)
     {
       float t = dda.t0;
@@ -189,7 +199,7 @@ MCVOL_HOT bool trackChannel(
           tau -= room > 0.f ? room : 0.f;
           break;
         }
-        t += tau / m;
+        t = advance(t, tau / m);
         tau = sampleOpticalDepth(rng);
         ++c.tentative;
         Vec3f rgb;
