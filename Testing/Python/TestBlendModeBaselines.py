@@ -37,6 +37,21 @@ MODES = ["Density", "Max", "Mix", "Composite"]
 DATASETS = ["figure3", "microscopy"]
 
 
+WINDOW = None
+
+
+def window():
+    """One render window for every render of the test (each window holds an
+    X connection; many of them in parallel tests exhaust the X server)."""
+    global WINDOW
+    if WINDOW is None:
+        WINDOW = vtkRenderWindow()
+        WINDOW.SetOffScreenRendering(1)
+        WINDOW.SetMultiSamples(0)
+        WINDOW.SetSize(SIZE, SIZE)
+    return WINDOW
+
+
 def render(dataset, mode, tracker, spp=SPP, seed=7):
     src = vtkMultiChannelDemoSource()
     src.SetDataset(dataset)
@@ -66,10 +81,7 @@ def render(dataset, mode, tracker, spp=SPP, seed=7):
     ren = vtkRenderer()
     ren.SetBackground(0.1, 0.1, 0.15)
     ren.AddVolume(vol)
-    win = vtkRenderWindow()
-    win.SetOffScreenRendering(1)
-    win.SetMultiSamples(0)
-    win.SetSize(SIZE, SIZE)
+    win = window()
     win.AddRenderer(ren)
     ren.ResetCamera()
     ren.GetActiveCamera().Azimuth(30)
@@ -83,7 +95,7 @@ def render(dataset, mode, tracker, spp=SPP, seed=7):
     grab.Update()
     img = grab.GetOutput()
     arr = vtk_to_numpy(img.GetPointData().GetScalars()).reshape(SIZE, SIZE, 3).astype(np.float64)
-    win.Finalize()
+    win.RemoveRenderer(ren)
     return arr
 
 

@@ -68,13 +68,20 @@ def place(prop, case):
     prop.SetScale(*case["scale"])
 
 
-def render(case, with_volume):
-    ren = vtkRenderer()
-    ren.SetBackground(0, 0, 0)
+def make_window():
+    # One window for all renders: each window holds an X connection, and
+    # many of them in parallel tests exhaust the X server.
     win = vtkRenderWindow()
     win.SetOffScreenRendering(1)
     win.SetSize(SIZE, SIZE)
     win.SetMultiSamples(0)
+    return win
+
+
+def render(win, case, with_volume):
+    win.GetRenderers().RemoveAllItems()
+    ren = vtkRenderer()
+    ren.SetBackground(0, 0, 0)
     win.AddRenderer(ren)
     spacing = case["spacing"]
     if with_volume:
@@ -127,7 +134,7 @@ def render(case, with_volume):
     ren.ResetCameraClippingRange(-1000, 1000, -1000, 1000, -1000, 1000)
     win.Render()
     rgba = capture_rgba(win)
-    win.Finalize()
+    win.RemoveRenderer(ren)
     return rgba[:, :, 0] > 127
 
 
@@ -154,9 +161,10 @@ CASES = [
 
 def main():
     t = Checker()
+    win = make_window()
     for case in CASES:
-        vol = render(case, True)
-        geo = render(case, False)
+        vol = render(win, case, True)
+        geo = render(win, case, False)
         area = int(geo.sum())
         t.check(area > 400, "%s: the box covers only %d pixels (bad test set-up)" % (case["name"], area))
         # The outline: pixels within one pixel of the geometry's edge.
