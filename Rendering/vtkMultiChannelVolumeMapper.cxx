@@ -23,13 +23,7 @@
 #include "vtkVolume.h"
 #include "vtkVolumeProperty.h"
 
-// Only core OpenGL 1.x enums are used here. vtk_glew.h needs GLEW's headers
-// (libglew-dev), which a system with ParaView's runtime may not have.
-#if __has_include(<GL/glew.h>)
-#include "vtk_glew.h"
-#else
-#include <GL/gl.h>
-#endif
+#include "vtk_glew.h" // For GL enums
 
 #include "mcvol/Renderer.h"
 #include "mcvol/Scene.h"
