@@ -103,7 +103,8 @@ Options parse(int argc, char** argv)
   for (int i = 1; i < argc; ++i)
   {
     const std::string a = argv[i];
-    auto need = [&](int n) {
+    auto need = [&](int n)
+    {
       if (i + n >= argc)
       {
         throw std::invalid_argument(a + " needs " + std::to_string(n) + " value(s)");
@@ -298,11 +299,12 @@ int main(int argc, char** argv)
     return 3;
   }
   std::vector<std::string> csv = { "section,dataset,channels,macrocell,tracker,backend,value,unit,extra" };
-  auto row = [&](const std::string& section, const std::string& ds, int ch, int mc, const std::string& tr,
-               double value, const std::string& unit, const std::string& extra) {
+  auto row = [&](const std::string& section, const std::string& ds, int ch, int mc, const std::string& tr, double value,
+               const std::string& unit, const std::string& extra)
+  {
     std::ostringstream ss;
-    ss << section << "," << ds << "," << ch << "," << mc << "," << tr << "," << r->name() << "," << value << ","
-       << unit << "," << extra;
+    ss << section << "," << ds << "," << ch << "," << mc << "," << tr << "," << r->name() << "," << value << "," << unit
+       << "," << extra;
     csv.push_back(ss.str());
   };
   int threads = 1;
@@ -318,9 +320,10 @@ int main(int argc, char** argv)
   {
     s.load(o, o.channels, o.macrocell);
     const std::string ds = describe(o, s);
-    std::printf("## Frame time at 1 spp: %s, %d channels, macrocell %d\n\n", ds.c_str(), s.volume.numChannels(),
-      o.macrocell);
-    std::printf("| tracker | median ms | min ms | tentative collisions/ray | DDA steps/ray | mean alpha |\n|---|---|---|---|---|---|\n");
+    std::printf(
+      "## Frame time at 1 spp: %s, %d channels, macrocell %d\n\n", ds.c_str(), s.volume.numChannels(), o.macrocell);
+    std::printf("| tracker | median ms | min ms | tentative collisions/ray | DDA steps/ray | mean alpha "
+                "|\n|---|---|---|---|---|---|\n");
     for (auto t : { mcvol::Tracker::OneDDA, mcvol::Tracker::NDDA })
     {
       const FrameStats f = timeFrames(o, *r, s.scene, t);
@@ -394,8 +397,8 @@ int main(int argc, char** argv)
     for (int i = 0; i < 21; ++i)
     {
       const auto& tf = (i % 2) ? alt : s.volume.transferFunctions[0];
-      s.scene.setTransferFunction(0,
-        mcvol::sampleTransferFunction(tf, s.ranges[0][0], s.ranges[0][1], o.tableSize, s.volume.spacing[0]));
+      s.scene.setTransferFunction(
+        0, mcvol::sampleTransferFunction(tf, s.ranges[0][0], s.ranges[0][1], o.tableSize, s.volume.spacing[0]));
       s.scene.update();
       ms.push_back(1e3 * s.scene.lastMajorantBuildSeconds());
       rebuilt = s.scene.lastMajorantChannelsRebuilt();
@@ -413,8 +416,9 @@ int main(int argc, char** argv)
     s.load(o, o.channels, o.macrocell);
     const mcvol::MemoryStats m = s.scene.memory();
     const double MiB = 1024.0 * 1024.0;
-    std::printf("## Memory (%s, %d channels, macrocell %d; paper Table 1)\n\n| data MiB | macrocells MiB | majorants MiB "
-                "| total MiB | (macrocells+majorants)/data |\n|---|---|---|---|---|\n| %.2f | %.2f | %.2f | %.2f | %.2f%% |\n\n",
+    std::printf(
+      "## Memory (%s, %d channels, macrocell %d; paper Table 1)\n\n| data MiB | macrocells MiB | majorants MiB "
+      "| total MiB | (macrocells+majorants)/data |\n|---|---|---|---|---|\n| %.2f | %.2f | %.2f | %.2f | %.2f%% |\n\n",
       describe(o, s).c_str(), s.volume.numChannels(), o.macrocell, m.dataBytes / MiB, m.macrocellBytes / MiB,
       m.majorantBytes / MiB, (m.dataBytes + m.macrocellBytes + m.majorantBytes) / MiB,
       100.0 * double(m.macrocellBytes + m.majorantBytes) / double(m.dataBytes));

@@ -67,8 +67,8 @@ void renderRows(const SceneView& s, const CameraView& cam, const FrameParams& fp
 }
 } // namespace
 
-void CPURenderer::render(const Scene& scene, const Camera& camera, const RenderSettings& settings,
-  const float* depth, Accumulator& accum, RenderCounters* counters)
+void CPURenderer::render(const Scene& scene, const Camera& camera, const RenderSettings& settings, const float* depth,
+  Accumulator& accum, RenderCounters* counters)
 {
   if (camera.width <= 0 || camera.height <= 0)
   {

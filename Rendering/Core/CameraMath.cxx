@@ -53,8 +53,8 @@ bool invert4x4(const double m[16], double out[16])
   return true;
 }
 
-std::array<double, 16> viewProjection(const double eye[3], const double target[3], const double up[3],
-  double fovyDeg, double aspect, double zNear, double zFar, bool parallel, double parallelScale)
+std::array<double, 16> viewProjection(const double eye[3], const double target[3], const double up[3], double fovyDeg,
+  double aspect, double zNear, double zFar, bool parallel, double parallelScale)
 {
   double f[3] = { target[0] - eye[0], target[1] - eye[1], target[2] - eye[2] };
   double fl = std::sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]);
@@ -114,8 +114,8 @@ Camera orbitCamera(const int dims[3], const double spacing[3], int width, int he
   const double eye[3] = { center[0] + dist * std::cos(el) * std::sin(az), center[1] + dist * std::sin(el),
     center[2] + dist * std::cos(el) * std::cos(az) };
   const double up[3] = { 0, 1, 0 };
-  const auto vp = viewProjection(eye, center, up, fovy, double(width) / double(height), std::max(1e-6, dist - 2 * radius),
-    dist + 2 * radius, parallel, radius / zoom);
+  const auto vp = viewProjection(eye, center, up, fovy, double(width) / double(height),
+    std::max(1e-6, dist - 2 * radius), dist + 2 * radius, parallel, radius / zoom);
   invert4x4(vp.data(), cam.invViewProj);
   for (int i = 0; i < 12; ++i)
     cam.worldToIndex[i] = 0;

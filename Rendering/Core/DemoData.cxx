@@ -83,7 +83,8 @@ DemoTransferFunction flat(float r, float g, float b, float a0, float a1, float u
   return tf;
 }
 
-DemoTransferFunction ramp(std::vector<std::array<float, 4>> color, std::vector<std::array<float, 2>> opacity, float unit)
+DemoTransferFunction ramp(
+  std::vector<std::array<float, 4>> color, std::vector<std::array<float, 2>> opacity, float unit)
 {
   DemoTransferFunction tf;
   tf.color = std::move(color);
@@ -94,8 +95,7 @@ DemoTransferFunction ramp(std::vector<std::array<float, 4>> color, std::vector<s
 
 // Colours cycled by extra channels of the channel-count study.
 const float kPalette[8][3] = { { 0.9f, 0.2f, 0.2f }, { 0.2f, 0.85f, 0.3f }, { 0.25f, 0.4f, 0.95f },
-  { 0.95f, 0.8f, 0.2f }, { 0.8f, 0.3f, 0.85f }, { 0.2f, 0.85f, 0.85f }, { 0.95f, 0.55f, 0.2f },
-  { 0.9f, 0.9f, 0.9f } };
+  { 0.95f, 0.8f, 0.2f }, { 0.8f, 0.3f, 0.85f }, { 0.2f, 0.85f, 0.85f }, { 0.95f, 0.55f, 0.2f }, { 0.9f, 0.9f, 0.9f } };
 
 void checkDims(const std::array<int, 3>& d)
 {
@@ -139,17 +139,20 @@ void makeFigure3(DemoVolume& v)
   float* c1 = as<float>(v.channels[1]);
   float* c2 = as<float>(v.channels[2]);
   auto unit = [&](int i, int a) { return d[a] > 1 ? float(i) / float(d[a] - 1) : 0.5f; };
-  auto inside = [](float x, float y, float z, float x0, float y0, float z0) {
+  auto inside = [](float x, float y, float z, float x0, float y0, float z0)
+  {
     const float s = 0.55f;
     return x >= x0 && x <= x0 + s && y >= y0 && y <= y0 + s && z >= z0 && z <= z0 + s;
   };
-  forEachVoxel(d, [&](size_t p, int i, int j, int k) {
-    const float x = unit(i, 0), y = unit(j, 1), z = unit(k, 2);
-    // Each cube spans 0.55 of the domain; density 1 at one face, 0 at the other.
-    c0[p] = inside(x, y, z, 0.08f, 0.08f, 0.2f) ? 1.f - (x - 0.08f) / 0.55f : 0.f;
-    c1[p] = inside(x, y, z, 0.37f, 0.22f, 0.22f) ? (x - 0.37f) / 0.55f : 0.f;
-    c2[p] = inside(x, y, z, 0.22f, 0.37f, 0.12f) ? (y - 0.37f) / 0.55f : 0.f;
-  });
+  forEachVoxel(d,
+    [&](size_t p, int i, int j, int k)
+    {
+      const float x = unit(i, 0), y = unit(j, 1), z = unit(k, 2);
+      // Each cube spans 0.55 of the domain; density 1 at one face, 0 at the other.
+      c0[p] = inside(x, y, z, 0.08f, 0.08f, 0.2f) ? 1.f - (x - 0.08f) / 0.55f : 0.f;
+      c1[p] = inside(x, y, z, 0.37f, 0.22f, 0.22f) ? (x - 0.37f) / 0.55f : 0.f;
+      c2[p] = inside(x, y, z, 0.22f, 0.37f, 0.12f) ? (y - 0.37f) / 0.55f : 0.f;
+    });
   const float u = 0.08f * float(std::max({ d[0], d[1], d[2] }));
   v.transferFunctions = { flat(1.f, 0.f, 0.f, 0.f, 0.9f, u), flat(0.f, 1.f, 0.f, 0.f, 0.9f, u),
     flat(0.f, 0.f, 1.f, 0.f, 0.9f, u) };
@@ -170,54 +173,57 @@ void makeMicroscopy(DemoVolume& v)
   const float cell = std::max(6.f, float(std::min(d[0], d[1])) / 6.f);
   const float zScale = 1.f; // isotropic cells in index space
   const float pcell = std::max(3.f, cell / 3.f);
-  auto seedOf = [&](int a, int b, int c, uint32_t s, float period, float out[3]) {
+  auto seedOf = [&](int a, int b, int c, uint32_t s, float period, float out[3])
+  {
     out[0] = (float(a) + 0.15f + 0.7f * latticeValue(a, b, c, s)) * period;
     out[1] = (float(b) + 0.15f + 0.7f * latticeValue(a, b, c, s + 1)) * period;
     out[2] = (float(c) + 0.15f + 0.7f * latticeValue(a, b, c, s + 2)) * period;
   };
-  forEachVoxel(d, [&](size_t p, int i, int j, int k) {
-    const float x = float(i), y = float(j), z = float(k) * zScale;
-    const int ci = int(std::floor(x / cell)), cj = int(std::floor(y / cell)), ck = int(std::floor(z / cell));
-    float d1 = std::numeric_limits<float>::max(), d2 = d1;
-    for (int c = ck - 1; c <= ck + 1; ++c)
-      for (int b = cj - 1; b <= cj + 1; ++b)
-        for (int a = ci - 1; a <= ci + 1; ++a)
-        {
-          float s[3];
-          seedOf(a, b, c, 11u, cell, s);
-          const float dd = std::sqrt((x - s[0]) * (x - s[0]) + (y - s[1]) * (y - s[1]) + (z - s[2]) * (z - s[2]));
-          if (dd < d1)
+  forEachVoxel(d,
+    [&](size_t p, int i, int j, int k)
+    {
+      const float x = float(i), y = float(j), z = float(k) * zScale;
+      const int ci = int(std::floor(x / cell)), cj = int(std::floor(y / cell)), ck = int(std::floor(z / cell));
+      float d1 = std::numeric_limits<float>::max(), d2 = d1;
+      for (int c = ck - 1; c <= ck + 1; ++c)
+        for (int b = cj - 1; b <= cj + 1; ++b)
+          for (int a = ci - 1; a <= ci + 1; ++a)
           {
-            d2 = d1;
-            d1 = dd;
+            float s[3];
+            seedOf(a, b, c, 11u, cell, s);
+            const float dd = std::sqrt((x - s[0]) * (x - s[0]) + (y - s[1]) * (y - s[1]) + (z - s[2]) * (z - s[2]));
+            if (dd < d1)
+            {
+              d2 = d1;
+              d1 = dd;
+            }
+            else if (dd < d2)
+            {
+              d2 = dd;
+            }
           }
-          else if (dd < d2)
+      const float noise = valueNoise(x, y, z, 3.f, 5u);
+      const float wall = std::exp(-(d2 - d1) * (d2 - d1) / 2.0f);
+      const float nucleus = d1 < 0.28f * cell ? 1.f : std::exp(-(d1 - 0.28f * cell) * (d1 - 0.28f * cell) / 1.5f);
+      float punct = 0.f;
+      const int pi = int(std::floor(x / pcell)), pj = int(std::floor(y / pcell)), pk = int(std::floor(z / pcell));
+      for (int c = pk - 1; c <= pk + 1; ++c)
+        for (int b = pj - 1; b <= pj + 1; ++b)
+          for (int a = pi - 1; a <= pi + 1; ++a)
           {
-            d2 = dd;
+            if (latticeValue(a, b, c, 77u) > 0.35f)
+            {
+              continue; // about a third of the sites carry a punctum
+            }
+            float s[3];
+            seedOf(a, b, c, 31u, pcell, s);
+            const float r2 = (x - s[0]) * (x - s[0]) + (y - s[1]) * (y - s[1]) + (z - s[2]) * (z - s[2]);
+            punct = std::max(punct, std::exp(-r2 / 1.2f));
           }
-        }
-    const float noise = valueNoise(x, y, z, 3.f, 5u);
-    const float wall = std::exp(-(d2 - d1) * (d2 - d1) / 2.0f);
-    const float nucleus = d1 < 0.28f * cell ? 1.f : std::exp(-(d1 - 0.28f * cell) * (d1 - 0.28f * cell) / 1.5f);
-    float punct = 0.f;
-    const int pi = int(std::floor(x / pcell)), pj = int(std::floor(y / pcell)), pk = int(std::floor(z / pcell));
-    for (int c = pk - 1; c <= pk + 1; ++c)
-      for (int b = pj - 1; b <= pj + 1; ++b)
-        for (int a = pi - 1; a <= pi + 1; ++a)
-        {
-          if (latticeValue(a, b, c, 77u) > 0.35f)
-          {
-            continue; // about a third of the sites carry a punctum
-          }
-          float s[3];
-          seedOf(a, b, c, 31u, pcell, s);
-          const float r2 = (x - s[0]) * (x - s[0]) + (y - s[1]) * (y - s[1]) + (z - s[2]) * (z - s[2]);
-          punct = std::max(punct, std::exp(-r2 / 1.2f));
-        }
-    mem[p] = uint8_t(std::min(255.f, 255.f * wall * (0.6f + 0.4f * noise)));
-    nuc[p] = uint8_t(std::min(255.f, 255.f * nucleus * (0.7f + 0.3f * noise)));
-    pun[p] = uint8_t(std::min(255.f, 255.f * punct));
-  });
+      mem[p] = uint8_t(std::min(255.f, 255.f * wall * (0.6f + 0.4f * noise)));
+      nuc[p] = uint8_t(std::min(255.f, 255.f * nucleus * (0.7f + 0.3f * noise)));
+      pun[p] = uint8_t(std::min(255.f, 255.f * punct));
+    });
   const float u = 2.f;
   v.transferFunctions = {
     ramp({ { 0.f, 0.9f, 0.3f, 0.8f }, { 1.f, 1.f, 0.6f, 0.95f } }, { { 0.f, 0.f }, { 0.3f, 0.f }, { 1.f, 0.5f } }, u),
@@ -240,17 +246,19 @@ void makeCosmology(DemoVolume& v)
   float* te = as<float>(v.channels[2]);
   float* ve = as<float>(v.channels[3]);
   const float period = float(std::max({ d[0], d[1], d[2] })) / 3.f;
-  forEachVoxel(d, [&](size_t p, int i, int j, int k) {
-    const float x = float(i), y = float(j), z = float(k);
-    const float f = fbm(x, y, z, period, 5, 1u);
-    const float g = fbm(x, y, z, period * 0.5f, 3, 2u);
-    const float h = fbm(x, y, z, period, 3, 3u);
-    const float delta = (f - 0.5f) * 9.f; // filaments: log-normal contrast
-    dm[p] = std::exp(delta);
-    ba[p] = std::exp(0.85f * delta + 1.5f * (g - 0.5f));
-    te[p] = std::pow(ba[p], 0.6f) * (0.6f + 0.8f * h);
-    ve[p] = 1.f + 4.f * std::fabs(h - 0.5f) + 0.3f * delta * delta / 9.f;
-  });
+  forEachVoxel(d,
+    [&](size_t p, int i, int j, int k)
+    {
+      const float x = float(i), y = float(j), z = float(k);
+      const float f = fbm(x, y, z, period, 5, 1u);
+      const float g = fbm(x, y, z, period * 0.5f, 3, 2u);
+      const float h = fbm(x, y, z, period, 3, 3u);
+      const float delta = (f - 0.5f) * 9.f; // filaments: log-normal contrast
+      dm[p] = std::exp(delta);
+      ba[p] = std::exp(0.85f * delta + 1.5f * (g - 0.5f));
+      te[p] = std::pow(ba[p], 0.6f) * (0.6f + 0.8f * h);
+      ve[p] = 1.f + 4.f * std::fabs(h - 0.5f) + 0.3f * delta * delta / 9.f;
+    });
   const float u = 0.05f * float(std::max({ d[0], d[1], d[2] }));
   v.transferFunctions = {
     ramp({ { 0.f, 0.2f, 0.2f, 0.6f }, { 0.3f, 0.8f, 0.3f, 0.5f }, { 1.f, 1.f, 0.9f, 0.7f } },
@@ -267,8 +275,8 @@ void makeWeather(DemoVolume& v)
   const int* d = v.dims;
   const size_t voxels = size_t(d[0]) * d[1] * d[2];
   v.type = ScalarType::Float32;
-  v.channelNames = { "pressure", "temperature", "u_wind", "v_wind", "w_wind", "wind_speed", "vapor", "cloud",
-    "rain", "snow", "ice", "graupel" };
+  v.channelNames = { "pressure", "temperature", "u_wind", "v_wind", "w_wind", "wind_speed", "vapor", "cloud", "rain",
+    "snow", "ice", "graupel" };
   v.channels.assign(12, allocate<float>(voxels));
   std::vector<float*> c(12);
   for (int n = 0; n < 12; ++n)
@@ -277,30 +285,32 @@ void makeWeather(DemoVolume& v)
   }
   const float cx = 0.5f * float(d[0] - 1), cy = 0.5f * float(d[1] - 1);
   const float R = 0.5f * float(std::min(d[0], d[1]));
-  forEachVoxel(d, [&](size_t p, int i, int j, int k) {
-    const float x = (float(i) - cx) / R, y = (float(j) - cy) / R;
-    const float z = d[2] > 1 ? float(k) / float(d[2] - 1) : 0.5f;
-    const float r = std::sqrt(x * x + y * y) + 1e-6f;
-    const float theta = std::atan2(y, x);
-    const float n1 = valueNoise(float(i), float(j), float(k), 6.f, 9u);
-    const float vmax = 60.f, rm = 0.15f;
-    const float speed = vmax * (r < rm ? r / rm : std::exp(-(r - rm) * 2.5f)) * (1.f - 0.5f * z);
-    const float spiral = 0.5f + 0.5f * std::cos(3.f * theta + 12.f * r);
-    const float band = std::exp(-std::pow((r - 0.45f) / 0.25f, 2.f)) * spiral + std::exp(-std::pow(r / 0.12f, 2.f));
-    const float eye = r < 0.05f ? 0.f : 1.f;
-    c[0][p] = 1000.f - 60.f * std::exp(-r * r / 0.1f) - 700.f * z;
-    c[1][p] = 300.f - 70.f * z + 8.f * std::exp(-r * r / 0.02f);
-    c[2][p] = -speed * std::sin(theta);
-    c[3][p] = speed * std::cos(theta);
-    c[4][p] = 4.f * band * eye * std::sin(kPi * z) * (0.5f + n1);
-    c[5][p] = speed;
-    c[6][p] = 0.02f * std::exp(-3.f * z) * (0.5f + 0.5f * band);
-    c[7][p] = 1e-3f * band * eye * std::sin(kPi * z) * (0.3f + n1);
-    c[8][p] = 1e-3f * band * eye * (z < 0.4f ? 1.f : 0.f) * n1;
-    c[9][p] = 1e-3f * band * eye * (z > 0.5f ? 1.f : 0.f) * n1;
-    c[10][p] = 1e-3f * band * eye * (z > 0.7f ? 1.f : 0.f) * (1.f - n1);
-    c[11][p] = 1e-3f * band * eye * (z > 0.3f && z < 0.6f ? 1.f : 0.f) * n1 * n1;
-  });
+  forEachVoxel(d,
+    [&](size_t p, int i, int j, int k)
+    {
+      const float x = (float(i) - cx) / R, y = (float(j) - cy) / R;
+      const float z = d[2] > 1 ? float(k) / float(d[2] - 1) : 0.5f;
+      const float r = std::sqrt(x * x + y * y) + 1e-6f;
+      const float theta = std::atan2(y, x);
+      const float n1 = valueNoise(float(i), float(j), float(k), 6.f, 9u);
+      const float vmax = 60.f, rm = 0.15f;
+      const float speed = vmax * (r < rm ? r / rm : std::exp(-(r - rm) * 2.5f)) * (1.f - 0.5f * z);
+      const float spiral = 0.5f + 0.5f * std::cos(3.f * theta + 12.f * r);
+      const float band = std::exp(-std::pow((r - 0.45f) / 0.25f, 2.f)) * spiral + std::exp(-std::pow(r / 0.12f, 2.f));
+      const float eye = r < 0.05f ? 0.f : 1.f;
+      c[0][p] = 1000.f - 60.f * std::exp(-r * r / 0.1f) - 700.f * z;
+      c[1][p] = 300.f - 70.f * z + 8.f * std::exp(-r * r / 0.02f);
+      c[2][p] = -speed * std::sin(theta);
+      c[3][p] = speed * std::cos(theta);
+      c[4][p] = 4.f * band * eye * std::sin(kPi * z) * (0.5f + n1);
+      c[5][p] = speed;
+      c[6][p] = 0.02f * std::exp(-3.f * z) * (0.5f + 0.5f * band);
+      c[7][p] = 1e-3f * band * eye * std::sin(kPi * z) * (0.3f + n1);
+      c[8][p] = 1e-3f * band * eye * (z < 0.4f ? 1.f : 0.f) * n1;
+      c[9][p] = 1e-3f * band * eye * (z > 0.5f ? 1.f : 0.f) * n1;
+      c[10][p] = 1e-3f * band * eye * (z > 0.7f ? 1.f : 0.f) * (1.f - n1);
+      c[11][p] = 1e-3f * band * eye * (z > 0.3f && z < 0.6f ? 1.f : 0.f) * n1 * n1;
+    });
   const float u = 0.05f * float(std::max({ d[0], d[1], d[2] }));
   v.transferFunctions.clear();
   for (int n = 0; n < 12; ++n)
@@ -416,7 +426,8 @@ std::array<int, 3> demoDefaultDims(const std::string& name)
     return { 64, 64, 64 };
   if (name == "weather")
     return { 100, 100, 20 };
-  throw std::invalid_argument("mcvol: unknown demo dataset '" + name + "' (known: figure3, microscopy, cosmology, weather)");
+  throw std::invalid_argument(
+    "mcvol: unknown demo dataset '" + name + "' (known: figure3, microscopy, cosmology, weather)");
 }
 
 DemoVolume makeDemo(const std::string& name, std::array<int, 3> dims, int channels)
@@ -470,7 +481,8 @@ TransferFunctionDesc sampleTransferFunction(const DemoTransferFunction& tf, floa
   out.unitDistance = float(double(tf.unitDistance) * spacing);
   out.rgb.resize(size_t(K) * 3);
   out.opacity.resize(size_t(K));
-  auto interp = [](const auto& pts, float x, int comp) {
+  auto interp = [](const auto& pts, float x, int comp)
+  {
     if (x <= pts.front()[0])
       return pts.front()[size_t(comp)];
     if (x >= pts.back()[0])

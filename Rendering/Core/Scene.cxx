@@ -105,8 +105,8 @@ void Scene::setVolume(const int dims[3], int numChannels, const ChannelSource* c
       throw std::invalid_argument("mcvol: " + channelText(n) + " has a stride below 1");
     }
   }
-  const bool sameShape = numChannels == this->NumChannels && dims[0] == this->Dims[0] &&
-    dims[1] == this->Dims[1] && dims[2] == this->Dims[2];
+  const bool sameShape = numChannels == this->NumChannels && dims[0] == this->Dims[0] && dims[1] == this->Dims[1] &&
+    dims[2] == this->Dims[2];
   std::copy(dims, dims + 3, this->Dims);
   if (!sameShape)
   {
@@ -142,14 +142,16 @@ void Scene::setTransferFunction(int channel, const TransferFunctionDesc& tf)
   }
   if (!std::isfinite(tf.scalarMin) || !std::isfinite(tf.scalarMax) || !(tf.scalarMax >= tf.scalarMin))
   {
-    throw std::invalid_argument("mcvol: the scalar range of " + channelText(channel) + "'s transfer function is invalid");
+    throw std::invalid_argument(
+      "mcvol: the scalar range of " + channelText(channel) + "'s transfer function is invalid");
   }
   for (size_t i = 0; i < K; ++i)
   {
     if (!std::isfinite(tf.opacity[i]) || !std::isfinite(tf.rgb[3 * i]) || !std::isfinite(tf.rgb[3 * i + 1]) ||
       !std::isfinite(tf.rgb[3 * i + 2]))
     {
-      throw std::invalid_argument("mcvol: the transfer function of " + channelText(channel) + " has a non-finite entry");
+      throw std::invalid_argument(
+        "mcvol: the transfer function of " + channelText(channel) + " has a non-finite entry");
     }
   }
   const int Kcur = this->View.tables.size;
@@ -402,17 +404,15 @@ void Scene::refreshView(bool majorantsChanged)
   }
   for (int n = 0; n < kMaxChannels; ++n)
   {
-    this->View.blend.mixWeights[n] = n < this->NumChannels
-      ? (sum > 0.f ? this->MixWeights[n] / sum : 1.f / float(this->NumChannels))
-      : 0.f;
+    this->View.blend.mixWeights[n] =
+      n < this->NumChannels ? (sum > 0.f ? this->MixWeights[n] / sum : 1.f / float(this->NumChannels)) : 0.f;
   }
   this->View.blend.mode = this->Mode;
   if (!majorantsChanged)
   {
     return;
   }
-  const int64_t cells =
-    int64_t(this->View.grid.dims[0]) * this->View.grid.dims[1] * this->View.grid.dims[2];
+  const int64_t cells = int64_t(this->View.grid.dims[0]) * this->View.grid.dims[1] * this->View.grid.dims[2];
   this->View.numActive = 0;
   for (int n = 0; n < this->NumChannels; ++n)
   {

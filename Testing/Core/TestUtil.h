@@ -113,7 +113,8 @@ inline double normalTwoSided(double z)
 /// Pearson chi-square of observed counts against expected probabilities;
 /// returns the p-value (dof = number of cells - 1). Cells of probability 0
 /// must have count 0 (asserted).
-inline double chiSquarePValue(const std::vector<double>& counts, const std::vector<double>& probs, double* statOut = nullptr)
+inline double chiSquarePValue(
+  const std::vector<double>& counts, const std::vector<double>& probs, double* statOut = nullptr)
 {
   double total = 0.0;
   for (double c : counts)
@@ -157,7 +158,10 @@ struct TestVolume
     this->channels.assign(size_t(numChannels), std::vector<float>(this->voxels(), value));
   }
   size_t voxels() const { return size_t(this->dims[0]) * size_t(this->dims[1]) * size_t(this->dims[2]); }
-  size_t index(int i, int j, int k) const { return (size_t(k) * size_t(this->dims[1]) + size_t(j)) * size_t(this->dims[0]) + size_t(i); }
+  size_t index(int i, int j, int k) const
+  {
+    return (size_t(k) * size_t(this->dims[1]) + size_t(j)) * size_t(this->dims[0]) + size_t(i);
+  }
   std::vector<ChannelSource> sources() const
   {
     std::vector<ChannelSource> s(this->channels.size());
@@ -184,8 +188,8 @@ inline double extinctionOf(double a, double u)
 }
 
 /// Constant opacity and colour over the scalar range [lo, hi] with K texels.
-inline TransferFunctionDesc flatTF(float opacity, float r, float g, float b, float unit = 1.f, int K = 2,
-  float lo = 0.f, float hi = 1.f)
+inline TransferFunctionDesc flatTF(
+  float opacity, float r, float g, float b, float unit = 1.f, int K = 2, float lo = 0.f, float hi = 1.f)
 {
   TransferFunctionDesc tf;
   tf.scalarMin = lo;
@@ -202,8 +206,8 @@ inline TransferFunctionDesc flatTF(float opacity, float r, float g, float b, flo
   return tf;
 }
 
-inline void configure(Scene& scene, const TestVolume& v, const std::vector<TransferFunctionDesc>& tfs, int macrocell = 8,
-  BlendMode mode = BlendMode::Density)
+inline void configure(Scene& scene, const TestVolume& v, const std::vector<TransferFunctionDesc>& tfs,
+  int macrocell = 8, BlendMode mode = BlendMode::Density)
 {
   const std::vector<ChannelSource> src = v.sources();
   scene.setVolume(v.dims, int(src.size()), src.data());
@@ -231,7 +235,8 @@ inline void configureDemo(Scene& scene, const DemoVolume& v, int macrocell = 8, 
   for (int n = 0; n < v.numChannels(); ++n)
   {
     const std::array<float, 2> range = v.range(n);
-    scene.setTransferFunction(n, sampleTransferFunction(v.transferFunctions[size_t(n)], range[0], range[1], K, unitScale));
+    scene.setTransferFunction(
+      n, sampleTransferFunction(v.transferFunctions[size_t(n)], range[0], range[1], K, unitScale));
   }
   scene.setMacrocellSize(macrocell);
   scene.setBlendMode(mode);
@@ -348,7 +353,8 @@ struct WorldRay
 
 inline WorldRay pixelRay(const Camera& c, double px, double py)
 {
-  auto un = [&](double x, double y, double z, double out[3]) {
+  auto un = [&](double x, double y, double z, double out[3])
+  {
     const double* m = c.invViewProj;
     const double X = m[0] * x + m[1] * y + m[2] * z + m[3];
     const double Y = m[4] * x + m[5] * y + m[6] * z + m[7];
@@ -423,8 +429,8 @@ struct Moments
 
 /// n renders of one sample each, seeds seedBase, seedBase + 1, ... (each
 /// seed gives independent random streams).
-inline Moments renderMoments(const Scene& scene, const Camera& cam, RenderSettings settings, int n, uint32_t seedBase,
-  int threads = 0)
+inline Moments renderMoments(
+  const Scene& scene, const Camera& cam, RenderSettings settings, int n, uint32_t seedBase, int threads = 0)
 {
   CPURenderer r;
   r.setThreads(threads);
@@ -466,8 +472,8 @@ inline Moments renderMoments(const Scene& scene, const Camera& cam, RenderSettin
  *  3. max_p |D_p| / sqrt(V_p), Bonferroni-corrected over the pixels.
  * Pixels with V_p == 0 must have D_p == 0 (every sample was identical).
  */
-inline void expectZeroDifference(const std::vector<double>& D, const std::vector<double>& V, double alpha,
-  const std::string& what)
+inline void expectZeroDifference(
+  const std::vector<double>& D, const std::vector<double>& V, double alpha, const std::string& what)
 {
   const char* names[4] = { "R", "G", "B", "A" };
   const size_t P = D.size() / 4;
@@ -526,8 +532,8 @@ inline void expectBinomial(double hits, double n, double p, double alpha, const 
 {
   const double sd = std::sqrt(n * p * (1.0 - p));
   const double z = (hits - n * p) / sd;
-  EXPECT_GT(normalTwoSided(z), alpha) << what << ": " << hits << " of " << n << " (expected " << n * p
-                                      << ", z = " << z << ")";
+  EXPECT_GT(normalTwoSided(z), alpha) << what << ": " << hits << " of " << n << " (expected " << n * p << ", z = " << z
+                                      << ")";
 }
 } // namespace test
 } // namespace mcvol

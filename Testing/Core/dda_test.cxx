@@ -155,7 +155,8 @@ void checkRays(RayKind kind, int count, uint64_t seed, Stats& st)
       {
         // Start outside along one axis, so the ray enters through a face.
         const int a = r.integer(0, 2);
-        o[a] = r.chance(0.5) ? G.boxLo[a] - float(r.uniform(0.1, 3.0)) * R : G.boxHi[a] + float(r.uniform(0.1, 3.0)) * R;
+        o[a] =
+          r.chance(0.5) ? G.boxLo[a] - float(r.uniform(0.1, 3.0)) * R : G.boxHi[a] + float(r.uniform(0.1, 3.0)) * R;
       }
     }
     else

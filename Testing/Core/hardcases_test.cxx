@@ -25,8 +25,8 @@ struct Image
   const float* at(int x, int y) const { return this->px.data() + 4 * (size_t(y) * size_t(this->width) + size_t(x)); }
 };
 
-Image render(const Scene& scene, const Camera& cam, Tracker t, int spp, uint32_t seed, RenderCounters* counters = nullptr,
-  bool jitter = true)
+Image render(const Scene& scene, const Camera& cam, Tracker t, int spp, uint32_t seed,
+  RenderCounters* counters = nullptr, bool jitter = true)
 {
   CPURenderer r;
   Accumulator acc;
@@ -332,8 +332,8 @@ Camera translated(Camera c, const double T[3])
     for (int k = 0; k < 4; ++k)
       c.invViewProj[r * 4 + k] = m[r * 4 + k] + T[r] * m[12 + k];
   for (int r = 0; r < 3; ++r)
-    c.worldToIndex[r * 4 + 3] -= c.worldToIndex[r * 4 + 0] * T[0] + c.worldToIndex[r * 4 + 1] * T[1] +
-      c.worldToIndex[r * 4 + 2] * T[2];
+    c.worldToIndex[r * 4 + 3] -=
+      c.worldToIndex[r * 4 + 0] * T[0] + c.worldToIndex[r * 4 + 1] * T[1] + c.worldToIndex[r * 4 + 2] * T[2];
   return c;
 }
 } // namespace
@@ -497,7 +497,8 @@ TEST(HardCases, GrazingAndAxisParallelRays)
 TEST(HardCases, VeryLongRays)
 {
   const double D = 1e5;
-  auto farCamera = [&](const double c[3], double halfWindow, int W) {
+  auto farCamera = [&](const double c[3], double halfWindow, int W)
+  {
     const double eye[3] = { c[0], c[1], c[2] + D }, up[3] = { 0, 1, 0 };
     const double fovy = 2.0 * std::atan(halfWindow / D) * 180.0 / M_PI;
     const auto vp = viewProjection(eye, c, up, fovy, 1.0, 1.0, 2 * D, false, 1.0);
@@ -646,7 +647,8 @@ TEST(HardCases, ZeroMajorantChannelCostsNothing)
     {
       Rng rng(uint32_t(i), 0u, 1u);
       const float y = 0.5f + 6.f * float(i % 10) / 10.f;
-      const Hit h = trackDensity(hs.view(), t, Vec3f(1.5f + float(i % 7) * 0.1f, y, 0.f), Vec3f(0, 0, 1), 7.f, rng, empty);
+      const Hit h =
+        trackDensity(hs.view(), t, Vec3f(1.5f + float(i % 7) * 0.1f, y, 0.f), Vec3f(0, 0, 1), 7.f, rng, empty);
       EXPECT_FALSE(h.found());
       trackDensity(hs.view(), t, Vec3f(18.f, y, 0.f), Vec3f(0, 0, 1), 7.f, rng, full);
     }

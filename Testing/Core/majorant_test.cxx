@@ -148,8 +148,8 @@ void checkType(ScalarType type, uint64_t seed, int scenes)
     const float hi = type == ScalarType::UInt8 ? 255.f : (type == ScalarType::UInt16 ? 60000.f : 7.f);
     for (int n = 0; n < 3; ++n)
     {
-      scene.setTransferFunction(n, randomTF(r, K, type == ScalarType::Int16 ? -2000.f : lo,
-                                      type == ScalarType::Int16 ? 2000.f : hi));
+      scene.setTransferFunction(
+        n, randomTF(r, K, type == ScalarType::Int16 ? -2000.f : lo, type == ScalarType::Int16 ? 2000.f : hi));
     }
     scene.setMacrocellSize(r.integer(1, 9));
     const bool nearest = r.chance(0.3);
@@ -165,7 +165,8 @@ void checkType(ScalarType type, uint64_t seed, int scenes)
       ASSERT_TRUE(std::isfinite(scene.majorants()[i]) && scene.majorants()[i] >= 0.f) << what;
     }
     int failures = 0;
-    auto check = [&](Vec3f p, const std::vector<int>& cells, const char* how) {
+    auto check = [&](Vec3f p, const std::vector<int>& cells, const char* how)
+    {
       for (int n = 0; n < 3 && failures < 5; ++n)
       {
         const float v = sampleChannel(s.volume, n, p);

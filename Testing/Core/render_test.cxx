@@ -141,8 +141,8 @@ struct TwoChannelSlab
 
   TwoChannelSlab(double sigma0, double sigma1, BlendMode mode)
   {
-    configure(scene, v,
-      { flatTF(opacityFor(sigma0, 1.0), 1, 0, 0), flatTF(opacityFor(sigma1, 1.0), 0, 1, 0) }, 4, mode);
+    configure(
+      scene, v, { flatTF(opacityFor(sigma0, 1.0), 1, 0, 0), flatTF(opacityFor(sigma1, 1.0), 0, 1, 0) }, 4, mode);
   }
 
   /// One render of `spp` samples; returns total alpha (= number of
@@ -201,8 +201,8 @@ TEST(BlendModes, MaxShowsOnlyTheDenserChannel)
       double dh = 0;
       for (int p = 0; p < density.cam.width * density.cam.height; ++p)
         dh += double(acc.rgba()[4 * p + 3]) * spp;
-      expectBinomial(std::round(dh), n, -std::expm1(-0.14 * slab.kThickness), kAlpha / 8,
-        std::string("density ") + toString(t));
+      expectBinomial(
+        std::round(dh), n, -std::expm1(-0.14 * slab.kThickness), kAlpha / 8, std::string("density ") + toString(t));
     }
   }
 }

@@ -132,8 +132,8 @@ namespace
 /// Homogeneous channels whose constant value sits halfway between two texels
 /// of differing opacity, so the majorant exceeds the extinction and null
 /// collisions occur. Returns the extinctions computed independently.
-std::vector<double> buildSelectionScene(Scene& scene, TestVolume& v, const std::vector<std::array<float, 3>>& opac,
-  int macrocell, float unit)
+std::vector<double> buildSelectionScene(
+  Scene& scene, TestVolume& v, const std::vector<std::array<float, 3>>& opac, int macrocell, float unit)
 {
   const int N = int(opac.size());
   v = TestVolume(9, 10, 11, N, 0.25f); // texel coordinate 0.5 with K = 3 over [0,1]
@@ -198,7 +198,7 @@ void checkSelection(const Scene& scene, const std::vector<double>& sigma, Tracke
   EXPECT_GT(p, alpha) << what << " (" << toString(tracker) << "): channel frequencies chi-square " << stat;
   const double z = (hits - expHits) / std::sqrt(varHits);
   EXPECT_GT(normalTwoSided(z), alpha) << what << " (" << toString(tracker) << "): " << hits << " collisions, expected "
-                                       << expHits;
+                                      << expHits;
   EXPECT_GT(c.tentative, c.real) << "null collisions were expected (majorant above the extinction)";
 }
 } // namespace
@@ -226,8 +226,8 @@ namespace
 /// of random obliquity) with no collision against exp(-sigma L): the count
 /// of uncollided rays is Poisson-binomial, tested two-sided at `alpha` by its
 /// normal approximation (variance sum p(1-p), several hundred at least).
-void checkSlab(const std::vector<double>& sigmaWanted, int macrocell, Tracker tracker, uint32_t seed, bool nullCollisions,
-  double alpha)
+void checkSlab(const std::vector<double>& sigmaWanted, int macrocell, Tracker tracker, uint32_t seed,
+  bool nullCollisions, double alpha)
 {
   const int N = int(sigmaWanted.size());
   TestVolume v(7, 6, 25, N, nullCollisions ? 0.25f : 0.5f);
@@ -273,9 +273,9 @@ void checkSlab(const std::vector<double>& sigmaWanted, int macrocell, Tracker tr
   }
   const double z = (through - expected) / std::sqrt(var);
   EXPECT_GT(normalTwoSided(z), alpha) << toString(tracker) << ", " << N << " channel(s), total sigma " << total
-                                       << ", macrocell " << macrocell << (nullCollisions ? ", null collisions" : "")
-                                       << ": " << through << " rays passed, expected " << expected << " (z = " << z
-                                       << ")";
+                                      << ", macrocell " << macrocell << (nullCollisions ? ", null collisions" : "")
+                                      << ": " << through << " rays passed, expected " << expected << " (z = " << z
+                                      << ")";
 }
 } // namespace
 

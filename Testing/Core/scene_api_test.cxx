@@ -25,7 +25,8 @@ void expectThrowNaming(const std::function<void()>& fn, const std::vector<std::s
     const std::string msg = e.what();
     for (const std::string& w : words)
     {
-      EXPECT_NE(msg.find(w), std::string::npos) << what << ": message \"" << msg << "\" does not mention \"" << w << "\"";
+      EXPECT_NE(msg.find(w), std::string::npos)
+        << what << ": message \"" << msg << "\" does not mention \"" << w << "\"";
     }
   }
   catch (const std::exception& e)
@@ -52,8 +53,8 @@ TEST(SceneAPI, SetVolumeErrors)
     expectThrowNaming([&] { s.setVolume(dims, 2, f.src.data()); }, { "empty extent", "dimension " + std::to_string(a) },
       "zero dimension");
     dims[a] = -3;
-    expectThrowNaming([&] { s.setVolume(dims, 2, f.src.data()); }, { "dimension " + std::to_string(a), "-3" },
-      "negative dimension");
+    expectThrowNaming(
+      [&] { s.setVolume(dims, 2, f.src.data()); }, { "dimension " + std::to_string(a), "-3" }, "negative dimension");
   }
   std::vector<ChannelSource> many(40, f.src[0]);
   expectThrowNaming([&] { s.setVolume(f.v.dims, 0, f.src.data()); }, { "0 channels", "1 to 32" }, "0 channels");
@@ -78,8 +79,8 @@ TEST(SceneAPI, TransferFunctionErrors)
 
   TransferFunctionDesc tf = good;
   tf.rgb.pop_back();
-  expectThrowNaming([&] { s.setTransferFunction(0, tf); }, { "channel 0", "3 colour values per entry" },
-    "rgb size not 3K");
+  expectThrowNaming(
+    [&] { s.setTransferFunction(0, tf); }, { "channel 0", "3 colour values per entry" }, "rgb size not 3K");
   tf = good;
   tf.opacity.resize(1);
   tf.rgb.resize(3);
@@ -94,8 +95,8 @@ TEST(SceneAPI, TransferFunctionErrors)
   {
     tf = good;
     tf.unitDistance = u;
-    expectThrowNaming([&] { s.setTransferFunction(1, tf); }, { "channel 1", "unit distance" },
-      "unit distance " + std::to_string(u));
+    expectThrowNaming(
+      [&] { s.setTransferFunction(1, tf); }, { "channel 1", "unit distance" }, "unit distance " + std::to_string(u));
   }
   tf = good;
   tf.scalarMin = 2.f;
@@ -107,8 +108,8 @@ TEST(SceneAPI, TransferFunctionErrors)
   expectThrowNaming([&] { s.setTransferFunction(-1, good); }, { "channel -1" }, "negative channel");
   // Tables of different sizes across channels.
   s.setTransferFunction(0, good);
-  expectThrowNaming([&] { s.setTransferFunction(1, flatTF(0.5f, 1, 0, 0, 1.f, 8)); },
-    { "same size", "channel 1", "8" }, "mismatched table sizes");
+  expectThrowNaming([&] { s.setTransferFunction(1, flatTF(0.5f, 1, 0, 0, 1.f, 8)); }, { "same size", "channel 1", "8" },
+    "mismatched table sizes");
   const float neg[2] = { 1.f, -1.f };
   expectThrowNaming([&] { s.setMixWeights(neg, 2); }, { "mix weight 1" }, "negative mix weight");
 }

@@ -20,6 +20,6 @@ Camera orbitCamera(const int dims[3], const double spacing[3], int width, int he
 bool invert4x4(const double m[16], double out[16]);
 
 /// World-to-NDC matrix of a look-at camera (OpenGL conventions).
-std::array<double, 16> viewProjection(const double eye[3], const double target[3], const double up[3],
-  double fovyDeg, double aspect, double zNear, double zFar, bool parallel, double parallelScale);
+std::array<double, 16> viewProjection(const double eye[3], const double target[3], const double up[3], double fovyDeg,
+  double aspect, double zNear, double zFar, bool parallel, double parallelScale);
 } // namespace mcvol

@@ -24,8 +24,8 @@ struct FrameParams
  * the result depends on nothing but the pixel, the sample indices and the seed.
  */
 template <BlendMode Mode>
-MCVOL_FUNC Vec4f renderPixel(const SceneView& s, const CameraView& cam, const FrameParams& fp, int x, int y,
-  float depth, RayCounters& c)
+MCVOL_FUNC Vec4f renderPixel(
+  const SceneView& s, const CameraView& cam, const FrameParams& fp, int x, int y, float depth, RayCounters& c)
 {
   Vec4f sum;
   const uint32_t pixel = uint32_t(y) * uint32_t(cam.width) + uint32_t(x);

@@ -74,7 +74,8 @@ MCVOL_FUNC float extinctionLimit(const CameraView& cam)
  * that t stays small in float even for very long rays. Returns false when the
  * ray misses the box or is hidden by geometry in front of it.
  */
-MCVOL_FUNC bool generateRay(const CameraView& cam, const VolumeView& vol, float px, float py, float depth, IndexRay& ray)
+MCVOL_FUNC bool generateRay(
+  const CameraView& cam, const VolumeView& vol, float px, float py, float depth, IndexRay& ray)
 {
   const double x = 2.0 * double(px) / double(cam.width) - 1.0;
   const double y = 2.0 * double(py) / double(cam.height) - 1.0;

@@ -81,8 +81,8 @@ public:
   /// must be sized to the camera). depth: optional window depth in [0,1] per
   /// pixel (row-major from the bottom row, like glReadPixels); rays stop at
   /// that depth (opaque geometry already drawn). 1 means no geometry.
-  virtual void render(const Scene& scene, const Camera& camera, const RenderSettings& settings,
-    const float* depth, Accumulator& accum, RenderCounters* counters = nullptr) = 0;
+  virtual void render(const Scene& scene, const Camera& camera, const RenderSettings& settings, const float* depth,
+    Accumulator& accum, RenderCounters* counters = nullptr) = 0;
   virtual const char* name() const = 0;
 
   /// Throws std::runtime_error naming the cause if the requested backend is
