@@ -100,6 +100,41 @@ MCVOL_HOT float sampleOpticalDepth(Rng& rng)
 }
 
 /**
+ * Woodcock steps of channel n over the segment [t0, tStop] of one macrocell
+ * with majorant m (Eq. 3 free flights, Eq. 7 / Listing 2 null-collision
+ * test). `tau` is the channel's remaining optical depth: it is consumed by
+ * the segment and carried to the next one, so a new free flight is drawn
+ * only after a tentative collision. Returns true, with `hit` filled, on a
+ * real collision.
+ */
+template <BlendMode Mode>
+MCVOL_HOT bool woodcockSegment(const SceneView& s, int n, Vec3f o, Vec3f d, float t0, float tStop, float m, float& tau,
+  Rng& rng, RayCounters& c, Hit& hit)
+{
+  float t = t0;
+  while (true)
+  {
+    const float room = (tStop - t) * m; // optical depth left in the segment
+    if (!(tau < room))
+    {
+      tau -= room > 0.f ? room : 0.f;
+      return false;
+    }
+    t = advance(t, tau / m);
+    tau = sampleOpticalDepth(rng);
+    ++c.tentative;
+    Vec3f rgb;
+    if (realCollision<Mode>(s, n, o + d * t, rng.next() * m, rgb, c))
+    {
+      hit.t = t;
+      hit.rgb = rgb;
+      hit.channel = n;
+      return true;
+    }
+  }
+}
+
+/**
  * Method #2 (Section 4.5, Listing 4): one DDA over the macrocells; in each
  * cell every active channel takes Woodcock steps with its own majorant until
  * it leaves the cell, passes the closest hit so far, or collides. The
@@ -140,28 +175,7 @@ MCVOL_HOT Hit track1DDA(const SceneView& s, Vec3f o, Vec3f d, float tmin, float 
       {
         continue; // empty for this channel: no sampling at all
       }
-      const float tStop = minf(dda.t1, hit.t);
-      float t = dda.t0;
-      while (true)
-      {
-        const float room = (tStop - t) * m; // optical depth left in this cell
-        if (!(tau[i] < room))
-        {
-          tau[i] -= room > 0.f ? room : 0.f;
-          break;
-        }
-        t = advance(t, tau[i] / m);
-        tau[i] = sampleOpticalDepth(rng);
-        ++c.tentative;
-        Vec3f rgb;
-        if (realCollision<Mode>(s, n, o + d * t, rng.next() * m, rgb, c))
-        {
-          hit.t = t;
-          hit.rgb = rgb;
-          hit.channel = n;
-          break;
-        }
-      }
+      woodcockSegment<Mode>(s, n, o, d, dda.t0, minf(dda.t1, hit.t), m, tau[i], rng, c, hit);
     }
     if (hit.found())
     {
@@ -188,29 +202,9 @@ MCVOL_HOT bool trackChannel(
   {
     ++c.ddaSteps;
     const float m = minf(s.grid.majorants[int64_t(dda.cellIndex()) * N + n], s.sigmaLimit);
-    if (m > 0.f)
+    if (m > 0.f && woodcockSegment<Mode>(s, n, o, d, dda.t0, dda.t1, m, tau, rng, c, hit))
     {
-      float t = dda.t0;
-      while (true)
-      {
-        const float room = (dda.t1 - t) * m;
-        if (!(tau < room))
-        {
-          tau -= room > 0.f ? room : 0.f;
-          break;
-        }
-        t = advance(t, tau / m);
-        tau = sampleOpticalDepth(rng);
-        ++c.tentative;
-        Vec3f rgb;
-        if (realCollision<Mode>(s, n, o + d * t, rng.next() * m, rgb, c))
-        {
-          hit.t = t;
-          hit.rgb = rgb;
-          hit.channel = n;
-          return true;
-        }
-      }
+      return true;
     }
     dda.next();
   }
