@@ -7,6 +7,7 @@
 #include "vtkFloatArray.h"
 #include "vtkImageData.h"
 #include "vtkMath.h"
+#include "vtkMatrix3x3.h"
 #include "vtkMatrix4x4.h"
 #include "vtkNew.h"
 #include "vtkObjectFactory.h"
@@ -134,7 +135,9 @@ struct vtkMultiChannelVolumeMapper::vtkInternals
   int NumChannels = 0;
   std::array<mcvol::ChannelSource, kMaxChannels> Sources{};
   std::vector<vtkSmartPointer<vtkDataArray>> Arrays; // keeps the channel data alive
-  vtkMTimeType DataMTime = 0;
+  vtkMTimeType DataMTime = 0;                        // of the arrays: their values
+  vtkMTimeType ImageMTime = 0;                       // of the image: its values or its geometry
+  std::array<double, 15> Geometry{};                 // origin, spacing, direction of ImageMTime
   std::array<std::array<double, 2>, kMaxChannels> Ranges{};
   std::array<ChannelTFState, kMaxChannels> TF{};
   int AppliedMacrocellSize = -1;
@@ -623,7 +626,15 @@ void vtkMultiChannelVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
   }
 
   std::array<mcvol::ChannelSource, kMaxChannels> sources{};
-  vtkMTimeType dataMTime = image->GetMTime();
+  // The arrays' times say their values changed; the image's time also moves
+  // when only its origin, spacing or direction do, which needs no rebuild
+  // (those reach the renderer through worldToIndex).
+  vtkMTimeType dataMTime = 0;
+  const vtkMTimeType imageMTime = image->GetMTime();
+  std::array<double, 15> geometry;
+  std::copy(image->GetOrigin(), image->GetOrigin() + 3, geometry.begin());
+  std::copy(image->GetSpacing(), image->GetSpacing() + 3, geometry.begin() + 3);
+  std::copy(image->GetDirectionMatrix()->GetData(), image->GetDirectionMatrix()->GetData() + 9, geometry.begin() + 6);
   for (int c = 0; c < numChannels; ++c)
   {
     vtkDataArray* array = arrays[c];
@@ -722,20 +733,22 @@ void vtkMultiChannelVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
       volumeChanged = sources[c].data != in.Sources[c].data || sources[c].type != in.Sources[c].type ||
         sources[c].stride != in.Sources[c].stride;
     }
-    const bool dataChanged = volumeChanged || dataMTime != in.DataMTime;
-    if (volumeChanged)
+    // An image Modified() with the same geometry may mean values written in
+    // place (users often call image->Modified() rather than the array's).
+    const bool imageValuesChanged = imageMTime != in.ImageMTime && geometry == in.Geometry;
+    const bool dataChanged = volumeChanged || dataMTime != in.DataMTime || imageValuesChanged;
+    in.ImageMTime = imageMTime;
+    in.Geometry = geometry;
+    if (imageValuesChanged && dataMTime == in.DataMTime)
     {
-      in.ForgetVolume();
-      in.Scene.setVolume(dims, numChannels, sources.data());
-      in.VolumeSet = true;
-      std::copy(dims, dims + 3, in.Dims);
-      in.NumChannels = numChannels;
-      in.Sources = sources;
-      in.Arrays.assign(arrays.begin(), arrays.end());
-    }
-    else if (dataChanged)
-    {
-      in.Scene.dataModified();
+      // The arrays were not marked modified, so their cached ranges are
+      // stale: mark them (what the writer should have done) and take the
+      // new time, so the next render sees no change.
+      for (vtkDataArray* a : arrays)
+      {
+        a->Modified();
+        dataMTime = std::max(dataMTime, a->GetMTime());
+      }
     }
     if (dataChanged)
     {
@@ -750,14 +763,37 @@ void vtkMultiChannelVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
           range[0] = 0.0; // no finite voxel at all
           range[1] = 1.0;
         }
-        if (!(range[1] - range[0] > 1e-6 * std::max(std::abs(range[0]), std::abs(range[1]))) || range[0] == range[1])
+        if (range[0] == range[1])
         {
+          // A constant channel: centre its value in the table. (Ranges
+          // narrower than float resolution are widened by the core.)
           const double pad = std::max(0.5, 1e-3 * std::abs(range[0]));
           range[0] -= pad;
           range[1] += pad;
         }
         in.Ranges[c] = { range[0], range[1] };
       }
+    }
+    // Double data is read relative to its minimum, so values far from zero
+    // (1e9 + [0, 500]) keep their resolution when they become float.
+    for (int c = 0; c < numChannels; ++c)
+    {
+      sources[c].offset = sources[c].type == mcvol::ScalarType::Float64 ? in.Ranges[c][0] : 0.0;
+      volumeChanged = volumeChanged || sources[c].offset != in.Sources[c].offset;
+    }
+    if (volumeChanged)
+    {
+      in.ForgetVolume();
+      in.Scene.setVolume(dims, numChannels, sources.data());
+      in.VolumeSet = true;
+      std::copy(dims, dims + 3, in.Dims);
+      in.NumChannels = numChannels;
+      in.Sources = sources;
+      in.Arrays.assign(arrays.begin(), arrays.end());
+    }
+    else if (dataChanged)
+    {
+      in.Scene.dataModified();
     }
 
     int updates = 0;
@@ -904,6 +940,16 @@ void vtkMultiChannelVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
       vtkErrorMacro("The volume's matrix is singular (a zero scale?).");
       return;
     }
+    const double* spacing = image->GetSpacing();
+    if (!(spacing[0] != 0.0 && spacing[1] != 0.0 && spacing[2] != 0.0 && std::isfinite(spacing[0]) &&
+          std::isfinite(spacing[1]) && std::isfinite(spacing[2])) ||
+      image->GetDirectionMatrix()->Determinant() == 0.0)
+    {
+      vtkErrorMacro("The image's spacing (" << spacing[0] << ", " << spacing[1] << ", " << spacing[2]
+                                            << ") or direction matrix is degenerate: every axis needs a non-zero, "
+                                               "finite spacing and the directions must be independent.");
+      return;
+    }
     vtkNew<vtkMatrix4x4> worldToModel;
     vtkMatrix4x4::Invert(propMatrix, worldToModel);
     vtkNew<vtkMatrix4x4> worldToIndex;
@@ -932,7 +978,6 @@ void vtkMultiChannelVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
   // ---- Depth of the opaque geometry drawn so far --------------------------
   in.Depth.resize(static_cast<size_t>(width) * static_cast<size_t>(height));
   {
-    vtkOpenGLState::ScopedglEnableDisable scissor(renWin->GetState(), GL_SCISSOR_TEST);
     if (renWin->GetZbufferData(x0, y0, x0 + width - 1, y0 + height - 1, in.Depth.data()) != VTK_OK)
     {
       vtkWarningMacro("Could not read the depth buffer; geometry will not occlude the volume.");
@@ -943,7 +988,7 @@ void vtkMultiChannelVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
   // ---- Accumulation reset -------------------------------------------------
   key.MapperMTime = this->GetMTime();
   key.PropertyMTime = property ? property->GetMTime() : 0;
-  key.DataMTime = dataMTime;
+  key.DataMTime = std::max(dataMTime, imageMTime);
   key.Width = width;
   key.Height = height;
   std::copy(std::begin(camera.invViewProj), std::end(camera.invViewProj), key.InvViewProj);

@@ -39,10 +39,10 @@ void renderRows(const SceneView& s, const CameraView& cam, const FrameParams& fp
 #pragma omp parallel num_threads(threads > 0 ? threads : omp_get_max_threads()) \
   reduction(+ : dda, tentative, real, samples)
   {
-    RayCounters c;
 #pragma omp for schedule(dynamic, 1)
     for (int y = 0; y < H; ++y)
     {
+      RayCounters c; // per row, folded into 64-bit sums (no overflow at 4096 spp)
       for (int x = 0; x < W; ++x)
       {
         const size_t p = size_t(y) * size_t(W) + size_t(x);
@@ -50,11 +50,11 @@ void renderRows(const SceneView& s, const CameraView& cam, const FrameParams& fp
         const Vec4f sum = renderPixel<Mode>(s, cam, fp, x, y, z, c);
         accumulate(rgba + 4 * p, sum, previous, fp.samplesPerPixel);
       }
+      dda += c.ddaSteps;
+      tentative += c.tentative;
+      real += c.real;
+      samples += c.samples;
     }
-    dda += c.ddaSteps;
-    tentative += c.tentative;
-    real += c.real;
-    samples += c.samples;
   }
   if (counters)
   {

@@ -25,8 +25,21 @@ std::string channelText(int n)
   return "channel " + std::to_string(n);
 }
 
+/// A voxel as the per-ray code reads it (fetchVoxel): float, with a float64
+/// channel's offset taken off first.
 template <typename T>
-void rangeOf(const T* data, int64_t stride, const int dims[3], const int lo[3], const int hi[3], float& mn, float& mx)
+float asSample(T v, double)
+{
+  return float(v);
+}
+float asSample(double v, double offset)
+{
+  return float(v - offset);
+}
+
+template <typename T>
+void rangeOf(const T* data, int64_t stride, double offset, const int dims[3], const int lo[3], const int hi[3],
+  float& mn, float& mx)
 {
   for (int k = lo[2]; k <= hi[2]; ++k)
   {
@@ -35,7 +48,7 @@ void rangeOf(const T* data, int64_t stride, const int dims[3], const int lo[3], 
       const int64_t row = (int64_t(k) * dims[1] + j) * dims[0];
       for (int i = lo[0]; i <= hi[0]; ++i)
       {
-        const float v = float(data[(row + i) * stride]);
+        const float v = asSample(data[(row + i) * stride], offset);
         if (v == v) // NaN voxels are transparent: they do not widen the range
         {
           mn = v < mn ? v : mn;
@@ -104,6 +117,12 @@ void Scene::setVolume(const int dims[3], int numChannels, const ChannelSource* c
     {
       throw std::invalid_argument("mcvol: " + channelText(n) + " has a stride below 1");
     }
+    if (!std::isfinite(channels[n].offset) || (channels[n].offset != 0.0 && channels[n].type != ScalarType::Float64))
+    {
+      throw std::invalid_argument("mcvol: " + channelText(n) +
+        " has an offset; only finite offsets of float64 channels "
+        "are supported");
+    }
   }
   const bool sameShape = numChannels == this->NumChannels && dims[0] == this->Dims[0] && dims[1] == this->Dims[1] &&
     dims[2] == this->Dims[2];
@@ -111,6 +130,13 @@ void Scene::setVolume(const int dims[3], int numChannels, const ChannelSource* c
   if (!sameShape)
   {
     this->HasTF.fill(false);
+  }
+  for (int n = 0; n < numChannels; ++n)
+  {
+    if (channels[n].offset != this->Channels[size_t(n)].offset)
+    {
+      this->HasTF[size_t(n)] = false; // its table was placed relative to the old offset
+    }
   }
   this->NumChannels = numChannels;
   std::copy(channels, channels + numChannels, this->Channels.begin());
@@ -140,7 +166,8 @@ void Scene::setTransferFunction(int channel, const TransferFunctionDesc& tf)
     throw std::invalid_argument(
       "mcvol: the opacity unit distance of " + channelText(channel) + " must be a positive finite number");
   }
-  if (!std::isfinite(tf.scalarMin) || !std::isfinite(tf.scalarMax) || !(tf.scalarMax >= tf.scalarMin))
+  if (!std::isfinite(tf.scalarMin) || !std::isfinite(tf.scalarMax) || !(tf.scalarMax >= tf.scalarMin) ||
+    std::fabs(tf.scalarMin) > 3e38 || std::fabs(tf.scalarMax) > 3e38)
   {
     throw std::invalid_argument(
       "mcvol: the scalar range of " + channelText(channel) + "'s transfer function is invalid");
@@ -176,14 +203,19 @@ void Scene::setTransferFunction(int channel, const TransferFunctionDesc& tf)
     t[4 * i + 2] = std::min(std::max(tf.rgb[3 * i + 2], 0.f), 1.f);
     t[4 * i + 3] = opacityToExtinction(tf.opacity[i], tf.unitDistance);
   }
-  float lo = tf.scalarMin;
-  float hi = tf.scalarMax;
-  if (!(hi > lo))
+  // The table's range in the units the per-ray code sees (offset taken off),
+  // with a width that keeps (K - 1) / width a finite float: a constant
+  // channel, or one whose range is narrower than float resolution, would
+  // otherwise get an infinite scale and NaN texel coordinates.
+  const double lo = tf.scalarMin - this->Channels[size_t(channel)].offset;
+  double width = tf.scalarMax - tf.scalarMin;
+  const double minWidth = std::max(1e-30, 1e-6 * std::fabs(lo));
+  if (!(width >= minWidth))
   {
-    hi = lo + 1.f; // a constant channel: any positive width maps it to texel 0
+    width = minWidth;
   }
-  this->View.tables.scalarMin[channel] = lo;
-  this->View.tables.scale[channel] = float(double(K - 1) / (double(hi) - double(lo)));
+  this->View.tables.scalarMin[channel] = float(lo);
+  this->View.tables.scale[channel] = float(double(K - 1) / width);
   this->HasTF[channel] = true;
   this->MajorantDirty[channel] = true;
   ++this->TableVersion;
@@ -204,7 +236,6 @@ void Scene::setMacrocellSize(int voxels)
 
 void Scene::setBlendMode(BlendMode mode)
 {
-  this->Mode = mode;
   this->View.blend.mode = mode;
 }
 
@@ -223,7 +254,6 @@ void Scene::setMixWeights(const float* weights, int count)
     }
     this->MixWeights[i] = weights[i];
   }
-  this->MixWeightsSet = count > 0;
 }
 
 MemoryStats Scene::memory() const
@@ -274,6 +304,7 @@ void Scene::rebuildMacrocells()
   {
     v.channels[n].data = this->Channels[n].data;
     v.channels[n].stride = this->Channels[n].stride;
+    v.channels[n].offset = this->Channels[n].offset;
     v.channels[n].type = this->Channels[n].type;
   }
   g.numChannels = this->NumChannels;
@@ -311,19 +342,19 @@ void Scene::rebuildMacrocells()
       switch (ch[n].type)
       {
         case ScalarType::UInt8:
-          rangeOf(static_cast<const uint8_t*>(ch[n].data), ch[n].stride, D, lo, hi, mn, mx);
+          rangeOf(static_cast<const uint8_t*>(ch[n].data), ch[n].stride, ch[n].offset, D, lo, hi, mn, mx);
           break;
         case ScalarType::Int16:
-          rangeOf(static_cast<const int16_t*>(ch[n].data), ch[n].stride, D, lo, hi, mn, mx);
+          rangeOf(static_cast<const int16_t*>(ch[n].data), ch[n].stride, ch[n].offset, D, lo, hi, mn, mx);
           break;
         case ScalarType::UInt16:
-          rangeOf(static_cast<const uint16_t*>(ch[n].data), ch[n].stride, D, lo, hi, mn, mx);
+          rangeOf(static_cast<const uint16_t*>(ch[n].data), ch[n].stride, ch[n].offset, D, lo, hi, mn, mx);
           break;
         case ScalarType::Float32:
-          rangeOf(static_cast<const float*>(ch[n].data), ch[n].stride, D, lo, hi, mn, mx);
+          rangeOf(static_cast<const float*>(ch[n].data), ch[n].stride, ch[n].offset, D, lo, hi, mn, mx);
           break;
         case ScalarType::Float64:
-          rangeOf(static_cast<const double*>(ch[n].data), ch[n].stride, D, lo, hi, mn, mx);
+          rangeOf(static_cast<const double*>(ch[n].data), ch[n].stride, ch[n].offset, D, lo, hi, mn, mx);
           break;
       }
       ranges[(c * N + n) * 2 + 0] = mn;
@@ -380,7 +411,7 @@ void Scene::rebuildMajorants(int channel)
     {
       // Both ends included: the table is interpolated linearly between texels.
       const int i0 = std::max(0, int(std::floor(texelCoord(tv, channel, mn))));
-      const int i1 = std::min(K - 1, int(std::ceil(texelCoord(tv, channel, mx))));
+      const int i1 = std::max(i0, std::min(K - 1, int(std::ceil(texelCoord(tv, channel, mx)))));
       int L = 0;
       while ((2 << L) <= i1 - i0 + 1)
       {
@@ -407,7 +438,6 @@ void Scene::refreshView(bool majorantsChanged)
     this->View.blend.mixWeights[n] =
       n < this->NumChannels ? (sum > 0.f ? this->MixWeights[n] / sum : 1.f / float(this->NumChannels)) : 0.f;
   }
-  this->View.blend.mode = this->Mode;
   if (!majorantsChanged)
   {
     return;

@@ -62,7 +62,7 @@ std::vector<Segment> walk(const GridView& g, Vec3f o, Vec3f d, float tmin, float
   while (!dda.done && int(segs.size()) <= limit)
   {
     segs.push_back({ dda.t0, dda.t1, { dda.cell[0], dda.cell[1], dda.cell[2] } });
-    EXPECT_EQ(dda.cellIndex(), dda.cell[0] + g.dims[0] * (dda.cell[1] + g.dims[1] * dda.cell[2]));
+    EXPECT_EQ(dda.cellIndex(), int64_t(dda.cell[0] + g.dims[0] * (dda.cell[1] + g.dims[1] * dda.cell[2])));
     dda.next();
   }
   return segs;

@@ -711,3 +711,81 @@ TEST(HardCases, HugeExtinctionStaysBounded)
       }
   }
 }
+
+// A transfer-function range of zero width at 1e8 (a constant channel) or of
+// 1e-37 (narrower than float resolution) used to give an infinite table
+// scale, NaN texel coordinates and an out-of-bounds read in the majorant
+// build. Now: finite majorants, and the voxels render with the table's
+// opacity (alpha > 0), for both cases.
+TEST(HardCases, DegenerateTransferFunctionRange)
+{
+  struct Case
+  {
+    const char* name;
+    float value;
+    double lo, hi;
+  };
+  for (const Case& k : { Case{ "constant 1e8", 1e8f, 1e8, 1e8 }, Case{ "width 1e-37", 1e-37f, 0.0, 1e-37 } })
+  {
+    TestVolume v(8, 8, 8, 1, k.value);
+    TransferFunctionDesc tf = flatTF(0.5f, 1.f, 1.f, 1.f, 1.f, 16);
+    tf.scalarMin = k.lo;
+    tf.scalarMax = k.hi;
+    Scene scene;
+    configure(scene, v, { tf }, 4);
+    for (float m : scene.majorants())
+    {
+      ASSERT_TRUE(std::isfinite(m) && m > 0.f) << k.name;
+    }
+    EXPECT_TRUE(std::isfinite(scene.view().tables.scale[0])) << k.name;
+    const double spacing[3] = { 1, 1, 1 };
+    const Camera cam = axisCamera(2, v.dims, spacing, 1.0, 6.0, 4, 4);
+    const Image img = render(scene, cam, Tracker::OneDDA, 16, 1);
+    EXPECT_GT(expectFinite(img, k.name), 0.5) << k.name; // 8 voxels at opacity 0.5 each
+  }
+}
+
+// Float64 data far from zero: 1e9 + i along x. With the channel's offset set
+// to 1e9 the per-ray code sees i (float would quantise 1e9 + i to steps of
+// 64), and a transfer function that is transparent below 1e9 + 20 leaves the
+// macrocells there empty.
+TEST(HardCases, Float64FarFromZeroKeepsResolution)
+{
+  const int dims[3] = { 40, 4, 4 };
+  std::vector<double> data(size_t(dims[0]) * dims[1] * dims[2]);
+  for (size_t p = 0; p < data.size(); ++p)
+  {
+    data[p] = 1e9 + double(p % size_t(dims[0]));
+  }
+  ChannelSource src;
+  src.data = data.data();
+  src.type = ScalarType::Float64;
+  src.offset = 1e9;
+  Scene scene;
+  scene.setVolume(dims, 1, &src);
+  TransferFunctionDesc tf = flatTF(0.f, 1.f, 1.f, 1.f, 1.f, 40);
+  tf.scalarMin = 1e9;
+  tf.scalarMax = 1e9 + 39;
+  for (int i = 20; i < 40; ++i)
+  {
+    tf.opacity[size_t(i)] = 0.9f;
+  }
+  scene.setTransferFunction(0, tf);
+  scene.setMacrocellSize(4);
+  scene.update();
+  for (int i = 0; i < dims[0] - 1; i += 3)
+  {
+    EXPECT_NEAR(sampleChannel(scene.view().volume, 0, Vec3f(float(i) + 0.25f, 1.f, 1.f)), i + 0.25, 1e-4);
+  }
+  // Cells over x in [0, 16] (voxels up to 17 with padding) are empty.
+  const GridView& g = scene.view().grid;
+  for (int cx = 0; cx < 4; ++cx)
+  {
+    EXPECT_EQ(g.majorants[size_t(cx)], 0.f) << "cell " << cx;
+  }
+  EXPECT_GT(g.majorants[size_t(g.dims[0] - 1)], 0.f);
+  // An offset on a non-double channel is refused.
+  ChannelSource bad = src;
+  bad.type = ScalarType::Float32;
+  EXPECT_THROW(scene.setVolume(dims, 1, &bad), std::invalid_argument);
+}

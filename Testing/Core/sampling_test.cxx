@@ -26,7 +26,7 @@ Hit track(const SceneView& s, Tracker tracker, const BoxRay& ray, Rng& rng, RayC
 
 // ---------------------------------------------------------------- Test 3
 
-// Chi-square goodness of fit of woodcockStep to Exp(m) over 64 equiprobable
+// Chi-square goodness of fit of the free flight sampleOpticalDepth / m to Exp(m) over 64 equiprobable
 // bins (63 dof) and a z test of the mean, for several majorants.
 TEST(FreeFlight, ExponentialDistribution)
 {
@@ -40,7 +40,7 @@ TEST(FreeFlight, ExponentialDistribution)
     double sum = 0.0;
     for (int i = 0; i < draws; ++i)
     {
-      const float t = woodcockStep(m, rng);
+      const float t = sampleOpticalDepth(rng) / m;
       ASSERT_TRUE(std::isfinite(t) && t >= 0.f);
       sum += t;
       // Bin of the exponential CDF value 1 - exp(-m t).
@@ -151,7 +151,7 @@ std::vector<double> buildSelectionScene(
   configure(scene, v, tfs, macrocell);
   for (int n = 0; n < N; ++n)
   {
-    const float got = lookupSigma(scene.view().tables, n, 0.25f);
+    const float got = lookupTF(scene.view().tables, n, 0.25f).sigma;
     EXPECT_NEAR(got, sigma[size_t(n)], 1e-5 * sigma[size_t(n)] + 1e-7) << "channel " << n << " extinction";
   }
   return sigma;
@@ -253,7 +253,7 @@ void checkSlab(const std::vector<double>& sigmaWanted, int macrocell, Tracker tr
   {
     const double expect = nullCollisions ? 0.5 * extinctionOf(tfs[size_t(n)].opacity[1], unit)
                                          : extinctionOf(tfs[size_t(n)].opacity[0], unit);
-    EXPECT_NEAR(lookupSigma(scene.view().tables, n, nullCollisions ? 0.25f : 0.5f), expect, 1e-5 * expect);
+    EXPECT_NEAR(lookupTF(scene.view().tables, n, nullCollisions ? 0.25f : 0.5f).sigma, expect, 1e-5 * expect);
     total += expect;
   }
   const SceneView& s = scene.view();

@@ -5,6 +5,7 @@
 
 #include <cfloat>
 #include <cmath>
+#include <cstdint>
 
 namespace mcvol
 {
@@ -97,9 +98,10 @@ struct DDA
     this->Dims[2] = g.dims[2];
   }
 
-  MCVOL_HOT int cellIndex() const
+  /// 64-bit: a fine grid over a large volume can hold more than 2^31 cells.
+  MCVOL_HOT int64_t cellIndex() const
   {
-    return this->cell[0] + this->Dims[0] * (this->cell[1] + this->Dims[1] * this->cell[2]);
+    return this->cell[0] + int64_t(this->Dims[0]) * (this->cell[1] + int64_t(this->Dims[1]) * this->cell[2]);
   }
 
   /// Moves to the next cell; returns false when the ray has left the grid or

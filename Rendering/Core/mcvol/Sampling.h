@@ -22,7 +22,7 @@ MCVOL_HOT float fetchVoxel(const ChannelView& c, int64_t v)
     case ScalarType::Float32:
       return static_cast<const float*>(c.data)[i];
     case ScalarType::Float64:
-      return float(static_cast<const double*>(c.data)[i]);
+      return float(static_cast<const double*>(c.data)[i] - c.offset);
   }
   return 0.f;
 }
@@ -132,21 +132,4 @@ MCVOL_HOT TFSample lookupTF(const TableView& t, int n, float s)
   return out;
 }
 
-/// Extinction only (the common case of a null-collision test).
-MCVOL_HOT float lookupSigma(const TableView& t, int n, float s)
-{
-  const float x = texelCoord(t, n, s);
-  if (x < 0.f)
-  {
-    return 0.f;
-  }
-  int i = int(x);
-  if (i > t.size - 2)
-  {
-    i = t.size - 2;
-  }
-  const float f = x - float(i);
-  const float* a = t.texels + (int64_t(n) * t.size + i) * 4;
-  return a[3] + f * (a[7] - a[3]);
-}
 } // namespace mcvol

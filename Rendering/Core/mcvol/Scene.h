@@ -17,6 +17,10 @@ struct ChannelSource
   const void* data = nullptr;
   ScalarType type = ScalarType::Float32;
   int64_t stride = 1; ///< in elements; N for the components of an interleaved array
+  /// Float64 only: subtracted in double before a value becomes float, so data
+  /// far from zero (1e9 + [0, 500]) keeps its resolution. Set it near the
+  /// data (its minimum, say); transfer-function ranges stay in data units.
+  double offset = 0.0;
 };
 
 /**
@@ -26,8 +30,8 @@ struct ChannelSource
  */
 struct TransferFunctionDesc
 {
-  float scalarMin = 0.f;
-  float scalarMax = 1.f;
+  double scalarMin = 0.0; ///< data units (the channel's offset is taken off)
+  double scalarMax = 1.0;
   std::vector<float> rgb;     ///< 3 * K linear RGB in [0,1]
   std::vector<float> opacity; ///< K opacities in [0,1]
   float unitDistance = 1.f;   ///< world units, > 0
@@ -90,7 +94,7 @@ public:
   int numChannels() const { return this->NumChannels; }
   const int* dims() const { return this->Dims; }
   int macrocellSize() const { return this->MacrocellSize; }
-  BlendMode blendMode() const { return this->Mode; }
+  BlendMode blendMode() const { return this->View.blend.mode; }
   const int* macrocellDims() const { return this->View.grid.dims; }
   /// Seconds spent in the last majorant (re)build, and how many channels it touched.
   double lastMajorantBuildSeconds() const { return this->LastMajorantSeconds; }
@@ -104,6 +108,7 @@ public:
   /// The plain view the per-ray code reads (valid after update()).
   const SceneView& view() const { return this->View; }
 
+  /// Host copies a backend uploads (the CUDA backend mirrors them).
   const std::vector<float>& macrocellRanges() const { return this->Ranges; }
   const std::vector<float>& majorants() const { return this->Majorants; }
   const std::vector<float>& tables() const { return this->Tables; }
@@ -120,9 +125,7 @@ private:
   std::array<bool, kMaxChannels> MajorantDirty{};
   bool MacrocellsDirty = true;
   int MacrocellSize = 8;
-  BlendMode Mode = BlendMode::Density;
   std::array<float, kMaxChannels> MixWeights{};
-  bool MixWeightsSet = false;
 
   std::vector<float> Tables;    ///< [channel][K][4]: r, g, b, extinction
   std::vector<float> Ranges;    ///< [cell][channel][2]: min, max

@@ -19,6 +19,7 @@ struct ChannelView
   const void* data = nullptr;
   int64_t stride = 1; ///< elements between consecutive voxels
   ScalarType type = ScalarType::Float32;
+  double offset = 0.0; ///< Float64 only: subtracted before conversion to float
 };
 
 struct VolumeView
@@ -40,8 +41,8 @@ struct TableView
 {
   int size = 0; ///< K >= 2
   const float* texels = nullptr;
-  float scalarMin[kMaxChannels];
-  float scale[kMaxChannels]; ///< (K - 1) / (max - min)
+  float scalarMin[kMaxChannels]; ///< table start minus the channel's offset
+  float scale[kMaxChannels];     ///< (K - 1) / (max - min), always finite
 };
 
 /// Regular grid of macrocells in index space; majorants[cell * N + n].

@@ -10,7 +10,8 @@
 
 namespace mcvol
 {
-/// Per-ray work counters, summed by the backends.
+/// Work counters of the rays of one image row at most (32 bits suffice there);
+/// backends fold them into 64-bit totals row by row.
 struct RayCounters
 {
   uint32_t ddaSteps = 0;
@@ -27,13 +28,6 @@ struct Hit
   int channel = -1;
   MCVOL_FUNC bool found() const { return this->channel >= 0; }
 };
-
-/// Listing 1: free-flight distance for majorant `maj` (Eq. 3). Rng::next()
-/// never returns 1, so the logarithm is finite.
-MCVOL_HOT float woodcockStep(float maj, Rng& rng)
-{
-  return -logf(1.f - rng.next()) / maj;
-}
 
 /**
  * Null-collision test of channel n at p under the blend mode (Eq. 7 for
@@ -92,8 +86,9 @@ MCVOL_HOT float advance(float t, float dt)
   return next > t ? next : nextafterf(t, 3.4e38f);
 }
 
-/// An exponential optical depth -ln(1 - u): the free flight of Eq. 3 in
-/// units of majorant times distance.
+/// An exponential optical depth -ln(1 - u): the free flight of Eq. 3 (Listing
+/// 1) in units of majorant times distance; divided by the majorant it is the
+/// distance. Rng::next() never returns 1, so the logarithm is finite.
 MCVOL_HOT float sampleOpticalDepth(Rng& rng)
 {
   return -logf(1.f - rng.next());
@@ -166,7 +161,7 @@ MCVOL_HOT Hit track1DDA(const SceneView& s, Vec3f o, Vec3f d, float tmin, float 
   while (!dda.done)
   {
     ++c.ddaSteps;
-    const float* maj = s.grid.majorants + int64_t(dda.cellIndex()) * N;
+    const float* maj = s.grid.majorants + dda.cellIndex() * N;
     for (int i = 0; i < s.numActive; ++i)
     {
       const int n = s.active[i];
@@ -201,7 +196,7 @@ MCVOL_HOT bool trackChannel(
   while (!dda.done)
   {
     ++c.ddaSteps;
-    const float m = minf(s.grid.majorants[int64_t(dda.cellIndex()) * N + n], s.sigmaLimit);
+    const float m = minf(s.grid.majorants[dda.cellIndex() * N + n], s.sigmaLimit);
     if (m > 0.f && woodcockSegment<Mode>(s, n, o, d, dda.t0, dda.t1, m, tau, rng, c, hit))
     {
       return true;

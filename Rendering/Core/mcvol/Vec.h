@@ -66,31 +66,10 @@ struct Vec4f
   float r = 0.f, g = 0.f, b = 0.f, a = 0.f;
 };
 
-/// Row-major 3x4 affine map (linear part plus translation).
-struct Affine3f
-{
-  float m[12] = { 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0 };
-
-  MCVOL_FUNC Vec3f point(Vec3f p) const
-  {
-    return { m[0] * p.x + m[1] * p.y + m[2] * p.z + m[3], m[4] * p.x + m[5] * p.y + m[6] * p.z + m[7],
-      m[8] * p.x + m[9] * p.y + m[10] * p.z + m[11] };
-  }
-  MCVOL_FUNC Vec3f vector(Vec3f v) const
-  {
-    return { m[0] * v.x + m[1] * v.y + m[2] * v.z, m[4] * v.x + m[5] * v.y + m[6] * v.z,
-      m[8] * v.x + m[9] * v.y + m[10] * v.z };
-  }
-};
-
-/// min/max without fminf's NaN rules, which compilers turn into library calls.
+/// min without fminf's NaN rules, which compilers turn into library calls.
 MCVOL_FUNC float minf(float a, float b)
 {
   return a < b ? a : b;
-}
-MCVOL_FUNC float maxf(float a, float b)
-{
-  return a > b ? a : b;
 }
 MCVOL_FUNC float clampf(float v, float lo, float hi)
 {
