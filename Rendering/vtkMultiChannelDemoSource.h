@@ -13,7 +13,7 @@
  * - "microscopy": a fluorescence-microscopy-like phantom (membranes, nuclei,
  *   puncta); 3 x unsigned char, 128 x 128 x 40 by default.
  * - "cosmology": a log-normal dark-matter density and three correlated fields
- *   (baryon density, temperature, velocity magnitude); 4 x float, 96^3.
+ *   (baryon density, temperature, velocity magnitude); 4 x float, 64^3.
  * - "weather": a hurricane-like vortex with 12 fields (pressure, temperature,
  *   winds, vapour, hydrometeors); 12 x float, 100 x 100 x 20.
  *

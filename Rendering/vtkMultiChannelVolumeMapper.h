@@ -6,7 +6,9 @@
  * vtkMultiChannelVolumeMapper renders a vtkImageData whose point data holds N
  * scalar channels (1 to 32), each with its own colour and opacity transfer
  * function, by multi-density Woodcock (delta) tracking (Sahistan et al.). It
- * runs on the CPU (OpenMP) or on an NVIDIA GPU (CUDA), picked with SetBackend.
+ * runs on the CPU (OpenMP); SetBackend picks the backend (a CUDA backend is
+ * planned: Auto will take it when a device is usable, and CUDA reports why it
+ * cannot be had until then).
  *
  * Rendering is progressive: every Render() adds SamplesPerPixel samples per
  * pixel to a running mean, which is drawn over the frame. The mean starts over
@@ -111,9 +113,10 @@ public:
 
   ///@{
   /**
-   * Macrocell traversal: ONE_DDA (default) walks one DDA with the summed
-   * majorant of all channels; N_DDA walks one DDA per channel (Sahistan et al.,
-   * Sections 4.5 and 4.4). Both give the same image in expectation.
+   * Macrocell traversal: ONE_DDA (default) walks one DDA over the macrocells,
+   * and in each cell every channel takes Woodcock steps with its own majorant;
+   * N_DDA walks one DDA per channel (Sahistan et al., Sections 4.5 and 4.4).
+   * Both give the same image in expectation.
    */
   vtkSetClampMacro(TrackingMethod, int, ONE_DDA, N_DDA);
   vtkGetMacro(TrackingMethod, int);

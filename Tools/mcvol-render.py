@@ -18,7 +18,6 @@ import argparse
 import json
 import math
 import os
-import struct
 import sys
 import time
 
@@ -736,11 +735,13 @@ def samples_per_render(total, wanted):
 
 def write_pfm(filename, width, height, channels, values):
     """PFM: "PF" (RGB) or "Pf" (gray), little-endian floats, bottom row first
-    (the order OpenGL reads pixels in)."""
+    (the order OpenGL reads pixels in). `values`: a numpy array."""
+    import numpy
+
     header = "%s\n%d %d\n-1.0\n" % ("PF" if channels == 3 else "Pf", width, height)
     with open(filename, "wb") as f:
         f.write(header.encode("ascii"))
-        f.write(struct.pack("<%df" % len(values), *values))
+        f.write(numpy.ascontiguousarray(values, dtype="<f4").tobytes())
 
 
 def render(scene, args, errors, log):
@@ -850,15 +851,14 @@ def render(scene, args, errors, log):
         if (mapper.GetAccumulatedImageWidth(), mapper.GetAccumulatedImageHeight()) != (w, h):
             raise RenderError("the accumulated image is %dx%d, expected %dx%d" % (
                 mapper.GetAccumulatedImageWidth(), mapper.GetAccumulatedImageHeight(), w, h))
-        values = [rgba.GetValue(i) for i in range(rgba.GetNumberOfValues())]
-        alpha = values[3::4]
+        import numpy
+        from vtkmodules.util.numpy_support import vtk_to_numpy
+
+        values = vtk_to_numpy(rgba).reshape(-1, 4).astype(numpy.float32)
+        alpha = values[:, 3]
         if args.raw:
-            bg = scene["background"]
-            rgb = []
-            for i, a in enumerate(alpha):
-                for k in range(3):
-                    rgb.append(values[4 * i + k] + bg[k] * (1.0 - a))
-            write_pfm(args.raw, w, h, 3, rgb)
+            bg = numpy.asarray(scene["background"], dtype=numpy.float32)
+            write_pfm(args.raw, w, h, 3, values[:, :3] + bg[None, :] * (1.0 - alpha[:, None]))
         if args.raw_alpha:
             write_pfm(args.raw_alpha, w, h, 1, alpha)
     log(

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# Installs the Debian packages mcvol needs, only those missing. Sourced by
-# scripts/demo.sh and scripts/test.sh; safe to run again.
+# Installs the Debian packages mcvol needs, only those missing. Run by
+# scripts/build.sh (and so by demo.sh and test.sh); safe to run again.
 set -euo pipefail
 
 MCVOL_PACKAGES=(

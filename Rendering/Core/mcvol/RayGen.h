@@ -45,12 +45,14 @@ MCVOL_FUNC Dvec3 unproject(const double* m, double x, double y, double z)
 constexpr float kMaxOpticalDepthPerVoxel = 16.f;
 
 /**
- * Extinction limit for a render: kMaxOpticalDepthPerVoxel over the smallest
- * world length of a voxel. That length is bounded below by 1 / ||A||_F, A the
- * linear part of worldToIndex, so no voxel, along any direction, holds more
- * than a few times 16 optical depths. Without a limit, opacity 1 over a unit
- * distance of a thousandth of a voxel makes Woodcock tracking take hundreds
- * of thousands of null collisions per macrocell.
+ * Extinction limit for a render: kMaxOpticalDepthPerVoxel per 1 / ||A||_F
+ * world units, A the linear part of worldToIndex (1 / ||A||_F is at most the
+ * world length of a voxel's thinnest side). A voxel then holds at most about
+ * 16 optical depths across its thinnest side, and 16 times its aspect ratio
+ * along its longest, so the null collisions per macrocell are bounded by the
+ * macrocell size and the spacing's anisotropy. Without a limit, opacity 1
+ * over a unit distance of a thousandth of a voxel makes Woodcock tracking
+ * take hundreds of thousands of null collisions per macrocell.
  */
 MCVOL_FUNC float extinctionLimit(const CameraView& cam)
 {
