@@ -131,8 +131,6 @@ struct vtkMultiChannelVolumeMapper::vtkInternals
 
   // What the Scene holds now.
   bool VolumeSet = false;
-  int Dims[3] = { 0, 0, 0 };
-  int NumChannels = 0;
   std::array<mcvol::ChannelSource, kMaxChannels> Sources{};
   std::vector<vtkSmartPointer<vtkDataArray>> Arrays; // keeps the channel data alive
   vtkMTimeType DataMTime = 0;                        // of the arrays: their values
@@ -140,9 +138,6 @@ struct vtkMultiChannelVolumeMapper::vtkInternals
   std::array<double, 15> Geometry{};                 // origin, spacing, direction of ImageMTime
   std::array<std::array<double, 2>, kMaxChannels> Ranges{};
   std::array<ChannelTFState, kMaxChannels> TF{};
-  int AppliedMacrocellSize = -1;
-  int AppliedBlendMode = -1;
-  std::vector<float> AppliedMixWeights;
 
   // Accumulation state.
   bool HaveKey = false;
@@ -163,7 +158,6 @@ struct vtkMultiChannelVolumeMapper::vtkInternals
   void ForgetVolume()
   {
     this->VolumeSet = false;
-    this->NumChannels = 0;
     this->Arrays.clear();
     for (auto& tf : this->TF)
     {
@@ -727,7 +721,8 @@ void vtkMultiChannelVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
   // ---- Scene: volume, ranges, tables, parameters --------------------------
   try
   {
-    bool volumeChanged = !in.VolumeSet || in.NumChannels != numChannels || !std::equal(dims, dims + 3, in.Dims);
+    bool volumeChanged =
+      !in.VolumeSet || in.Scene.numChannels() != numChannels || !std::equal(dims, dims + 3, in.Scene.dims());
     for (int c = 0; c < numChannels && !volumeChanged; ++c)
     {
       volumeChanged = sources[c].data != in.Sources[c].data || sources[c].type != in.Sources[c].type ||
@@ -786,8 +781,6 @@ void vtkMultiChannelVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
       in.ForgetVolume();
       in.Scene.setVolume(dims, numChannels, sources.data());
       in.VolumeSet = true;
-      std::copy(dims, dims + 3, in.Dims);
-      in.NumChannels = numChannels;
       in.Sources = sources;
       in.Arrays.assign(arrays.begin(), arrays.end());
     }
@@ -847,29 +840,19 @@ void vtkMultiChannelVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
     }
     this->LastTransferFunctionUpdates = updates;
 
-    if (in.AppliedMacrocellSize != this->MacrocellSize)
-    {
-      in.Scene.setMacrocellSize(this->MacrocellSize);
-      in.AppliedMacrocellSize = this->MacrocellSize;
-    }
-    if (in.AppliedBlendMode != this->ChannelBlendMode)
-    {
-      in.Scene.setBlendMode(static_cast<mcvol::BlendMode>(this->ChannelBlendMode));
-      in.AppliedBlendMode = this->ChannelBlendMode;
-    }
+    // The Scene's setters are cheap and rebuild nothing unless a value
+    // changed (a new macrocell size marks the grids for update()).
+    in.Scene.setMacrocellSize(this->MacrocellSize);
+    in.Scene.setBlendMode(static_cast<mcvol::BlendMode>(this->ChannelBlendMode));
     // vtkVolumeProperty's interpolation type, as VTK's own mappers use it (a
     // property change resets the accumulation through its MTime).
     in.Scene.setNearestInterpolation(property->GetInterpolationType() == VTK_NEAREST_INTERPOLATION);
-    std::vector<float> weights(numChannels);
+    std::array<float, kMaxChannels> weights{};
     for (int c = 0; c < numChannels; ++c)
     {
       weights[c] = static_cast<float>(in.MixWeights[c]);
     }
-    if (weights != in.AppliedMixWeights)
-    {
-      in.Scene.setMixWeights(weights.data(), numChannels);
-      in.AppliedMixWeights = weights;
-    }
+    in.Scene.setMixWeights(weights.data(), numChannels);
     in.Scene.update();
   }
   catch (const std::exception& e)
