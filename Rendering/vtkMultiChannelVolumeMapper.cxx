@@ -718,9 +718,33 @@ void vtkMultiChannelVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
     }
   }
 
+  // ---- Backend ------------------------------------------------------------
+  if (!in.Renderer || in.RendererBackend != this->Backend)
+  {
+    in.Renderer.reset();
+    in.RendererBackend = this->Backend;
+    try
+    {
+      in.Renderer = mcvol::Renderer::create(static_cast<mcvol::Backend>(this->Backend));
+    }
+    catch (const std::exception& e)
+    {
+      vtkErrorMacro("Backend " << this->GetBackendAsString() << " is not available: " << e.what());
+      return;
+    }
+    if (!in.Renderer)
+    {
+      vtkErrorMacro("No rendering backend could be created.");
+      return;
+    }
+  }
+
   // ---- Scene: volume, ranges, tables, parameters --------------------------
   try
   {
+    // A device backend builds macrocells and majorants itself from its own
+    // copy of the data; the host then spends neither time nor memory on them.
+    in.Scene.setHostAcceleration(!in.Renderer->buildsAccelerationOnDevice());
     bool volumeChanged =
       !in.VolumeSet || in.Scene.numChannels() != numChannels || !std::equal(dims, dims + 3, in.Scene.dims());
     for (int c = 0; c < numChannels && !volumeChanged; ++c)
@@ -861,27 +885,6 @@ void vtkMultiChannelVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
     in.ForgetVolume();
     in.HaveKey = false;
     return;
-  }
-
-  // ---- Backend ------------------------------------------------------------
-  if (!in.Renderer || in.RendererBackend != this->Backend)
-  {
-    in.Renderer.reset();
-    in.RendererBackend = this->Backend;
-    try
-    {
-      in.Renderer = mcvol::Renderer::create(static_cast<mcvol::Backend>(this->Backend));
-    }
-    catch (const std::exception& e)
-    {
-      vtkErrorMacro("Backend " << this->GetBackendAsString() << " is not available: " << e.what());
-      return;
-    }
-    if (!in.Renderer)
-    {
-      vtkErrorMacro("No rendering backend could be created.");
-      return;
-    }
   }
 
   // ---- Camera -------------------------------------------------------------

@@ -84,9 +84,14 @@ void CPURenderer::render(const Scene& scene, const Camera& camera, const RenderS
   }
   // A copy: the extinction limit belongs to this render's camera.
   SceneView s = scene.view();
-  if (s.volume.numChannels == 0 || s.tables.size < 2 || !s.grid.majorants)
+  if (s.volume.numChannels == 0 || s.tables.size < 2)
   {
     throw std::logic_error("mcvol: Scene::update() must succeed before rendering");
+  }
+  if (!s.grid.majorants)
+  {
+    throw std::logic_error("mcvol: the CPU backend needs the Scene's host macrocells and majorants, but "
+                           "Scene::setHostAcceleration(false) turned them off");
   }
   const CameraView cam = toView(camera);
   s.sigmaLimit = extinctionLimit(cam);

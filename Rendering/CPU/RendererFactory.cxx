@@ -2,18 +2,25 @@
 #include "mcvol/CPURenderer.h"
 #include "mcvol/Renderer.h"
 
+#ifdef MCVOL_WITH_CUDA
+#include "mcvol/CUDARenderer.h"
+#endif
+
 #include <stdexcept>
 
 namespace mcvol
 {
 bool Renderer::cudaAvailable(std::string* why)
 {
-  // The CUDA backend is a later addition; until it is built in, no device is usable.
+#ifdef MCVOL_WITH_CUDA
+  return CUDARenderer::deviceUsable(why);
+#else
   if (why)
   {
-    *why = "this build of mcvol has no CUDA backend";
+    *why = "this build of mcvol has no CUDA backend (no CUDA compiler was found when it was configured)";
   }
   return false;
+#endif
 }
 
 std::unique_ptr<Renderer> Renderer::create(Backend requested, std::string* why)
@@ -32,7 +39,15 @@ std::unique_ptr<Renderer> Renderer::create(Backend requested, std::string* why)
       {
         throw std::runtime_error("mcvol: the CUDA backend was requested but " + cudaWhy);
       }
+#ifdef MCVOL_WITH_CUDA
+      if (why)
+      {
+        *why = "CUDA backend (requested; " + cudaWhy + ")";
+      }
+      return std::unique_ptr<Renderer>(new CUDARenderer());
+#else
       break;
+#endif
     case Backend::Auto:
     default:
       if (!cudaAvailable(&cudaWhy))
@@ -43,7 +58,15 @@ std::unique_ptr<Renderer> Renderer::create(Backend requested, std::string* why)
         }
         return std::unique_ptr<Renderer>(new CPURenderer());
       }
+#ifdef MCVOL_WITH_CUDA
+      if (why)
+      {
+        *why = "CUDA backend (auto: " + cudaWhy + ")";
+      }
+      return std::unique_ptr<Renderer>(new CUDARenderer());
+#else
       break;
+#endif
   }
   throw std::runtime_error("mcvol: no backend could be created");
 }

@@ -1,10 +1,11 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "mcvol/Scene.h"
 
+#include "mcvol/Acceleration.h"
 #include "mcvol/Renderer.h"
-#include "mcvol/Sampling.h"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -87,6 +88,31 @@ void Accumulator::reset()
   this->Samples = 0;
 }
 
+namespace
+{
+uint64_t nextSceneId()
+{
+  static std::atomic<uint64_t> counter{ 0 };
+  return ++counter;
+}
+} // namespace
+
+SceneId::SceneId()
+  : value(nextSceneId())
+{
+}
+
+SceneId::SceneId(const SceneId&)
+  : value(nextSceneId())
+{
+}
+
+SceneId& SceneId::operator=(const SceneId&)
+{
+  this->value = nextSceneId();
+  return *this;
+}
+
 Scene::Scene()
 {
   this->MixWeights.fill(0.f);
@@ -141,11 +167,28 @@ void Scene::setVolume(const int dims[3], int numChannels, const ChannelSource* c
   this->NumChannels = numChannels;
   std::copy(channels, channels + numChannels, this->Channels.begin());
   this->MacrocellsDirty = true;
+  ++this->ContentVersion;
 }
 
 void Scene::dataModified()
 {
   this->MacrocellsDirty = true;
+  ++this->ContentVersion;
+}
+
+void Scene::setHostAcceleration(bool on)
+{
+  if (on != this->HostAcceleration)
+  {
+    this->HostAcceleration = on;
+    this->MacrocellsDirty = true;
+    if (!on)
+    {
+      // Release the host copies.
+      std::vector<float>().swap(this->Ranges);
+      std::vector<float>().swap(this->Majorants);
+    }
+  }
 }
 
 void Scene::setTransferFunction(int channel, const TransferFunctionDesc& tf)
@@ -218,6 +261,7 @@ void Scene::setTransferFunction(int channel, const TransferFunctionDesc& tf)
   this->View.tables.scale[channel] = float(double(K - 1) / width);
   this->HasTF[channel] = true;
   this->MajorantDirty[channel] = true;
+  ++this->ChannelTableVersion[size_t(channel)];
   ++this->TableVersion;
 }
 
@@ -270,9 +314,8 @@ MemoryStats Scene::memory() const
   return m;
 }
 
-void Scene::rebuildMacrocells()
+void Scene::layoutGrid()
 {
-  const auto t0 = std::chrono::steady_clock::now();
   GridView& g = this->View.grid;
   VolumeView& v = this->View.volume;
   for (int a = 0; a < 3; ++a)
@@ -308,6 +351,13 @@ void Scene::rebuildMacrocells()
     v.channels[n].type = this->Channels[n].type;
   }
   g.numChannels = this->NumChannels;
+}
+
+void Scene::rebuildMacrocells()
+{
+  const auto t0 = std::chrono::steady_clock::now();
+  this->layoutGrid();
+  const GridView& g = this->View.grid;
   const int N = this->NumChannels;
   const int64_t cells = int64_t(g.dims[0]) * g.dims[1] * g.dims[2];
   this->Ranges.assign(size_t(cells) * N * 2, 0.f);
@@ -322,19 +372,7 @@ void Scene::rebuildMacrocells()
     const int cell[3] = { int(c % gd0), int((c / gd0) % gd1), int(c / (int64_t(gd0) * gd1)) };
     int lo[3];
     int hi[3];
-    for (int a = 0; a < 3; ++a)
-    {
-      if (D[a] == 1)
-      {
-        lo[a] = hi[a] = 0;
-        continue;
-      }
-      // Voxels whose trilinear footprint reaches the cell, plus one more on
-      // each side (the 27-neighbourhood), so the range stays conservative
-      // under interpolation and under rounding of the DDA's cell boundaries.
-      lo[a] = std::max(0, cell[a] * M - 1);
-      hi[a] = std::min(D[a] - 1, (cell[a] + 1) * M + 1);
-    }
+    cellVoxelBounds(D, M, cell, lo, hi);
     for (int n = 0; n < N; ++n)
     {
       float mn = std::numeric_limits<float>::infinity();
@@ -362,7 +400,6 @@ void Scene::rebuildMacrocells()
     }
   }
   this->Majorants.assign(size_t(cells) * N, 0.f);
-  g.majorants = this->Majorants.data();
   this->LastMacrocellSeconds = secondsSince(t0);
   ++this->DataVersion;
 }
@@ -377,49 +414,19 @@ void Scene::rebuildMajorants(int channel)
   const float* table = this->Tables.data() + size_t(channel) * K * 4;
   const float* ranges = this->Ranges.data();
   float* maj = this->Majorants.data();
-  // Range-maximum queries over the table's extinctions in O(1) per cell: a
-  // sparse table, level L holding the maximum of 2^L texels from each index.
-  // A cell's scalar range can cover most of the table, so a per-cell loop
-  // over texels would make a rebuild cost cells x K.
-  std::vector<std::vector<float>> sparse(1, std::vector<float>(size_t(K)));
-  for (int i = 0; i < K; ++i)
-  {
-    sparse[0][size_t(i)] = table[4 * i + 3];
-  }
-  for (int L = 1; (1 << L) <= K; ++L)
-  {
-    const std::vector<float>& prev = sparse.back();
-    std::vector<float> next(size_t(K - (1 << L) + 1));
-    for (size_t i = 0; i < next.size(); ++i)
-    {
-      next[i] = std::max(prev[i], prev[i + (size_t(1) << (L - 1))]);
-    }
-    sparse.push_back(std::move(next));
-  }
-  // Majorants are inflated by a relative 2^-16 so float rounding in the
-  // interpolation can never push a sampled extinction above them.
-  const float inflate = 1.f + 0x1p-16f;
+  // Range-maximum queries over the table's extinctions in O(1) per cell (a
+  // sparse table): a cell's scalar range can cover most of the table, so a
+  // per-cell loop over texels would make a rebuild cost cells x K.
+  std::vector<float> sparse(size_t(sparseLevels(K)) * size_t(K), 0.f);
+  buildSparseTable(table, K, sparse.data());
+  const float* sp = sparse.data();
   // Threads only pay off on large grids; a small rebuild is sub-millisecond
   // on one core and would otherwise wait for busy threads to wake.
 #pragma omp parallel for schedule(static) if (cells > 100000)
   for (int64_t c = 0; c < cells; ++c)
   {
-    const float mn = ranges[(c * N + channel) * 2 + 0];
-    const float mx = ranges[(c * N + channel) * 2 + 1];
-    float m = 0.f;
-    if (mn <= mx)
-    {
-      // Both ends included: the table is interpolated linearly between texels.
-      const int i0 = std::max(0, int(std::floor(texelCoord(tv, channel, mn))));
-      const int i1 = std::max(i0, std::min(K - 1, int(std::ceil(texelCoord(tv, channel, mx)))));
-      int L = 0;
-      while ((2 << L) <= i1 - i0 + 1)
-      {
-        ++L;
-      }
-      m = std::max(sparse[size_t(L)][size_t(i0)], sparse[size_t(L)][size_t(i1 - (1 << L) + 1)]);
-    }
-    maj[c * N + channel] = m * inflate;
+    maj[c * N + channel] =
+      cellMajorant(tv, channel, ranges[(c * N + channel) * 2 + 0], ranges[(c * N + channel) * 2 + 1], sp);
   }
 }
 
@@ -473,6 +480,30 @@ bool Scene::update()
     }
   }
   bool changed = false;
+  if (!this->HostAcceleration)
+  {
+    // Tables only; the backend builds ranges and majorants from the versions.
+    if (this->MacrocellsDirty)
+    {
+      this->layoutGrid();
+      this->MacrocellsDirty = false;
+      ++this->DataVersion;
+      changed = true;
+    }
+    for (int n = 0; n < this->NumChannels; ++n)
+    {
+      changed = changed || this->MajorantDirty[n];
+      this->MajorantDirty[n] = false;
+    }
+    this->refreshView(false);
+    this->View.grid.majorants = nullptr;
+    this->View.numActive = this->NumChannels;
+    for (int n = 0; n < this->NumChannels; ++n)
+    {
+      this->View.active[n] = n;
+    }
+    return changed;
+  }
   if (this->MacrocellsDirty)
   {
     this->rebuildMacrocells();

@@ -15,6 +15,8 @@
 
 #include <algorithm>
 #include <array>
+#include <cstdlib>
+#include <memory>
 #include <cfloat>
 #include <cmath>
 #include <cstdint>
@@ -139,6 +141,29 @@ inline double chiSquarePValue(
     *statOut = stat;
   }
   return chi2Sf(stat, double(cells - 1));
+}
+
+// ---------------------------------------------------------------- backends
+
+/// The backend the backend-generic tests render with: MCVOL_TEST_BACKEND=cuda
+/// runs them on the CUDA backend (TestMain.cxx skips with 125 when no device
+/// is usable); anything else, or unset, the CPU.
+inline Backend testBackend()
+{
+  const char* e = std::getenv("MCVOL_TEST_BACKEND");
+  return e && std::string(e) == "cuda" ? Backend::CUDA : Backend::CPU;
+}
+
+/// A renderer of testBackend(); `threads` applies to the CPU backend (0 = default).
+inline std::unique_ptr<Renderer> testRenderer(int threads = 0)
+{
+  if (testBackend() == Backend::CUDA)
+  {
+    return Renderer::create(Backend::CUDA);
+  }
+  std::unique_ptr<CPURenderer> r(new CPURenderer());
+  r->setThreads(threads);
+  return std::unique_ptr<Renderer>(r.release());
 }
 
 // ------------------------------------------------------------------ scenes
@@ -429,11 +454,9 @@ struct Moments
 
 /// n renders of one sample each, seeds seedBase, seedBase + 1, ... (each
 /// seed gives independent random streams).
-inline Moments renderMoments(
-  const Scene& scene, const Camera& cam, RenderSettings settings, int n, uint32_t seedBase, int threads = 0)
+inline Moments renderMoments(Renderer& r, const Scene& scene, const Camera& cam, RenderSettings settings, int n,
+  uint32_t seedBase)
 {
-  CPURenderer r;
-  r.setThreads(threads);
   Moments m;
   m.width = cam.width;
   m.height = cam.height;
@@ -459,6 +482,14 @@ inline Moments renderMoments(
     }
   }
   return m;
+}
+
+/// renderMoments on testBackend().
+inline Moments renderMoments(
+  const Scene& scene, const Camera& cam, RenderSettings settings, int n, uint32_t seedBase, int threads = 0)
+{
+  std::unique_ptr<Renderer> r = testRenderer(threads);
+  return renderMoments(*r, scene, cam, settings, n, seedBase);
 }
 
 /**

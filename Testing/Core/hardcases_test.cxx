@@ -28,14 +28,14 @@ struct Image
 Image render(const Scene& scene, const Camera& cam, Tracker t, int spp, uint32_t seed,
   RenderCounters* counters = nullptr, bool jitter = true)
 {
-  CPURenderer r;
+  std::unique_ptr<Renderer> r = testRenderer();
   Accumulator acc;
   RenderSettings rs;
   rs.samplesPerPixel = spp;
   rs.seed = seed;
   rs.tracker = t;
   rs.jitterPixels = jitter;
-  r.render(scene, cam, rs, nullptr, acc, counters);
+  r->render(scene, cam, rs, nullptr, acc, counters);
   Image img;
   img.width = cam.width;
   img.height = cam.height;

@@ -31,6 +31,11 @@ struct RenderSettings
   uint32_t seed = 0;
   Tracker tracker = Tracker::OneDDA;
   bool jitterPixels = true; ///< sub-pixel jitter (anti-aliasing)
+  /// Device backends: copy the accumulated image into the Accumulator at the
+  /// end of render(). false leaves it on the device (the frame may still be
+  /// running when render() returns) until readBack() or the next render with
+  /// readBack on; the Accumulator's sample count is updated either way.
+  bool readBack = true;
 };
 
 /// Work counters a render adds up (tests read them; the benchmark prints them).
@@ -84,6 +89,15 @@ public:
   virtual void render(const Scene& scene, const Camera& camera, const RenderSettings& settings, const float* depth,
     Accumulator& accum, RenderCounters* counters = nullptr) = 0;
   virtual const char* name() const = 0;
+
+  /// Device backends: waits for the renders issued so far and copies the
+  /// accumulated image into `accum` (see RenderSettings::readBack).
+  virtual void readBack(Accumulator& accum) { (void)accum; }
+  /// Waits until every render issued so far has finished.
+  virtual void finish() {}
+  /// True if the backend builds macrocells and majorants itself (on the
+  /// device), so the Scene can skip its host build (Scene::setHostAcceleration).
+  virtual bool buildsAccelerationOnDevice() const { return false; }
 
   /// Throws std::runtime_error naming the cause if the requested backend is
   /// unavailable. `why` (optional) receives a sentence on the choice made.

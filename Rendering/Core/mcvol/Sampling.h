@@ -37,6 +37,17 @@ MCVOL_HOT float fetchVoxel(const ChannelView& c, int64_t v)
 MCVOL_HOT float sampleChannel(const VolumeView& vol, int n, Vec3f p)
 {
   const ChannelView& c = vol.channels[n];
+#if defined(__CUDA_ARCH__)
+  if (c.texture != 0)
+  {
+    // Hardware filtering (linear or point, chosen when the texture object was
+    // made to match vol.nearest): texel centres sit at i + 0.5 and the clamp
+    // address mode reproduces the clamping below. The weights have 8
+    // fractional bits, so values differ from the software path by a fraction
+    // of a voxel's step, but stay a convex combination of the same voxels.
+    return c.textureScale * tex3D<float>(c.texture, p.x + 0.5f, p.y + 0.5f, p.z + 0.5f);
+  }
+#endif
   if (vol.nearest)
   {
     int64_t v = 0;

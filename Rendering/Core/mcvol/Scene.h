@@ -69,6 +69,16 @@ struct MemoryStats
  *
  * Bad arguments throw std::invalid_argument with a message naming the cause.
  */
+/// An identity that copies do not share: a copied Scene is a new scene for
+/// the device caches keyed on it (its versions restart as they please).
+struct SceneId
+{
+  SceneId();
+  SceneId(const SceneId&);
+  SceneId& operator=(const SceneId&);
+  uint64_t value = 0;
+};
+
 class Scene
 {
 public:
@@ -88,6 +98,17 @@ public:
   /// All zero means equal weights.
   void setMixWeights(const float* weights, int count);
 
+  /**
+   * Whether update() builds the macrocell ranges and majorants on the host
+   * (default true; the CPU backend reads them). A backend that builds its own
+   * copies on the device (CUDA) turns it off so that no host time or memory
+   * is spent on them; update() then only checks the input, samples the tables
+   * and lays out the grid, and the per-channel versions below tell the
+   * backend what to rebuild.
+   */
+  void setHostAcceleration(bool on);
+  bool hostAcceleration() const { return this->HostAcceleration; }
+
   /// Builds what is out of date. Returns true if anything was rebuilt.
   bool update();
 
@@ -104,6 +125,15 @@ public:
   /// Increments whenever update() changes anything a backend caches.
   uint64_t dataVersion() const { return this->DataVersion; }
   uint64_t tableVersion() const { return this->TableVersion; }
+  /// Unique per Scene object (copies get their own), for device caches.
+  uint64_t id() const { return this->Id.value; }
+  /// Increments when the voxels change (setVolume, dataModified), not when
+  /// only the macrocell size does.
+  uint64_t contentVersion() const { return this->ContentVersion; }
+  /// Increments when channel n's transfer function is set.
+  uint64_t channelTableVersion(int n) const { return this->ChannelTableVersion[size_t(n)]; }
+  /// The channels as given to setVolume (a device backend uploads them).
+  const ChannelSource& channel(int n) const { return this->Channels[size_t(n)]; }
 
   /// The plain view the per-ray code reads (valid after update()).
   const SceneView& view() const { return this->View; }
@@ -114,6 +144,7 @@ public:
   const std::vector<float>& tables() const { return this->Tables; }
 
 private:
+  void layoutGrid();
   void rebuildMacrocells();
   void rebuildMajorants(int channel);
   void refreshView(bool majorantsChanged);
@@ -123,7 +154,11 @@ private:
   std::array<ChannelSource, kMaxChannels> Channels{};
   std::array<bool, kMaxChannels> HasTF{};
   std::array<bool, kMaxChannels> MajorantDirty{};
+  SceneId Id;
   bool MacrocellsDirty = true;
+  bool HostAcceleration = true;
+  uint64_t ContentVersion = 0;
+  std::array<uint64_t, kMaxChannels> ChannelTableVersion{};
   int MacrocellSize = 8;
   std::array<float, kMaxChannels> MixWeights{};
 

@@ -20,6 +20,12 @@ struct ChannelView
   int64_t stride = 1; ///< elements between consecutive voxels
   ScalarType type = ScalarType::Float32;
   double offset = 0.0; ///< Float64 only: subtracted before conversion to float
+  /// CUDA backend only: a 3D texture object (cudaTextureObject_t) holding the
+  /// same voxels, sampled with hardware filtering instead of `data`; 0 = none.
+  unsigned long long texture = 0;
+  /// Texture reads of integer data come back normalised (uint8 / 255 ...);
+  /// this factor restores data units.
+  float textureScale = 1.f;
 };
 
 struct VolumeView

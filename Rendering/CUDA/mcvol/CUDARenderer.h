@@ -1,0 +1,92 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#pragma once
+
+#include "mcvol/Renderer.h"
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace mcvol
+{
+/// Where the CUDA kernels read voxels from.
+enum class CudaSampling : int
+{
+  Texture = 0, ///< 3D textures, hardware trilinear (or point) filtering
+  Global = 1   ///< plain device arrays in the native type, the core's software interpolation
+};
+
+/// Device-side memory of a CUDA renderer (the paper's Table 1, on the GPU).
+struct CudaMemoryStats
+{
+  size_t dataBytes = 0;      ///< channel arrays (native type; float64 stored as float32)
+  size_t textureBytes = 0;   ///< 3D texture arrays (a second copy, when texture sampling is on)
+  size_t macrocellBytes = 0; ///< per-cell per-channel scalar ranges
+  size_t majorantBytes = 0;  ///< per-cell per-channel majorants
+  size_t imageBytes = 0;     ///< accumulation and depth buffers
+};
+
+/// What the renderer did to keep its device copies current (for tests).
+struct CudaUpdateCounters
+{
+  uint64_t dataUploads = 0;       ///< channel uploads (one per channel per data change)
+  uint64_t rangeBuilds = 0;       ///< macrocell-range builds (all channels)
+  uint64_t majorantChannelBuilds = 0; ///< per-channel majorant builds
+  uint64_t imageDownloads = 0;    ///< accumulated images copied to the host
+  double lastMajorantMs = 0.0;    ///< GPU time of the last majorant rebuild (all channels it touched)
+  double lastRangeMs = 0.0;       ///< GPU time of the last range build
+};
+
+/**
+ * CUDA backend. Runs the core's per-pixel code (Integrator.h, Tracking.h: the
+ * same functions as the CPU backend, compiled by nvcc) with one thread per
+ * pixel. Keeps device copies of the channels, of the transfer-function
+ * tables, of the macrocell ranges and majorants (built on the GPU from the
+ * device copies; one channel's majorants rebuilt when its transfer function
+ * changes) and of the accumulated image.
+ *
+ * Uploads follow the Scene's versions: voxels when contentVersion() changes,
+ * ranges when dataVersion() changes (macrocell size), one channel's majorants
+ * when channelTableVersion(n) changes. Scenes whose host acceleration is on
+ * work too (the host grids are simply not used).
+ *
+ * All errors throw std::runtime_error with the CUDA error text.
+ */
+class CUDARenderer final : public Renderer
+{
+public:
+  /// Selects device `device` (throws if none is usable).
+  explicit CUDARenderer(int device = 0);
+  ~CUDARenderer() override;
+
+  void render(const Scene& scene, const Camera& camera, const RenderSettings& settings, const float* depth,
+    Accumulator& accum, RenderCounters* counters = nullptr) override;
+  const char* name() const override { return "cuda"; }
+  void readBack(Accumulator& accum) override;
+  void finish() override;
+  bool buildsAccelerationOnDevice() const override { return true; }
+
+  /// Texture (default) or global-memory sampling; takes effect at the next render.
+  void setSampling(CudaSampling s);
+  CudaSampling sampling() const;
+  /// Threads per block (x, y) of the render kernel (default 8 x 8).
+  void setBlockSize(int x, int y);
+
+  CudaMemoryStats memory() const;
+  const CudaUpdateCounters& updateCounters() const;
+  /// "NVIDIA H100 80GB HBM3, driver 12.8, runtime 13.0, 132 SMs".
+  std::string deviceDescription() const;
+  /// Copies channel n's device majorant grid (cells x 1) to the host, for tests.
+  std::vector<float> downloadMajorants(int channel) const;
+  /// The active-channel list the last update computed.
+  std::vector<int> activeChannels() const;
+
+  /// True if a CUDA device can be used; `why` gets the reason when not.
+  static bool deviceUsable(std::string* why = nullptr);
+
+private:
+  struct Internal;
+  std::unique_ptr<Internal> In;
+};
+} // namespace mcvol

@@ -1,0 +1,102 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#pragma once
+
+#include "mcvol/Sampling.h"
+
+#include <cstdint>
+
+namespace mcvol
+{
+/**
+ * Pieces of the macrocell and majorant builds that the host build
+ * (Scene.cxx) and the GPU build (CUDARenderer.cu) share, so both produce the
+ * same grids.
+ */
+
+/// Voxels whose values a point of macrocell `cell` can read: the voxels whose
+/// trilinear footprint reaches the cell plus one more on each side (the
+/// 27-neighbourhood), so a range stays conservative under interpolation and
+/// under rounding of the DDA's cell boundaries. Inclusive bounds.
+MCVOL_FUNC void cellVoxelBounds(const int dims[3], int macrocell, const int cell[3], int lo[3], int hi[3])
+{
+  for (int a = 0; a < 3; ++a)
+  {
+    if (dims[a] == 1)
+    {
+      lo[a] = hi[a] = 0;
+      continue;
+    }
+    const int l = cell[a] * macrocell - 1;
+    const int h = (cell[a] + 1) * macrocell + 1;
+    lo[a] = l > 0 ? l : 0;
+    hi[a] = h < dims[a] - 1 ? h : dims[a] - 1;
+  }
+}
+
+/// Levels of a max sparse table over a channel's K texels (level L holds the
+/// maximum of 2^L texels starting at each index; stored [L * K + i]).
+MCVOL_FUNC int sparseLevels(int K)
+{
+  int levels = 1;
+  while ((2 << (levels - 1)) <= K)
+  {
+    ++levels;
+  }
+  return levels;
+}
+
+/// Majorants are inflated by a relative 2^-16 so that float rounding in the
+/// interpolation can never push a sampled extinction above them.
+constexpr float kMajorantInflation = 1.f + 0x1p-16f;
+
+/**
+ * Majorant of channel n over a macrocell whose scalar range is [mn, mx]: the
+ * largest extinction of the texels the range covers, both ends included
+ * (the table is interpolated linearly), in O(1) through the sparse table.
+ * An empty range (mn > mx: every voxel NaN) gives 0.
+ */
+MCVOL_FUNC float cellMajorant(const TableView& tv, int n, float mn, float mx, const float* sparse)
+{
+  if (!(mn <= mx))
+  {
+    return 0.f;
+  }
+  const int K = tv.size;
+  const float c0 = floorf(texelCoord(tv, n, mn));
+  const float c1 = ceilf(texelCoord(tv, n, mx));
+  const int i0 = c0 > 0.f ? int(c0) : 0;
+  int i1 = int(c1) < K - 1 ? int(c1) : K - 1;
+  i1 = i1 > i0 ? i1 : i0;
+  int L = 0;
+  while ((2 << L) <= i1 - i0 + 1)
+  {
+    ++L;
+  }
+  const float a = sparse[int64_t(L) * K + i0];
+  const float b = sparse[int64_t(L) * K + i1 - (1 << L) + 1];
+  return (a > b ? a : b) * kMajorantInflation;
+}
+
+/// Fills `sparse` (sparseLevels(K) * K floats) from channel n's texels
+/// (r, g, b, extinction).
+MCVOL_FUNC void buildSparseTable(const float* texels, int K, float* sparse)
+{
+  for (int i = 0; i < K; ++i)
+  {
+    sparse[i] = texels[4 * i + 3];
+  }
+  const int levels = sparseLevels(K);
+  for (int L = 1; L < levels; ++L)
+  {
+    const float* prev = sparse + int64_t(L - 1) * K;
+    float* cur = sparse + int64_t(L) * K;
+    const int half = 1 << (L - 1);
+    for (int i = 0; i + (1 << L) <= K; ++i)
+    {
+      const float a = prev[i];
+      const float b = prev[i + half];
+      cur[i] = a > b ? a : b;
+    }
+  }
+}
+} // namespace mcvol

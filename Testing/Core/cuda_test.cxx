@@ -1,0 +1,472 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// The CUDA backend against the CPU backend (needs a CUDA device; TestMain
+// skips with 125 without one).
+//
+// Significance: CudaAgreement runs 2 samplings x 3 types x 5 channel counts
+// x 4 blend modes x 2 trackers = 240 image comparisons, each of 12 checks
+// (3 statistics x R, G, B, A); the family-wise level is kAlpha = 0.001, so
+// each check runs at kAlpha / 2880 (Bonferroni). Seeds are fixed.
+#include "TestUtil.h"
+
+#include "mcvol/CUDARenderer.h"
+
+#include <cstring>
+#include <limits>
+#include <sstream>
+
+using namespace mcvol;
+using namespace mcvol::test;
+
+namespace
+{
+constexpr double kAlpha = 1e-3;
+
+/// N channels of smooth, different blobs, stored as T (planar), with a NaN
+/// voxel in float data.
+struct TypedVolume
+{
+  int dims[3] = { 0, 0, 0 };
+  ScalarType type = ScalarType::Float32;
+  std::vector<std::vector<uint8_t>> bytes;
+  float maxValue = 1.f;
+
+  TypedVolume(ScalarType t, int n, int nx, int ny, int nz)
+  {
+    this->dims[0] = nx;
+    this->dims[1] = ny;
+    this->dims[2] = nz;
+    this->type = t;
+    this->maxValue = t == ScalarType::UInt8 ? 255.f : (t == ScalarType::UInt16 ? 65535.f : 1.f);
+    const size_t voxels = size_t(nx) * ny * nz;
+    const size_t es = size_t(scalarTypeSize(t));
+    this->bytes.assign(size_t(n), std::vector<uint8_t>(voxels * es));
+    for (int c = 0; c < n; ++c)
+    {
+      // Blob centre and radius differ per channel, so channels overlap partly.
+      const double cx = nx * (0.3 + 0.4 * ((c * 37) % 11) / 10.0);
+      const double cy = ny * (0.3 + 0.4 * ((c * 53) % 7) / 6.0);
+      const double cz = nz * (0.3 + 0.4 * ((c * 29) % 5) / 4.0);
+      const double r = 0.25 * nx * (0.7 + 0.3 * ((c * 17) % 3));
+      for (int k = 0; k < nz; ++k)
+        for (int j = 0; j < ny; ++j)
+          for (int i = 0; i < nx; ++i)
+          {
+            const double d2 = ((i - cx) * (i - cx) + (j - cy) * (j - cy) + (k - cz) * (k - cz)) / (r * r);
+            const double v = std::exp(-d2) * (0.8 + 0.2 * std::sin(0.7 * i + 0.3 * c));
+            const size_t idx = (size_t(k) * ny + j) * nx + i;
+            uint8_t* p = this->bytes[size_t(c)].data() + idx * es;
+            if (t == ScalarType::UInt8)
+            {
+              *p = uint8_t(std::lround(std::min(1.0, std::max(0.0, v)) * 255));
+            }
+            else if (t == ScalarType::UInt16)
+            {
+              const uint16_t u = uint16_t(std::lround(std::min(1.0, std::max(0.0, v)) * 65535));
+              std::memcpy(p, &u, 2);
+            }
+            else
+            {
+              float f = float(v);
+              if (c == 0 && i == nx / 2 && j == ny / 2 && k == nz / 2)
+              {
+                f = std::numeric_limits<float>::quiet_NaN();
+              }
+              std::memcpy(p, &f, 4);
+            }
+          }
+    }
+  }
+
+  void configure(Scene& scene, BlendMode mode, int macrocell = 4) const
+  {
+    std::vector<ChannelSource> src(this->bytes.size());
+    for (size_t n = 0; n < src.size(); ++n)
+    {
+      src[n].data = this->bytes[n].data();
+      src[n].type = this->type;
+    }
+    scene.setVolume(this->dims, int(src.size()), src.data());
+    const float colours[6][3] = { { 1, 0.2f, 0.1f }, { 0.1f, 1, 0.2f }, { 0.2f, 0.3f, 1 }, { 1, 1, 0.1f },
+      { 0.1f, 1, 1 }, { 1, 0.1f, 1 } };
+    for (size_t n = 0; n < src.size(); ++n)
+    {
+      // Opacity ramps up over the upper part of the range, so every channel
+      // has empty, thin and dense regions.
+      TransferFunctionDesc tf;
+      tf.scalarMin = 0;
+      tf.scalarMax = this->maxValue;
+      tf.unitDistance = 1.f + 0.5f * float(n % 3);
+      const int K = 64;
+      for (int i = 0; i < K; ++i)
+      {
+        const float x = float(i) / float(K - 1);
+        tf.opacity.push_back(x < 0.2f ? 0.f : std::min(1.f, (x - 0.2f) * 0.6f));
+        const float* c = colours[n % 6];
+        tf.rgb.push_back(c[0] * (0.5f + 0.5f * x));
+        tf.rgb.push_back(c[1]);
+        tf.rgb.push_back(c[2] * (1.f - 0.5f * x));
+      }
+      scene.setTransferFunction(int(n), tf);
+    }
+    scene.setMacrocellSize(macrocell);
+    scene.setBlendMode(mode);
+    std::vector<float> w(src.size());
+    for (size_t n = 0; n < w.size(); ++n)
+    {
+      w[n] = 1.f + float(n % 3);
+    }
+    scene.setMixWeights(w.data(), int(w.size()));
+    scene.update();
+  }
+};
+
+std::unique_ptr<CUDARenderer> cudaRenderer(CudaSampling s)
+{
+  std::unique_ptr<CUDARenderer> r(new CUDARenderer());
+  r->setSampling(s);
+  return r;
+}
+
+std::vector<float> renderImage(Renderer& r, const Scene& scene, const Camera& cam, int spp, uint32_t seed,
+  Tracker t = Tracker::OneDDA, RenderCounters* counters = nullptr)
+{
+  Accumulator acc;
+  RenderSettings rs;
+  rs.samplesPerPixel = spp;
+  rs.seed = seed;
+  rs.tracker = t;
+  r.render(scene, cam, rs, nullptr, acc, counters);
+  return std::vector<float>(acc.rgba(), acc.rgba() + size_t(cam.width) * cam.height * 4);
+}
+} // namespace
+
+// Statistical agreement of CPU and CUDA images for every blend mode, both
+// trackers, uint8/uint16/float data, N = 1, 3, 4, 12, 16, with texture and
+// with global-memory sampling. Independent seeds on the two sides, so the
+// per-pixel differences have mean zero exactly when both backends compute the
+// same expectation (expectSameImage: image-mean z, sum of z^2, max |z|).
+TEST(CudaAgreement, EveryModeTrackerTypeAndChannelCount)
+{
+  const int combos = 2 * 3 * 5 * 4 * 2;
+  const double alpha = kAlpha / (combos * 12);
+  CPURenderer cpu;
+  const std::unique_ptr<CUDARenderer> tex = cudaRenderer(CudaSampling::Texture);
+  const std::unique_ptr<CUDARenderer> glob = cudaRenderer(CudaSampling::Global);
+  RenderSettings rs;
+  const int renders = 24;
+  uint32_t seed = 1;
+  for (ScalarType type : { ScalarType::UInt8, ScalarType::UInt16, ScalarType::Float32 })
+  {
+    for (int N : { 1, 3, 4, 12, 16 })
+    {
+      const TypedVolume v(type, N, 24, 22, 20);
+      const Camera cam = orbitCamera(v.dims, std::array<double, 3>{ 1, 1, 1 }.data(), 20, 20, 35, 25);
+      for (BlendMode mode : { BlendMode::Density, BlendMode::Max, BlendMode::Mix, BlendMode::Composite })
+      {
+        Scene scene;
+        v.configure(scene, mode);
+        for (Tracker t : { Tracker::OneDDA, Tracker::NDDA })
+        {
+          rs.tracker = t;
+          const Moments a = renderMoments(cpu, scene, cam, rs, renders, seed += 1000);
+          std::ostringstream what;
+          what << toString(type) << " N=" << N << " " << toString(mode) << " " << toString(t);
+          double alphaSum = 0;
+          for (size_t p = 3; p < a.size(); p += 4)
+          {
+            alphaSum += a.mean(p);
+          }
+          EXPECT_GT(alphaSum, 1.0) << what.str() << ": the CPU image is empty (a useless comparison)";
+          for (CUDARenderer* g : { tex.get(), glob.get() })
+          {
+            const Moments b = renderMoments(*g, scene, cam, rs, renders, seed += 1000);
+            expectSameImage(a, b, alpha,
+              what.str() + (g->sampling() == CudaSampling::Texture ? " texture" : " global"));
+          }
+        }
+      }
+    }
+  }
+}
+
+// With global-memory sampling the GPU runs the CPU's arithmetic on the same
+// random numbers: with the same seed the images are equal up to float
+// rounding (nvcc contracts a*b+c into FMAs, logf differs in the last bit), so
+// nearly every pixel matches closely. A wrong channel, table or random stream
+// would make most pixels differ.
+TEST(CudaAgreement, SameSeedGlobalSamplingNearlyIdentical)
+{
+  CPURenderer cpu;
+  const std::unique_ptr<CUDARenderer> g = cudaRenderer(CudaSampling::Global);
+  const TypedVolume v(ScalarType::Float32, 4, 32, 30, 28);
+  const Camera cam = orbitCamera(v.dims, std::array<double, 3>{ 1, 1, 1 }.data(), 48, 48, 35, 25);
+  for (BlendMode mode : { BlendMode::Density, BlendMode::Max, BlendMode::Mix, BlendMode::Composite })
+  {
+    Scene scene;
+    v.configure(scene, mode);
+    for (Tracker t : { Tracker::OneDDA, Tracker::NDDA })
+    {
+      const std::vector<float> a = renderImage(cpu, scene, cam, 16, 77, t);
+      const std::vector<float> b = renderImage(*g, scene, cam, 16, 77, t);
+      size_t close = 0;
+      for (size_t p = 0; p < a.size() / 4; ++p)
+      {
+        bool same = true;
+        for (int c = 0; c < 4; ++c)
+        {
+          same = same && std::fabs(a[4 * p + c] - b[4 * p + c]) <= 1e-4f;
+        }
+        close += same ? 1 : 0;
+      }
+      const double frac = double(close) / double(a.size() / 4);
+      std::printf("same seed, %s %s: %.4f of pixels within 1e-4\n", toString(mode), toString(t), frac);
+      EXPECT_GE(frac, 0.95) << toString(mode) << " " << toString(t);
+    }
+  }
+}
+
+// The GPU builds the same macrocell majorants as the host, bit for bit, for
+// every voxel type (NaN and Inf voxels included), and the same active list.
+TEST(CudaGrid, MajorantsEqualHostBuild)
+{
+  const int dims[3] = { 37, 21, 19 };
+  const size_t voxels = size_t(dims[0]) * dims[1] * dims[2];
+  TestRand rnd(5);
+  std::vector<uint8_t> u8(voxels);
+  std::vector<int16_t> i16(voxels);
+  std::vector<uint16_t> u16(voxels);
+  std::vector<float> f32(voxels);
+  std::vector<double> f64(voxels);
+  for (size_t i = 0; i < voxels; ++i)
+  {
+    const double x = rnd.uniform();
+    u8[i] = uint8_t(x * 255);
+    i16[i] = int16_t(x * 60000 - 30000);
+    u16[i] = uint16_t(x * 65535);
+    f32[i] = float(x * 10 - 3);
+    f64[i] = 1e9 + x * 40;
+  }
+  f32[100] = std::numeric_limits<float>::quiet_NaN();
+  f32[2000] = std::numeric_limits<float>::infinity();
+  f64[300] = std::numeric_limits<double>::quiet_NaN();
+  ChannelSource src[6];
+  src[0] = { u8.data(), ScalarType::UInt8, 1, 0.0 };
+  src[1] = { i16.data(), ScalarType::Int16, 1, 0.0 };
+  src[2] = { u16.data(), ScalarType::UInt16, 1, 0.0 };
+  src[3] = { f32.data(), ScalarType::Float32, 1, 0.0 };
+  src[4] = { f64.data(), ScalarType::Float64, 1, 1e9 };
+  std::vector<float> allZero(voxels, 0.5f);
+  src[5] = { allZero.data(), ScalarType::Float32, 1, 0.0 };
+  const double lo[6] = { 0, -30000, 0, -3, 1e9, 0 };
+  const double hi[6] = { 255, 30000, 65535, 7, 1e9 + 40, 1 };
+  for (int M : { 1, 3, 8 })
+  {
+    Scene scene;
+    scene.setVolume(dims, 6, src);
+    for (int n = 0; n < 6; ++n)
+    {
+      TransferFunctionDesc tf = flatTF(0.f, 1, 1, 1, 1.f, 256, float(lo[n]), float(hi[n]));
+      tf.scalarMin = lo[n];
+      tf.scalarMax = hi[n];
+      for (int i = 0; i < 256; ++i)
+      {
+        // A bumpy opacity so that the covered texel range matters; channel 5 stays fully transparent.
+        tf.opacity[size_t(i)] = n == 5 ? 0.f : float(0.5 + 0.5 * std::sin(i * 0.37 + n));
+      }
+      scene.setTransferFunction(n, tf);
+    }
+    scene.setMacrocellSize(M);
+    scene.update();
+    CUDARenderer g;
+    const Camera cam = orbitCamera(dims, std::array<double, 3>{ 1, 1, 1 }.data(), 8, 8, 30, 20);
+    renderImage(g, scene, cam, 1, 1);
+    const int64_t cells = int64_t(scene.macrocellDims()[0]) * scene.macrocellDims()[1] * scene.macrocellDims()[2];
+    for (int n = 0; n < 6; ++n)
+    {
+      const std::vector<float> dev = g.downloadMajorants(n);
+      ASSERT_EQ(int64_t(dev.size()), cells);
+      int64_t differ = 0;
+      for (int64_t c = 0; c < cells; ++c)
+      {
+        differ += dev[size_t(c)] != scene.majorants()[size_t(c) * 6 + size_t(n)] ? 1 : 0;
+      }
+      EXPECT_EQ(differ, 0) << "macrocell " << M << ", channel " << n << " (" << toString(src[n].type) << ")";
+    }
+    const std::vector<int> active = g.activeChannels();
+    EXPECT_EQ(active, std::vector<int>(scene.view().active, scene.view().active + scene.view().numActive));
+    EXPECT_EQ(active.size(), 5u) << "the transparent channel must not be active";
+  }
+}
+
+// Uploads happen once per data change, one channel's majorants are rebuilt
+// when its transfer function changes, and the Scene can skip its host build.
+TEST(CudaGrid, UploadsAndRebuildsFollowChanges)
+{
+  const TypedVolume v(ScalarType::Float32, 4, 30, 28, 26);
+  Scene scene;
+  scene.setHostAcceleration(false);
+  v.configure(scene, BlendMode::Density);
+  EXPECT_TRUE(scene.majorants().empty()) << "no host majorants when host acceleration is off";
+  EXPECT_EQ(scene.memory().macrocellBytes, 0u);
+  CUDARenderer g;
+  const Camera cam = orbitCamera(v.dims, std::array<double, 3>{ 1, 1, 1 }.data(), 16, 16, 30, 20);
+  Accumulator acc;
+  RenderSettings rs;
+  for (int i = 0; i < 5; ++i)
+  {
+    g.render(scene, cam, rs, nullptr, acc);
+  }
+  CudaUpdateCounters u = g.updateCounters();
+  EXPECT_EQ(u.dataUploads, 4u) << "one upload per channel, not per frame";
+  EXPECT_EQ(u.rangeBuilds, 1u);
+  EXPECT_EQ(u.majorantChannelBuilds, 4u);
+  EXPECT_EQ(u.imageDownloads, 5u) << "one image per render";
+
+  // One transfer function changes: that channel's majorants only.
+  TransferFunctionDesc tf = flatTF(0.3f, 1, 0, 0, 1.f, 64, 0.f, 1.f);
+  scene.setTransferFunction(2, tf);
+  scene.update();
+  g.render(scene, cam, rs, nullptr, acc);
+  u = g.updateCounters();
+  EXPECT_EQ(u.dataUploads, 4u);
+  EXPECT_EQ(u.rangeBuilds, 1u);
+  EXPECT_EQ(u.majorantChannelBuilds, 5u);
+
+  // A new macrocell size: ranges and all majorants, no upload.
+  scene.setMacrocellSize(6);
+  scene.update();
+  g.render(scene, cam, rs, nullptr, acc);
+  u = g.updateCounters();
+  EXPECT_EQ(u.dataUploads, 4u);
+  EXPECT_EQ(u.rangeBuilds, 2u);
+  EXPECT_EQ(u.majorantChannelBuilds, 9u);
+
+  // New voxel values: everything once.
+  scene.dataModified();
+  scene.update();
+  g.render(scene, cam, rs, nullptr, acc);
+  u = g.updateCounters();
+  EXPECT_EQ(u.dataUploads, 8u);
+  EXPECT_EQ(u.rangeBuilds, 3u);
+
+  // The device-built grid renders what the host-built one does (same seed,
+  // global sampling: nearly the same pixels).
+  Scene hostScene;
+  v.configure(hostScene, BlendMode::Density);
+  hostScene.setTransferFunction(2, tf);
+  hostScene.setMacrocellSize(6);
+  hostScene.update();
+  CPURenderer cpu;
+  g.setSampling(CudaSampling::Global);
+  const std::vector<float> a = renderImage(cpu, hostScene, cam, 64, 3);
+  const std::vector<float> b = renderImage(g, scene, cam, 64, 3);
+  double maxDiff = 0;
+  double meanDiff = 0;
+  for (size_t i = 0; i < a.size(); ++i)
+  {
+    maxDiff = std::max(maxDiff, double(std::fabs(a[i] - b[i])));
+    meanDiff += std::fabs(a[i] - b[i]) / a.size();
+  }
+  EXPECT_LT(meanDiff, 2e-3) << "max difference " << maxDiff;
+}
+
+// Progressive accumulation on the device: k renders of one sample with the
+// image left on the device equal one render of k samples; a host reset
+// restarts the device mean; the CPU's progressive mean matches too.
+TEST(CudaAccumulation, ProgressiveDeviceMeanAndReset)
+{
+  const TypedVolume v(ScalarType::UInt8, 3, 30, 28, 26);
+  Scene scene;
+  v.configure(scene, BlendMode::Density);
+  const Camera cam = orbitCamera(v.dims, std::array<double, 3>{ 1, 1, 1 }.data(), 24, 24, 30, 20);
+  CUDARenderer g;
+  Accumulator progressive;
+  RenderSettings rs;
+  rs.seed = 9;
+  rs.readBack = false;
+  for (int k = 0; k < 8; ++k)
+  {
+    g.render(scene, cam, rs, nullptr, progressive);
+  }
+  EXPECT_EQ(g.updateCounters().imageDownloads, 0u);
+  g.readBack(progressive);
+  EXPECT_EQ(progressive.samples(), 8u);
+  const std::vector<float> once = renderImage(g, scene, cam, 8, 9);
+  for (size_t i = 0; i < once.size(); ++i)
+  {
+    ASSERT_NEAR(progressive.rgba()[i], once[i], 2e-6f) << "value " << i;
+  }
+  // Reset on the host: the next render starts a new mean.
+  progressive.reset();
+  rs.readBack = true;
+  rs.samplesPerPixel = 8;
+  g.render(scene, cam, rs, nullptr, progressive);
+  for (size_t i = 0; i < once.size(); ++i)
+  {
+    ASSERT_EQ(progressive.rgba()[i], once[i]) << "value " << i;
+  }
+}
+
+// Depth clipping and counters on the device: geometry at mid-depth stops the
+// rays (less alpha, fewer collisions), and the counters add up like the CPU's.
+TEST(CudaRender, DepthAndCounters)
+{
+  const TypedVolume v(ScalarType::Float32, 3, 30, 28, 26);
+  Scene scene;
+  v.configure(scene, BlendMode::Density);
+  const Camera cam = orbitCamera(v.dims, std::array<double, 3>{ 1, 1, 1 }.data(), 32, 32, 30, 20);
+  CUDARenderer g;
+  CPURenderer cpu;
+  RenderCounters cg, cc;
+  const std::vector<float> a = renderImage(g, scene, cam, 32, 4, Tracker::OneDDA, &cg);
+  renderImage(cpu, scene, cam, 32, 4, Tracker::OneDDA, &cc);
+  EXPECT_EQ(cg.rays, cc.rays);
+  // Same seed, nearly the same paths: work within 2% of the CPU's.
+  EXPECT_NEAR(double(cg.tentativeCollisions), double(cc.tentativeCollisions), 0.02 * double(cc.tentativeCollisions));
+  EXPECT_NEAR(double(cg.realCollisions), double(cc.realCollisions), 0.02 * double(cc.realCollisions));
+  std::vector<float> depth(size_t(cam.width) * cam.height, 1.f);
+  for (size_t i = 0; i < depth.size() / 2; ++i)
+  {
+    depth[i] = 0.f; // geometry at the near plane over the lower half
+  }
+  Accumulator acc;
+  RenderSettings rs;
+  rs.samplesPerPixel = 8;
+  g.render(scene, cam, rs, depth.data(), acc);
+  for (size_t p = 0; p < depth.size() / 2; ++p)
+  {
+    ASSERT_EQ(acc.rgba()[4 * p + 3], 0.f) << "pixel " << p << " is behind geometry";
+  }
+  double upper = 0;
+  for (size_t p = depth.size() / 2; p < depth.size(); ++p)
+  {
+    upper += acc.rgba()[4 * p + 3];
+  }
+  double upperFree = 0;
+  for (size_t p = depth.size() / 2; p < depth.size(); ++p)
+  {
+    upperFree += a[4 * p + 3];
+  }
+  EXPECT_GT(upper, 0.5 * upperFree) << "the unoccluded half still renders";
+}
+
+// Bad input gives errors, not crashes.
+TEST(CudaRender, Errors)
+{
+  CUDARenderer g;
+  EXPECT_THROW(g.setBlockSize(3, 5), std::invalid_argument);
+  EXPECT_THROW(g.setBlockSize(64, 32), std::invalid_argument);
+  Scene empty;
+  Accumulator acc;
+  Camera cam;
+  cam.width = 4;
+  cam.height = 4;
+  EXPECT_THROW(g.render(empty, cam, RenderSettings(), nullptr, acc), std::logic_error);
+  cam.width = 0;
+  EXPECT_THROW(g.render(empty, cam, RenderSettings(), nullptr, acc), std::invalid_argument);
+  std::string why;
+  EXPECT_TRUE(Renderer::cudaAvailable(&why)) << why;
+  std::string choice;
+  const std::unique_ptr<Renderer> autoR = Renderer::create(Backend::Auto, &choice);
+  EXPECT_STREQ(autoR->name(), "cuda") << choice;
+}
