@@ -69,6 +69,7 @@ struct Options
   double psnr = 35.0;
   int referenceSpp = 2048;
   int maxConvergeFrames = 4096;
+  double density = 1.0; ///< divides every opacity unit distance (denser volumes)
 };
 
 using Clock = std::chrono::steady_clock;
@@ -117,7 +118,7 @@ void usage()
             "                   [--sections trackers,channels,macrocell,rebuild,memory]\n"
             "                   [--channel-counts 1,2,4] [--macrocell-sizes 4,8,16] [--csv FILE]\n"
             "                   [--label TEXT] [--sampling texture|global] [--block X Y]\n"
-            "                   [--psnr DB] [--reference-spp N]\n"
+            "                   [--psnr DB] [--reference-spp N] [--density F]\n"
             "sections: trackers channels macrocell rebuild memory paper converge sampling");
 }
 
@@ -197,6 +198,11 @@ Options parse(int argc, char** argv)
       o.blockX = std::stoi(argv[++i]);
       o.blockY = std::stoi(argv[++i]);
     }
+    else if (a == "--density")
+    {
+      need(1);
+      o.density = std::stod(argv[++i]);
+    }
     else if (a == "--psnr")
     {
       need(1);
@@ -250,22 +256,29 @@ struct Setup
   void load(const Options& o, int channels, int macrocell, bool hostAcceleration = true)
   {
     this->volume = mcvol::makeDemo(o.dataset, o.dims, channels);
+    this->configure(o, this->volume.numChannels(), macrocell, hostAcceleration);
+  }
+
+  /// A new scene over the first `channels` channels of the loaded volume (the
+  /// channel sweep generates the largest count once).
+  void configure(const Options& o, int channels, int macrocell, bool hostAcceleration)
+  {
     this->ranges.clear();
     std::vector<mcvol::ChannelSource> src;
-    for (int n = 0; n < this->volume.numChannels(); ++n)
+    for (int n = 0; n < channels; ++n)
     {
       src.push_back(this->volume.source(n));
       this->ranges.push_back(this->volume.range(n));
     }
     this->scene = mcvol::Scene();
     this->scene.setHostAcceleration(hostAcceleration);
-    this->scene.setVolume(this->volume.dims, this->volume.numChannels(), src.data());
+    this->scene.setVolume(this->volume.dims, channels, src.data());
     this->scene.setMacrocellSize(macrocell);
-    for (int n = 0; n < this->volume.numChannels(); ++n)
+    for (int n = 0; n < channels; ++n)
     {
       this->scene.setTransferFunction(n,
         mcvol::sampleTransferFunction(this->volume.transferFunctions[size_t(n)], this->ranges[size_t(n)][0],
-          this->ranges[size_t(n)][1], o.tableSize, this->volume.spacing[0]));
+          this->ranges[size_t(n)][1], o.tableSize, this->volume.spacing[0] / o.density));
     }
     this->scene.update();
   }
@@ -374,6 +387,10 @@ std::string describe(const Options& o, const Setup& s)
   {
     ss << o.label << " = ";
   }
+  if (o.density != 1.0)
+  {
+    ss << "density x" << o.density << " ";
+  }
   ss << o.dataset << " " << s.volume.dims[0] << "x" << s.volume.dims[1] << "x" << s.volume.dims[2] << " "
      << mcvol::toString(s.volume.type);
   return ss.str();
@@ -461,9 +478,10 @@ int main(int argc, char** argv)
     std::printf("## Frame time against channel count (%s, macrocell %d)\n\n", o.dataset.c_str(), o.macrocell);
     std::printf("| channels | 1-DDA ms | N-DDA ms | 1-DDA / 1 channel | mean alpha |\n|---|---|---|---|---|\n");
     double base = 0;
+    s.volume = mcvol::makeDemo(o.dataset, o.dims, *std::max_element(o.channelCounts.begin(), o.channelCounts.end()));
     for (int n : o.channelCounts)
     {
-      s.load(o, n, o.macrocell, hostAccel);
+      s.configure(o, n, o.macrocell, hostAccel);
       const FrameStats a = timeFrames(o, *r, s.scene, mcvol::Tracker::OneDDA);
       const FrameStats b = timeFrames(o, *r, s.scene, mcvol::Tracker::NDDA);
       if (base == 0)

@@ -6,7 +6,7 @@
 set -uo pipefail
 top="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 b="${1:-/tmp/mcvol-gpu}"
-out="${OUT:-/tmp/mcvol-gpu-out}"
+out="${RESULTS:-${OUT:-/tmp/mcvol-gpu-out}}"
 mkdir -p "$out"
 nvcc_path="$(command -v nvcc || echo /usr/local/cuda/bin/nvcc)"
 nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv > "$out/gpu.txt" 2>&1

@@ -1,0 +1,89 @@
+#!/usr/bin/env bash
+# GPU machine, step 2: the paper's benchmarks with mcvol-bench (built by
+# check.sh into the same build folder). Stages, run in the order given:
+#   paper     frame rate (1024^2, 1 spp, 25 warm-up + 500 timed, both
+#             trackers), GPU memory, texture vs global sampling, time to
+#             converge to 35 dB: the four paper-sized datasets
+#   dense     the paper stage's frame rates with opacities 8x denser
+#   macrocell frame rate against macrocell size (paper Fig. 8), CUDA and CPU
+#   channels  frame rate against channel count 1..16 (paper Fig. 9), CUDA and CPU
+#   block     render-kernel block shapes (NYX-like)
+#   profile   Nsight Compute on the render kernel of the slowest paper case
+# Usage: bash Benchmarks/gpu/bench.sh [build-dir] stage...   (results under $OUT)
+set -uo pipefail
+b="${1:-/tmp/mcvol-gpu}"
+shift
+out="${RESULTS:-${OUT:-/tmp/mcvol-gpu-out}}"
+mkdir -p "$out"
+bench="$b/bin/mcvol-bench"
+# name dataset dims channels
+sets=(
+  "nyx cosmology 512 512 512 4 NYX-like"
+  "hurricane weather 500 500 100 4 Hurricane-like"
+  "miranda cosmology 256 384 384 4 Miranda-like"
+  "zebrafish microscopy 640 640 121 3 Zebrafish-like"
+)
+run() { # name args...
+  local name="$1"
+  shift
+  echo "== $name: $*" >&2
+  "$bench" "$@" --csv "$out/$name.csv" > "$out/$name.md" 2> "$out/$name.err"
+  local rc=$?
+  [ $rc -eq 0 ] || { echo "FAILED ($rc): $name" >&2; tail -5 "$out/$name.err" >&2; }
+}
+for stage in "$@"; do
+  case "$stage" in
+    paper)
+      for s in "${sets[@]}"; do
+        read -r key ds x y z ch label <<< "$s"
+        run "paper-$key" --backend cuda --dataset "$ds" --dims "$x" "$y" "$z" --channels "$ch" --label "$label" \
+          --size 1024 1024 --warmup 25 --frames 500 --reference-spp 4096 --sections paper,memory,sampling,converge
+        grep -A4 "^| tracker | FPS" "$out/paper-$key.md" | sed -n 3,4p | sed "s/^/$label /"
+      done
+      ;;
+    dense)
+      # The same datasets with every opacity unit distance divided by 8: more
+      # collisions per ray (the synthetic transfer functions are fairly clear).
+      for s in "${sets[@]}"; do
+        read -r key ds x y z ch label <<< "$s"
+        run "dense-$key" --backend cuda --dataset "$ds" --dims "$x" "$y" "$z" --channels "$ch" --label "$label" \
+          --density 8 --size 1024 1024 --warmup 25 --frames 500 --reference-spp 4096 --sections paper,converge
+        grep -A4 "^| tracker | FPS" "$out/dense-$key.md" | sed -n 3,4p | sed "s/^/$label dense /"
+      done
+      ;;
+    macrocell)
+      for s in "${sets[@]}"; do
+        read -r key ds x y z ch label <<< "$s"
+        run "macrocell-cuda-$key" --backend cuda --dataset "$ds" --dims "$x" "$y" "$z" --channels "$ch" \
+          --label "$label" --size 1024 1024 --warmup 10 --frames 100 --macrocell-sizes 1,2,4,8,16,32 \
+          --sections macrocell
+        run "macrocell-cpu-$key" --backend cpu --dataset "$ds" --dims "$x" "$y" "$z" --channels "$ch" \
+          --label "$label" --size 1024 1024 --warmup 1 --frames 3 --macrocell-sizes 2,4,8,16,32 --sections macrocell
+      done
+      ;;
+    channels)
+      run channels-cuda --backend cuda --dataset cosmology --dims 512 512 512 --label NYX-like --size 1024 1024 \
+        --warmup 10 --frames 100 --channel-counts 1,2,3,4,5,6,7,8,9,10,11,12,13,14,15,16 --sections channels
+      run channels-cpu --backend cpu --dataset cosmology --dims 512 512 512 --label NYX-like --size 1024 1024 \
+        --warmup 1 --frames 3 --channel-counts 1,2,4,8,12,16 --sections channels
+      ;;
+    block)
+      for bs in "8 8" "16 8" "32 4" "16 16" "32 8"; do
+        run "block-${bs/ /x}" --backend cuda --dataset cosmology --dims 512 512 512 --channels 4 --label NYX-like \
+          --size 1024 1024 --warmup 25 --frames 200 --block $bs --sections trackers
+        echo "block $bs: $(grep -E '^\| (1-DDA|N-DDA)' "$out/block-${bs/ /x}.md" | tr '\n' ' ')"
+      done
+      ;;
+    profile)
+      ncu_bin="$(command -v ncu || echo /usr/local/cuda/bin/ncu)"
+      "$ncu_bin" --kernel-name regex:renderKernel --launch-skip 30 --launch-count 1 --set full \
+        -o "$out/profile" -f "$bench" --backend cuda --dataset ${PROFILE_DATASET:-cosmology} \
+        --dims ${PROFILE_DIMS:-512 512 512} --channels ${PROFILE_CHANNELS:-4} --size 1024 1024 --warmup 25 --frames 10 \
+        --sections trackers > "$out/profile.log" 2>&1
+      "$ncu_bin" --import "$out/profile.ncu-rep" --page details > "$out/profile-details.txt" 2>&1
+      grep -E "Duration|Memory Throughput|Compute \(SM\) Throughput|Achieved Occupancy|Registers Per|L1/TEX Hit|L2 Hit|DRAM Throughput|Warp Cycles Per Issued|Theoretical Occupancy|Stall" \
+        "$out/profile-details.txt" | head -40
+      rm -f "$out/profile.ncu-rep"
+      ;;
+  esac
+done
