@@ -150,8 +150,10 @@ struct vtkMultiChannelVolumeMapper::vtkInternals
   vtkSmartPointer<vtkTextureObject> Texture;
   std::unique_ptr<vtkOpenGLQuadHelper> Quad;
 
-  // Backing store for GetActiveBackendName.
+  // Backing store for GetActiveBackendName and GetBackendReport.
   std::string BackendName = "none";
+  std::string BackendReport = "no backend chosen yet";
+  std::string BackendWhy; // from Renderer::create when Renderer was made
 
   vtkInternals() { this->MixWeights.fill(1.0); }
 
@@ -240,14 +242,14 @@ const char* vtkMultiChannelVolumeMapper::GetActiveBackendName()
   if (in.RendererBackend != this->Backend)
   {
     // Not rendered with this setting yet: say what create() would pick.
-    try
+    std::string why;
+    if (this->Backend == BACKEND_CPU || !mcvol::Renderer::cudaAvailable(&why))
     {
-      auto r = mcvol::Renderer::create(static_cast<mcvol::Backend>(this->Backend));
-      in.BackendName = r ? r->name() : "none";
+      in.BackendName = this->Backend == BACKEND_CUDA ? "none" : "cpu";
     }
-    catch (const std::exception&)
+    else
     {
-      in.BackendName = "none";
+      in.BackendName = "cuda";
     }
   }
   else
@@ -255,6 +257,35 @@ const char* vtkMultiChannelVolumeMapper::GetActiveBackendName()
     in.BackendName = in.Renderer ? in.Renderer->name() : "none";
   }
   return in.BackendName.c_str();
+}
+
+//------------------------------------------------------------------------------
+const char* vtkMultiChannelVolumeMapper::GetBackendReport()
+{
+  vtkInternals& in = *this->Internals;
+  if (in.RendererBackend == this->Backend)
+  {
+    in.BackendReport = in.Renderer ? in.BackendWhy : "unavailable: " + in.BackendWhy;
+    return in.BackendReport.c_str();
+  }
+  // Not rendered with this setting yet: what create() would say (without
+  // creating a renderer).
+  std::string why;
+  const bool cuda = mcvol::Renderer::cudaAvailable(&why);
+  switch (this->Backend)
+  {
+    case BACKEND_CPU:
+      in.BackendReport = "CPU backend (requested)";
+      break;
+    case BACKEND_CUDA:
+      in.BackendReport =
+        cuda ? "CUDA backend (requested; " + why + ")" : "unavailable: the CUDA backend was requested but " + why;
+      break;
+    default:
+      in.BackendReport = cuda ? "CUDA backend (auto: " + why + ")" : "CPU backend (auto: " + why + ")";
+      break;
+  }
+  return in.BackendReport.c_str();
 }
 
 //------------------------------------------------------------------------------
@@ -725,10 +756,11 @@ void vtkMultiChannelVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
     in.RendererBackend = this->Backend;
     try
     {
-      in.Renderer = mcvol::Renderer::create(static_cast<mcvol::Backend>(this->Backend));
+      in.Renderer = mcvol::Renderer::create(static_cast<mcvol::Backend>(this->Backend), &in.BackendWhy);
     }
     catch (const std::exception& e)
     {
+      in.BackendWhy = e.what();
       vtkErrorMacro("Backend " << this->GetBackendAsString() << " is not available: " << e.what());
       return;
     }

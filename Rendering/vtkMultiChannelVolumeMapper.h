@@ -6,9 +6,13 @@
  * vtkMultiChannelVolumeMapper renders a vtkImageData whose point data holds N
  * scalar channels (1 to 32), each with its own colour and opacity transfer
  * function, by multi-density Woodcock (delta) tracking (Sahistan et al.). It
- * runs on the CPU (OpenMP); SetBackend picks the backend (a CUDA backend is
- * planned: Auto will take it when a device is usable, and CUDA reports why it
- * cannot be had until then).
+ * runs on NVIDIA GPUs (CUDA) or on the CPU (OpenMP); SetBackend picks the
+ * backend: Auto (default) takes CUDA when this build has the CUDA backend and
+ * a usable device, otherwise the CPU; GetBackendReport() says which and why.
+ * With the CUDA backend the channels are uploaded once per data change, the
+ * macrocell and majorant grids are built on the GPU (one channel's majorants
+ * when its transfer function changes) and the image comes back once per
+ * render.
  *
  * Rendering is progressive: every Render() adds SamplesPerPixel samples per
  * pixel to a running mean, which is drawn over the frame. The mean starts over
@@ -177,6 +181,13 @@ public:
    * "none" when the requested backend is not available.
    */
   const char* GetActiveBackendName();
+
+  /**
+   * A sentence on the backend choice, e.g. "CUDA backend (auto: CUDA device
+   * NVIDIA H100 80GB HBM3)" or "CPU backend (auto: no usable CUDA device
+   * (...))", or the error when the requested backend is not available.
+   */
+  const char* GetBackendReport();
 
   ///@{
   /**

@@ -824,7 +824,7 @@ def render(scene, args, errors, log):
             raise RenderError("the mapper stopped accumulating at %d samples per pixel" % done)
         last = done
     seconds = time.perf_counter() - start
-    backend = mapper.GetActiveBackendName()
+    backend = mapper.GetBackendReport()
     if mapper.GetTotalSamples() != total:
         raise RenderError("accumulated %d samples per pixel, not %d" % (mapper.GetTotalSamples(), total))
 
@@ -862,7 +862,7 @@ def render(scene, args, errors, log):
         if args.raw_alpha:
             write_pfm(args.raw_alpha, w, h, 1, alpha)
     log(
-        "%s: %d spp (%d per render) at %dx%d, %d channel(s), %s blend, %s, backend %s: %.2f s -> %s"
+        "%s: %d spp (%d per render) at %dx%d, %d channel(s), %s blend, %s, %s: %.2f s -> %s"
         % (
             PROG,
             total,

@@ -8,6 +8,8 @@ rm -rf "$RESULTS" && mkdir -p "$RESULTS"
 if [ "${CHECK:-1}" = 1 ]; then
   bash "$top/Benchmarks/gpu/check.sh" /tmp/b
 else
+  [ -f /tmp/b/CMakeCache.txt ] || cmake -S "$top" -B /tmp/b -DMCVOL_CORE_ONLY=ON -DCMAKE_BUILD_TYPE=Release \
+    -DCMAKE_CUDA_COMPILER="$(command -v nvcc || echo /usr/local/cuda/bin/nvcc)" > "$RESULTS/configure.log" 2>&1
   cmake --build /tmp/b -j"$(nproc)" > "$RESULTS/build.log" 2>&1 || echo "build failed"
 fi
 [ $# -gt 0 ] && bash "$top/Benchmarks/gpu/bench.sh" /tmp/b "$@"

@@ -296,10 +296,10 @@ struct CUDARenderer::Internal
   bool TexturesBuilt = false;
 
   DeviceChannel Channels[kMaxChannels];
-  DeviceBuffer<float> Tables;   ///< [channel][K][4]
-  DeviceBuffer<float> Sparse;   ///< [channel][levels][K]
-  DeviceBuffer<float2> Ranges;  ///< [cell][channel]
-  DeviceBuffer<float> Majorants;///< [cell][channel]
+  DeviceBuffer<float> Tables;    ///< [channel][K][4]
+  DeviceBuffer<float> Sparse;    ///< [channel][levels][K]
+  DeviceBuffer<float2> Ranges;   ///< [cell][channel]
+  DeviceBuffer<float> Majorants; ///< [cell][channel]
   DeviceBuffer<unsigned> ChannelMax;
   DeviceBuffer<unsigned> NaNFlags;
   SceneView View; ///< device pointers; per-render fields filled in render()
@@ -438,9 +438,8 @@ std::string CUDARenderer::deviceDescription() const
   cudaRuntimeGetVersion(&runtime);
   std::ostringstream s;
   s << this->In->Props.name << ", compute " << this->In->Props.major << "." << this->In->Props.minor << ", "
-    << this->In->Props.multiProcessorCount << " SMs, " << (this->In->Props.totalGlobalMem >> 20)
-    << " MiB; CUDA driver " << driver / 1000 << "." << (driver % 1000) / 10 << ", runtime " << runtime / 1000 << "."
-    << (runtime % 1000) / 10;
+    << this->In->Props.multiProcessorCount << " SMs, " << (this->In->Props.totalGlobalMem >> 20) << " MiB; CUDA driver "
+    << driver / 1000 << "." << (driver % 1000) / 10 << ", runtime " << runtime / 1000 << "." << (runtime % 1000) / 10;
   return s.str();
 }
 
@@ -541,8 +540,8 @@ void CUDARenderer::Internal::uploadChannels(const Scene& scene)
 void CUDARenderer::Internal::buildTextures()
 {
   const int* d = this->Dims;
-  const bool fits = d[0] <= this->Props.maxTexture3D[0] && d[1] <= this->Props.maxTexture3D[1] &&
-    d[2] <= this->Props.maxTexture3D[2];
+  const bool fits =
+    d[0] <= this->Props.maxTexture3D[0] && d[1] <= this->Props.maxTexture3D[1] && d[2] <= this->Props.maxTexture3D[2];
   for (int n = 0; n < this->NumChannels; ++n)
   {
     DeviceChannel& dc = this->Channels[n];
@@ -598,16 +597,16 @@ void CUDARenderer::Internal::buildRanges(int macrocell)
     switch (dc.type)
     {
       case ScalarType::UInt8:
-        rangeKernel<<<blocks, threads>>>(
-          reinterpret_cast<const uint8_t*>(dc.bytes.ptr), dims, gd, M, N, n, cells, this->Ranges.ptr, this->NaNFlags.ptr);
+        rangeKernel<<<blocks, threads>>>(reinterpret_cast<const uint8_t*>(dc.bytes.ptr), dims, gd, M, N, n, cells,
+          this->Ranges.ptr, this->NaNFlags.ptr);
         break;
       case ScalarType::Int16:
-        rangeKernel<<<blocks, threads>>>(
-          reinterpret_cast<const int16_t*>(dc.bytes.ptr), dims, gd, M, N, n, cells, this->Ranges.ptr, this->NaNFlags.ptr);
+        rangeKernel<<<blocks, threads>>>(reinterpret_cast<const int16_t*>(dc.bytes.ptr), dims, gd, M, N, n, cells,
+          this->Ranges.ptr, this->NaNFlags.ptr);
         break;
       case ScalarType::UInt16:
-        rangeKernel<<<blocks, threads>>>(
-          reinterpret_cast<const uint16_t*>(dc.bytes.ptr), dims, gd, M, N, n, cells, this->Ranges.ptr, this->NaNFlags.ptr);
+        rangeKernel<<<blocks, threads>>>(reinterpret_cast<const uint16_t*>(dc.bytes.ptr), dims, gd, M, N, n, cells,
+          this->Ranges.ptr, this->NaNFlags.ptr);
         break;
       default:
         rangeKernel<<<blocks, threads>>>(

@@ -15,11 +15,11 @@
 
 #include <algorithm>
 #include <array>
-#include <cstdlib>
-#include <memory>
 #include <cfloat>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -454,8 +454,8 @@ struct Moments
 
 /// n renders of one sample each, seeds seedBase, seedBase + 1, ... (each
 /// seed gives independent random streams).
-inline Moments renderMoments(Renderer& r, const Scene& scene, const Camera& cam, RenderSettings settings, int n,
-  uint32_t seedBase)
+inline Moments renderMoments(
+  Renderer& r, const Scene& scene, const Camera& cam, RenderSettings settings, int n, uint32_t seedBase)
 {
   Moments m;
   m.width = cam.width;

@@ -180,8 +180,8 @@ TEST(CudaAgreement, EveryModeTrackerTypeAndChannelCount)
           for (CUDARenderer* g : { tex.get(), glob.get() })
           {
             const Moments b = renderMoments(*g, scene, cam, rs, renders, seed += 1000);
-            expectSameImage(a, b, alpha,
-              what.str() + (g->sampling() == CudaSampling::Texture ? " texture" : " global"));
+            expectSameImage(
+              a, b, alpha, what.str() + (g->sampling() == CudaSampling::Texture ? " texture" : " global"));
           }
         }
       }

@@ -203,9 +203,28 @@ mapper.SetMixWeight(40, 1.0)
 mapper.SetMixWeight(0, -1.0)
 t.check(len(errors.errors) == 2, "bad mix weights are errors: %s" % errors.errors)
 t.check(mapper.GetActiveBackendName() == "cpu", "CPU backend: %s" % mapper.GetActiveBackendName())
+report = mapper.GetBackendReport()
+t.check(report.startswith("CPU backend"), "CPU report: %s" % report)
+# Auto and CUDA: with a usable device Auto takes CUDA; without one (CI) Auto
+# falls back to the CPU saying why, and CUDA is an error naming the cause.
+mapper.SetBackendToAuto()
+auto_name = mapper.GetActiveBackendName()
+auto_report = mapper.GetBackendReport()
+print("Auto backend here:", auto_name, "-", auto_report)
+t.check(auto_name in ("cpu", "cuda"), "auto picks a backend: %s" % auto_name)
+t.check(("CUDA" in auto_report) if auto_name == "cuda" else auto_report.startswith("CPU backend (auto: "),
+        "auto report names the choice and the reason: %s" % auto_report)
 errors.clear()
 mapper.SetBackendToCUDA()
 name = mapper.GetActiveBackendName()
-print("CUDA backend name here:", name)
+print("CUDA backend here:", name, "-", mapper.GetBackendReport())
+if auto_name == "cpu":
+    t.check(name == "none", "no CUDA device: the CUDA backend is unavailable (%s)" % name)
+    t.check(mapper.GetBackendReport().startswith("unavailable: the CUDA backend was requested but "),
+            "the report names the cause: %s" % mapper.GetBackendReport())
+    expect_message(render(make_image((6, 6, 6), components=1), "CUDA without a device"), "CUDA")
+else:
+    t.check(name == "cuda", "CUDA backend: %s" % name)
+mapper.SetBackendToCPU()
 
 t.finish()

@@ -30,12 +30,12 @@ struct CudaMemoryStats
 /// What the renderer did to keep its device copies current (for tests).
 struct CudaUpdateCounters
 {
-  uint64_t dataUploads = 0;       ///< channel uploads (one per channel per data change)
-  uint64_t rangeBuilds = 0;       ///< macrocell-range builds (all channels)
+  uint64_t dataUploads = 0;           ///< channel uploads (one per channel per data change)
+  uint64_t rangeBuilds = 0;           ///< macrocell-range builds (all channels)
   uint64_t majorantChannelBuilds = 0; ///< per-channel majorant builds
-  uint64_t imageDownloads = 0;    ///< accumulated images copied to the host
-  double lastMajorantMs = 0.0;    ///< GPU time of the last majorant rebuild (all channels it touched)
-  double lastRangeMs = 0.0;       ///< GPU time of the last range build
+  uint64_t imageDownloads = 0;        ///< accumulated images copied to the host
+  double lastMajorantMs = 0.0;        ///< GPU time of the last majorant rebuild (all channels it touched)
+  double lastRangeMs = 0.0;           ///< GPU time of the last range build
 };
 
 /**
