@@ -7,6 +7,7 @@
 #   dense     the paper stage's frame rates with opacities 8x denser
 #   macrocell frame rate against macrocell size (paper Fig. 8), CUDA and CPU
 #   channels  frame rate against channel count 1..16 (paper Fig. 9), CUDA and CPU
+#   rebuild   GPU majorant rebuild after one transfer-function change
 #   block     render-kernel block shapes (NYX-like)
 #   profile   Nsight Compute on the render kernel of the slowest paper case
 # Usage: bash Benchmarks/gpu/bench.sh [build-dir] stage...   (results under $OUT)
@@ -66,6 +67,15 @@ for stage in "$@"; do
         --warmup 10 --frames 100 --channel-counts 1,2,3,4,5,6,7,8,9,10,11,12,13,14,15,16 --sections channels
       run channels-cpu --backend cpu --dataset cosmology --dims 512 512 512 --label NYX-like --size 1024 1024 \
         --warmup 1 --frames 3 --channel-counts 1,2,4,8,12,16 --sections channels
+      ;;
+    rebuild)
+      # One channel's transfer function changes: GPU majorant rebuild time.
+      for s in "${sets[@]}"; do
+        read -r key ds x y z ch label <<< "$s"
+        run "rebuild-$key" --backend cuda --dataset "$ds" --dims "$x" "$y" "$z" --channels "$ch" --label "$label" \
+          --sections rebuild
+        echo "$label: $(grep -E '^\| 1 \|' "$out/rebuild-$key.md")"
+      done
       ;;
     block)
       for bs in "8 8" "16 8" "32 4" "16 16" "32 8"; do
