@@ -16,6 +16,7 @@ cmake -S "$top" -B "$b" -DMCVOL_CORE_ONLY=ON -DCMAKE_BUILD_TYPE=Release \
 cmake --build "$b" -j"$(nproc)" > "$out/build.log" 2>&1 || { grep -E "error" -A5 "$out/build.log" | head -60; exit 1; }
 echo "build ok"
 (cd "$b" && ctest -j8 --output-on-failure > "$out/ctest.log" 2>&1); rc=$?
+(cd "$b" && ctest -L cuda -V > "$out/ctest-cuda-verbose.log" 2>&1)
 tail -15 "$out/ctest.log"
 grep -E "same seed|Failure|Expected|Which is|differ" "$out/ctest.log" | head -40
 if [ "${SANITIZE:-1}" = 1 ]; then

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 
+#include "mcvol/Blend.h"
 #include "mcvol/DDA.h"
 #include "mcvol/Random.h"
 #include "mcvol/Sampling.h"
@@ -38,8 +39,7 @@ struct Hit
 template <BlendMode Mode>
 MCVOL_HOT bool realCollision(const SceneView& s, int n, Vec3f p, float xiMaj, Vec3f& rgb, RayCounters& c)
 {
-  TFSample own = lookupTF(s.tables, n, sampleChannel(s.volume, n, p));
-  own.sigma = minf(own.sigma, s.sigmaLimit);
+  const TFSample own = channelOptics(s, n, p);
   ++c.samples;
   // Cheap rejection first: the effective extinction never exceeds sigma_n.
   if (!(xiMaj < own.sigma))
@@ -61,10 +61,9 @@ MCVOL_HOT bool realCollision(const SceneView& s, int n, Vec3f p, float xiMaj, Ve
     {
       continue;
     }
-    TFSample other = lookupTF(s.tables, k, sampleChannel(s.volume, k, p));
-    other.sigma = minf(other.sigma, s.sigmaLimit);
+    const TFSample other = channelOptics(s, k, p);
     ++c.samples;
-    if (other.sigma > own.sigma || (other.sigma == own.sigma && k < n))
+    if (outranks(other.sigma, k, own.sigma, n))
     {
       return false;
     }

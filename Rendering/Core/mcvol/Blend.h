@@ -1,0 +1,87 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#pragma once
+
+#include "mcvol/Sampling.h"
+
+namespace mcvol
+{
+/**
+ * The blend modes' optical model at one point, shared by the Monte Carlo
+ * trackers (Tracking.h) and the ray marcher (RayMarch.h), so that each Monte
+ * Carlo mode converges to the matching ray-marched image.
+ *
+ * Per channel n the transfer function gives extinction sigma_n and colour c_n.
+ * - Density (Eq. 6/7): sigma = sum_n sigma_n, emission sum_n sigma_n c_n / sigma.
+ * - Max (Eq. 8/9): only the channel of largest extinction exists: sigma =
+ *   max_n sigma_n, emission its colour.
+ * - Mix (Eq. 8/10): sigma = max_n sigma_n, emission sum_n w_n sigma_n c_n / sigma.
+ * - Composite: each channel alone (the caller renders them separately).
+ */
+
+/// True if channel k (extinction sk) takes precedence over channel n
+/// (extinction sn) in max and mix blending: larger extinction wins, ties go
+/// to the lower channel index (so equal channels never both vanish).
+MCVOL_HOT bool outranks(float sk, int k, float sn, int n)
+{
+  return sk > sn || (sk == sn && k < n);
+}
+
+/// One channel's transfer-function sample at p (extinction clamped to the
+/// render's limit, as the trackers clamp it).
+MCVOL_HOT TFSample channelOptics(const SceneView& s, int n, Vec3f p)
+{
+  TFSample t = lookupTF(s.tables, n, sampleChannel(s.volume, n, p));
+  t.sigma = minf(t.sigma, s.sigmaLimit);
+  return t;
+}
+
+/// Extinction and emitted colour (not premultiplied) of the blend at p over
+/// the listed channels.
+struct PointOptics
+{
+  float sigma = 0.f;
+  Vec3f emission;
+};
+
+template <BlendMode Mode>
+MCVOL_HOT PointOptics blendedOptics(const SceneView& s, const int* channels, int count, Vec3f p)
+{
+  PointOptics out;
+  Vec3f weighted; // sum of (weight) sigma_n c_n
+  float best = -1.f;
+  int bestChannel = -1;
+  Vec3f bestColour;
+  for (int i = 0; i < count; ++i)
+  {
+    const int n = channels[i];
+    const TFSample t = channelOptics(s, n, p);
+    if (Mode == BlendMode::Density || Mode == BlendMode::Composite)
+    {
+      out.sigma += t.sigma;
+      weighted += t.rgb * t.sigma;
+      continue;
+    }
+    if (bestChannel < 0 || outranks(t.sigma, n, best, bestChannel))
+    {
+      best = t.sigma;
+      bestChannel = n;
+      bestColour = t.rgb;
+    }
+    if (Mode == BlendMode::Mix)
+    {
+      weighted += t.rgb * (t.sigma * s.blend.mixWeights[n]);
+    }
+  }
+  if (Mode == BlendMode::Density || Mode == BlendMode::Composite)
+  {
+    out.emission = out.sigma > 0.f ? weighted * (1.f / out.sigma) : Vec3f();
+    return out;
+  }
+  out.sigma = best > 0.f ? best : 0.f;
+  if (out.sigma > 0.f)
+  {
+    out.emission = Mode == BlendMode::Max ? bestColour : weighted * (1.f / out.sigma);
+  }
+  return out;
+}
+} // namespace mcvol

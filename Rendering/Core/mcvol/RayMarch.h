@@ -1,0 +1,321 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#pragma once
+
+#include "mcvol/Blend.h"
+#include "mcvol/DDA.h"
+#include "mcvol/Random.h"
+#include "mcvol/RayGen.h"
+
+#include <cstdint>
+
+namespace mcvol
+{
+/**
+ * Deterministic ray marching over the same channels, transfer functions and
+ * blend modes as the Monte Carlo trackers: the reference their images are
+ * measured against.
+ *
+ * Two compositing models (Kraus and Buerger, Sections 3.2 and 3.3):
+ * - Extinction: at each sample the channels' extinctions are interpolated
+ *   (post-classification, as the trackers see them) and combined by the blend
+ *   mode (Blend.h); the step's opacity is exactly 1 - exp(-sigma d) (Eq. 22)
+ *   and its premultiplied colour emission * alpha (Eq. 23). This is the
+ *   quantity Woodcock tracking estimates: as d -> 0 both converge to the same
+ *   image.
+ * - Opacity: classic opacity-based sampling. Each voxel's opacity for the
+ *   step d is taken from its transfer-function opacity (for the unit distance
+ *   u) with the opacity correction 1 - (1 - a)^(d/u) (Eq. 16, here via the
+ *   table's extinction), its opacity-weighted colour c * alpha (Eq. 17); the
+ *   opacities and opacity-weighted colours are interpolated between voxels
+ *   (pre-classification) and the channels combined as in Eq. 11 and 15
+ *   (density: summed, opacity clamped to 1; max: the channel of largest
+ *   opacity; mix: largest opacity, weighted opacity-weighted colours). It
+ *   converges only as d -> 0 and shows the artifacts the paper describes.
+ *
+ * Samples lie on the lattice t_k = (k + phase) d along each ray (phase 0.5,
+ * the midpoint rule, or a per-pixel hash with jitter). Macrocells whose
+ * majorants are 0 for every channel are skipped without changing the result
+ * (every voxel a point there can read is transparent, in both models). The
+ * march stops once the transmittance falls below a stated threshold.
+ */
+enum class Compositing : int
+{
+  Extinction = 0,
+  Opacity = 1
+};
+
+struct MarchParams
+{
+  float step = 0.5f;                    ///< world units, > 0
+  float terminateTransmittance = 1e-4f; ///< early ray termination below this
+  bool skipEmpty = true;                ///< skip macrocells with all-zero majorants
+  Compositing compositing = Compositing::Extinction;
+};
+
+struct MarchCounters
+{
+  uint64_t samples = 0;      ///< lattice points evaluated
+  uint64_t skippedCells = 0; ///< macrocells skipped as empty
+  uint64_t terminated = 0;   ///< rays stopped by the transmittance threshold
+};
+
+/// Opacity and premultiplied colour of one step.
+struct StepOptics
+{
+  float alpha = 0.f;
+  Vec3f colour; ///< premultiplied
+};
+
+/// The 8 trilinear corners of p (or the nearest voxel, weight 1): voxel
+/// indices and weights, clamped to the grid exactly as sampleChannel() does.
+struct Corners
+{
+  int64_t index[8];
+  float weight[8];
+  int count = 0;
+};
+
+MCVOL_HOT Corners cornersOf(const VolumeView& vol, Vec3f p)
+{
+  Corners c;
+  if (vol.nearest)
+  {
+    int64_t v = 0;
+    int64_t stride = 1;
+    for (int a = 0; a < 3; ++a)
+    {
+      const int i = int(clampf(p[a], 0.f, float(vol.dims[a] - 1)) + 0.5f);
+      v += stride * int64_t(i < vol.dims[a] ? i : vol.dims[a] - 1);
+      stride *= vol.dims[a];
+    }
+    c.index[0] = v;
+    c.weight[0] = 1.f;
+    c.count = 1;
+    return c;
+  }
+  int i0[3];
+  int i1[3];
+  float f[3];
+  for (int a = 0; a < 3; ++a)
+  {
+    const float x = clampf(p[a], 0.f, float(vol.dims[a] - 1));
+    int i = int(x);
+    if (i > vol.dims[a] - 2)
+    {
+      i = vol.dims[a] - 2 < 0 ? 0 : vol.dims[a] - 2;
+    }
+    i0[a] = i;
+    i1[a] = vol.dims[a] > 1 ? i + 1 : i;
+    f[a] = vol.dims[a] > 1 ? x - float(i) : 0.f;
+  }
+  const int64_t sy = vol.dims[0];
+  const int64_t sz = int64_t(vol.dims[0]) * vol.dims[1];
+  for (int k = 0; k < 8; ++k)
+  {
+    const int bx = k & 1, by = (k >> 1) & 1, bz = (k >> 2) & 1;
+    c.index[k] = (bx ? i1[0] : i0[0]) + (by ? i1[1] : i0[1]) * sy + (bz ? i1[2] : i0[2]) * sz;
+    c.weight[k] = (bx ? f[0] : 1.f - f[0]) * (by ? f[1] : 1.f - f[1]) * (bz ? f[2] : 1.f - f[2]);
+  }
+  c.count = 8;
+  return c;
+}
+
+/// Opacity-based sampling of channel n at the corners: interpolated step
+/// opacity and opacity-weighted colour. A NaN voxel among the corners makes
+/// the channel transparent at p (the core's NaN rule).
+MCVOL_HOT StepOptics opacitySample(const SceneView& s, int n, const Corners& c, float step)
+{
+  StepOptics o;
+  for (int k = 0; k < c.count; ++k)
+  {
+    const float v = fetchVoxel(s.volume.channels[n], c.index[k]);
+    if (!(v == v))
+    {
+      return StepOptics();
+    }
+    const TFSample t = lookupTF(s.tables, n, v);
+    const float a = -expm1f(-minf(t.sigma, s.sigmaLimit) * step); // 1 - (1 - a_u)^(d/u)
+    o.alpha += c.weight[k] * a;
+    o.colour += t.rgb * (c.weight[k] * a);
+  }
+  return o;
+}
+
+/// One step's optics at p over the listed channels.
+template <BlendMode Mode>
+MCVOL_HOT StepOptics stepOptics(const SceneView& s, const MarchParams& mp, const int* channels, int count, Vec3f p)
+{
+  StepOptics out;
+  if (mp.compositing == Compositing::Extinction)
+  {
+    const PointOptics po = blendedOptics<Mode>(s, channels, count, p);
+    if (po.sigma > 0.f)
+    {
+      out.alpha = -expm1f(-po.sigma * mp.step);
+      out.colour = po.emission * out.alpha;
+    }
+    return out;
+  }
+  const Corners c = cornersOf(s.volume, p);
+  float best = -1.f;
+  int bestChannel = -1;
+  for (int i = 0; i < count; ++i)
+  {
+    const int n = channels[i];
+    const StepOptics o = opacitySample(s, n, c, mp.step);
+    if (Mode == BlendMode::Density || Mode == BlendMode::Composite)
+    {
+      out.alpha += o.alpha;   // Eq. 11
+      out.colour += o.colour; // Eq. 15
+      continue;
+    }
+    if (bestChannel < 0 || outranks(o.alpha, n, best, bestChannel))
+    {
+      best = o.alpha;
+      bestChannel = n;
+      if (Mode == BlendMode::Max)
+      {
+        out.colour = o.colour;
+      }
+    }
+    if (Mode == BlendMode::Mix)
+    {
+      out.colour += o.colour * s.blend.mixWeights[n];
+    }
+  }
+  if (Mode == BlendMode::Density || Mode == BlendMode::Composite)
+  {
+    if (out.alpha > 1.f)
+    {
+      out.colour = out.colour * (1.f / out.alpha);
+      out.alpha = 1.f;
+    }
+    return out;
+  }
+  out.alpha = best > 0.f ? best : 0.f;
+  if (!(out.alpha > 0.f))
+  {
+    out.colour = Vec3f();
+  }
+  return out;
+}
+
+/// Front-to-back march over [0, tmax] with the listed channels; premultiplied
+/// RGB and alpha.
+template <BlendMode Mode>
+MCVOL_HOT Vec4f marchChannels(const SceneView& s, const MarchParams& mp, const int* channels, int count, Vec3f o,
+  Vec3f d, float tmax, float phase, MarchCounters& mc)
+{
+  Vec4f out;
+  if (count == 0 || !(tmax > 0.f))
+  {
+    return out;
+  }
+  float T = 1.f;
+  Vec3f C;
+  const int N = s.grid.numChannels;
+  DDA dda;
+  dda.init(s.grid, o, d, 0.f, tmax);
+  // The next lattice index to evaluate, carried across cells so that every
+  // sample is taken exactly once whatever the cell boundaries' rounding.
+  int64_t k = 0;
+  bool stop = false;
+  while (!dda.done && !stop)
+  {
+    bool empty = mp.skipEmpty;
+    if (empty)
+    {
+      const float* maj = s.grid.majorants + dda.cellIndex() * N;
+      for (int i = 0; i < count && empty; ++i)
+      {
+        empty = !(minf(maj[channels[i]], s.sigmaLimit) > 0.f);
+      }
+    }
+    if (empty)
+    {
+      // Jump over the cell's samples (at or before the first one past it).
+      const float kEnd = floorf(dda.t1 / mp.step - phase);
+      if (kEnd > float(k))
+      {
+        k = int64_t(kEnd);
+      }
+    }
+    while (true)
+    {
+      const float t = (float(k) + phase) * mp.step;
+      if (!(t < dda.t1))
+      {
+        break;
+      }
+      if (!empty)
+      {
+        const StepOptics so = stepOptics<Mode>(s, mp, channels, count, o + d * t);
+        ++mc.samples;
+        C += so.colour * T;
+        T *= 1.f - so.alpha;
+        if (T < mp.terminateTransmittance)
+        {
+          ++mc.terminated;
+          stop = true;
+          break;
+        }
+      }
+      ++k;
+    }
+    if (empty)
+    {
+      ++mc.skippedCells;
+    }
+    dda.next();
+  }
+  out.r = C.x;
+  out.g = C.y;
+  out.b = C.z;
+  out.a = 1.f - T;
+  return out;
+}
+
+/// Phase of a pixel's sample lattice: 0.5 (midpoint rule), or with jitter a
+/// hash of (pixel, seed) in [0, 1) (deterministic: same image every time).
+MCVOL_FUNC float marchPhase(bool jitter, uint32_t pixel, uint32_t seed)
+{
+  if (!jitter)
+  {
+    return 0.5f;
+  }
+  Rng r(pixel, 0xFFFFFFFFu, seed);
+  return r.next();
+}
+
+/**
+ * The reference image of one pixel (ray through its centre): premultiplied
+ * RGBA. Post-render composite marches each channel alone and adds the
+ * results (alpha 1 - prod(1 - alpha_n)), as the Monte Carlo composite does.
+ */
+template <BlendMode Mode>
+MCVOL_FUNC Vec4f marchPixel(const SceneView& s, const CameraView& cam, const MarchParams& mp, int x, int y, float depth,
+  float phase, MarchCounters& mc)
+{
+  IndexRay ray;
+  if (!generateRay(cam, s.volume, float(x) + 0.5f, float(y) + 0.5f, depth, ray))
+  {
+    return Vec4f();
+  }
+  if (Mode != BlendMode::Composite)
+  {
+    return marchChannels<Mode>(s, mp, s.active, s.numActive, ray.o, ray.d, ray.tmax, phase, mc);
+  }
+  Vec4f sum;
+  float clear = 1.f;
+  for (int i = 0; i < s.numActive; ++i)
+  {
+    const Vec4f v = marchChannels<BlendMode::Composite>(s, mp, s.active + i, 1, ray.o, ray.d, ray.tmax, phase, mc);
+    sum.r += v.r;
+    sum.g += v.g;
+    sum.b += v.b;
+    clear *= 1.f - v.a;
+  }
+  sum.a = 1.f - clear;
+  return sum;
+}
+} // namespace mcvol
