@@ -28,6 +28,7 @@ endforeach ()
 
 set(classes
   vtkMultiChannelDemoSource
+  vtkMultiChannelRayMarchMapper
   vtkMultiChannelVolumeMapper)
 list(TRANSFORM classes PREPEND "${_mcvol_rendering_dir}/")
 

@@ -236,6 +236,33 @@ const char* vtkMultiChannelVolumeMapper::GetBackendAsString()
 }
 
 //------------------------------------------------------------------------------
+bool vtkMultiChannelVolumeMapper::TraceImage(const mcvol::Scene& scene, const mcvol::Camera& camera,
+  const float* depth, mcvol::Renderer& renderer, mcvol::Accumulator& accum, std::string& error)
+{
+  mcvol::RenderSettings settings;
+  settings.samplesPerPixel = this->SamplesPerPixel;
+  settings.seed = this->Seed;
+  settings.tracker = this->TrackingMethod == N_DDA ? mcvol::Tracker::NDDA : mcvol::Tracker::OneDDA;
+  settings.jitterPixels = this->PixelJitter;
+  try
+  {
+    renderer.render(scene, camera, settings, depth, accum);
+  }
+  catch (const std::exception& e)
+  {
+    error = e.what();
+    return false;
+  }
+  return true;
+}
+
+//------------------------------------------------------------------------------
+bool vtkMultiChannelVolumeMapper::NeedsHostGrids(const mcvol::Renderer& renderer)
+{
+  return !renderer.buildsAccelerationOnDevice();
+}
+
+//------------------------------------------------------------------------------
 const char* vtkMultiChannelVolumeMapper::GetActiveBackendName()
 {
   vtkInternals& in = *this->Internals;
@@ -776,7 +803,7 @@ void vtkMultiChannelVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
   {
     // A device backend builds macrocells and majorants itself from its own
     // copy of the data; the host then spends neither time nor memory on them.
-    in.Scene.setHostAcceleration(!in.Renderer->buildsAccelerationOnDevice());
+    in.Scene.setHostAcceleration(this->NeedsHostGrids(*in.Renderer));
     bool volumeChanged =
       !in.VolumeSet || in.Scene.numChannels() != numChannels || !std::equal(dims, dims + 3, in.Scene.dims());
     for (int c = 0; c < numChannels && !volumeChanged; ++c)
@@ -1030,19 +1057,14 @@ void vtkMultiChannelVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
   }
 
   // ---- Trace --------------------------------------------------------------
-  mcvol::RenderSettings settings;
-  settings.samplesPerPixel = this->SamplesPerPixel;
-  settings.seed = this->Seed;
-  settings.tracker = this->TrackingMethod == N_DDA ? mcvol::Tracker::NDDA : mcvol::Tracker::OneDDA;
-  try
   {
-    in.Renderer->render(in.Scene, camera, settings, in.LastDepth.data(), in.Accum);
-  }
-  catch (const std::exception& e)
-  {
-    vtkErrorMacro("Rendering failed: " << e.what());
-    in.HaveKey = false;
-    return;
+    std::string error;
+    if (!this->TraceImage(in.Scene, camera, in.LastDepth.data(), *in.Renderer, in.Accum, error))
+    {
+      vtkErrorMacro("Rendering failed: " << error);
+      in.HaveKey = false;
+      return;
+    }
   }
   this->NumberOfChannels = numChannels;
 
@@ -1113,6 +1135,7 @@ void vtkMultiChannelVolumeMapper::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "TrackingMethod: " << this->GetTrackingMethodAsString() << "\n";
   os << indent << "SamplesPerPixel: " << this->SamplesPerPixel << "\n";
   os << indent << "Seed: " << this->Seed << "\n";
+  os << indent << "PixelJitter: " << this->PixelJitter << "\n";
   os << indent << "MacrocellSize: " << this->MacrocellSize << "\n";
   os << indent << "Backend: " << this->GetBackendAsString() << "\n";
   os << indent

@@ -58,6 +58,17 @@
 #include "vtkVolumeMapper.h"
 
 #include <memory> // For std::unique_ptr
+#include <string> // For std::string
+
+#ifndef __VTK_WRAP__
+namespace mcvol
+{
+class Accumulator;
+struct Camera;
+class Renderer;
+class Scene;
+}
+#endif
 
 class vtkColorTransferFunction;
 class vtkFloatArray;
@@ -144,6 +155,18 @@ public:
    */
   vtkSetMacro(Seed, unsigned int);
   vtkGetMacro(Seed, unsigned int);
+  ///@}
+
+  ///@{
+  /**
+   * Spread each pixel's Monte Carlo samples over the pixel's area
+   * (anti-aliasing; default on). Off, every sample goes through the pixel
+   * centre, as vtkMultiChannelRayMarchMapper's rays do: use it to compare the
+   * two image for image.
+   */
+  vtkSetMacro(PixelJitter, bool);
+  vtkGetMacro(PixelJitter, bool);
+  vtkBooleanMacro(PixelJitter, bool);
   ///@}
 
   ///@{
@@ -302,10 +325,25 @@ protected:
   vtkMultiChannelVolumeMapper();
   ~vtkMultiChannelVolumeMapper() override;
 
+#ifndef __VTK_WRAP__
+  /**
+   * Traces one render into `accum`, which was reset to zero samples whenever
+   * the image changed. The Monte Carlo mapper adds SamplesPerPixel samples
+   * with the chosen backend; vtkMultiChannelRayMarchMapper replaces it with
+   * the deterministic ray march. Returns false and sets `error` on failure.
+   */
+  virtual bool TraceImage(const mcvol::Scene& scene, const mcvol::Camera& camera, const float* depth,
+    mcvol::Renderer& renderer, mcvol::Accumulator& accum, std::string& error);
+  /// Whether the Scene must build its macrocell grids on the host (a
+  /// backend that builds them on the device does not need them).
+  virtual bool NeedsHostGrids(const mcvol::Renderer& renderer);
+#endif
+
   int ChannelBlendMode = MC_DENSITY_BLEND;
   int TrackingMethod = ONE_DDA;
   int SamplesPerPixel = 1;
   unsigned int Seed = 0;
+  bool PixelJitter = true;
   int MacrocellSize = 8;
   int Backend = BACKEND_AUTO;
   int NumberOfChannels = 0;

@@ -38,6 +38,8 @@ DEMO_NAMES = ("figure3", "microscopy", "cosmology", "weather")
 BLEND_MODES = ("density", "max", "mix", "composite")
 TRACKING = ("1-dda", "n-dda")
 BACKENDS = ("auto", "cpu", "cuda")
+RENDERERS = ("montecarlo", "raymarch")
+COMPOSITING = ("extinction", "opacity")
 # Types the mapper reads in place (VTK type names as GetDataTypeAsString gives them).
 SUPPORTED_TYPES = ("unsigned char", "short", "unsigned short", "float", "double")
 MAX_CHANNELS = 32
@@ -250,6 +252,10 @@ TOP_KEYS = {
     "background",
     "seed",
     "macrocell_size",
+    "renderer",
+    "step",
+    "compositing",
+    "pixel_jitter",
 }
 CHANNEL_KEYS = {
     "name",
@@ -432,6 +438,18 @@ def parse_scene(data, scene_dir, presets):
         if "macrocell_size" in data
         else 8
     )
+    s["renderer"] = get_string(data["renderer"], "renderer", RENDERERS) if "renderer" in data else "montecarlo"
+    s["step"] = get_number(data["step"], "step", lo=0.0, hi=1e300) if "step" in data else 0.0
+    s["step_voxels"] = None
+    s["compositing"] = (
+        get_string(data["compositing"], "compositing", COMPOSITING) if "compositing" in data else "extinction"
+    )
+    if "pixel_jitter" in data:
+        if not isinstance(data["pixel_jitter"], bool):
+            raise SceneError("pixel_jitter", "expected true or false, got %s" % json.dumps(data["pixel_jitter"]))
+        s["pixel_jitter"] = data["pixel_jitter"]
+    else:
+        s["pixel_jitter"] = True
     return s
 
 
@@ -757,14 +775,15 @@ def render(scene, args, errors, log):
         vtkWindowToImageFilter,
     )
 
-    from mcvol import vtkMultiChannelVolumeMapper
+    from mcvol import vtkMultiChannelRayMarchMapper, vtkMultiChannelVolumeMapper
 
     need_arrays = any("array" in ch for ch in scene.get("channels", []))
     image, demo = load_input(scene["input"], errors, need_arrays)
     channels = resolve_channels(scene, image, demo)
     tfs = build_transfer_functions(channels, demo)
 
-    mapper = errors.watch(vtkMultiChannelVolumeMapper())
+    reference = scene["renderer"] == "raymarch"
+    mapper = errors.watch(vtkMultiChannelRayMarchMapper() if reference else vtkMultiChannelVolumeMapper())
     render_image = arrange_channels(image, channels, mapper)
     mapper.SetInputData(render_image)
     prop = vtkVolumeProperty()
@@ -792,9 +811,21 @@ def render(scene, args, errors, log):
     ]()
     mapper.SetSeed(scene["seed"])
     mapper.SetMacrocellSize(scene["macrocell_size"])
+    mapper.SetPixelJitter(scene["pixel_jitter"])
     total = scene["samples_per_pixel"]
     per_render = samples_per_render(total, scene["samples_per_render"])
     mapper.SetSamplesPerPixel(per_render)
+    if reference:
+        # One deterministic image: the ray march through pixel centres.
+        total = per_render = 1
+        step = scene["step"]
+        if scene["step_voxels"] is not None:
+            spacing = [abs(x) for x in render_image.GetSpacing()]
+            step = scene["step_voxels"] * min(spacing)
+        mapper.SetStepSize(step)
+        mapper.SetCompositingModel(
+            mapper.OPACITY_COMPOSITING if scene["compositing"] == "opacity" else mapper.EXTINCTION_COMPOSITING
+        )
 
     volume = vtkVolume()
     volume.SetMapper(mapper)
@@ -861,21 +892,15 @@ def render(scene, args, errors, log):
             write_pfm(args.raw, w, h, 3, values[:, :3] + bg[None, :] * (1.0 - alpha[:, None]))
         if args.raw_alpha:
             write_pfm(args.raw_alpha, w, h, 1, alpha)
+    if reference:
+        method = "ray march, step %g (%s compositing, %d samples)" % (
+            mapper.GetLastStepSize(), scene["compositing"], mapper.GetLastSampleCount())
+        backend = "CPU"
+    else:
+        method = "%d spp (%d per render), %s" % (total, per_render, scene["tracking"])
     log(
-        "%s: %d spp (%d per render) at %dx%d, %d channel(s), %s blend, %s, %s: %.2f s -> %s"
-        % (
-            PROG,
-            total,
-            per_render,
-            w,
-            h,
-            len(channels),
-            scene["blend"],
-            scene["tracking"],
-            backend,
-            seconds,
-            args.output,
-        )
+        "%s: %s at %dx%d, %d channel(s), %s blend, %s: %.2f s -> %s"
+        % (PROG, method, w, h, len(channels), scene["blend"], backend, seconds, args.output)
     )
 
 
@@ -925,8 +950,29 @@ def main(argv=None):
     parser.add_argument("--spp", type=parse_spp, help="total samples per pixel (overrides samples_per_pixel)")
     parser.add_argument("--size", type=parse_size, metavar="WxH", help="image size (overrides image_size)")
     parser.add_argument("--backend", choices=BACKENDS, help="overrides backend")
+    parser.add_argument(
+        "--reference",
+        action="store_true",
+        help="render with the ray-marching reference (vtkMultiChannelRayMarchMapper) instead of Monte Carlo",
+    )
+    step = parser.add_mutually_exclusive_group()
+    step.add_argument("--step", type=float, metavar="S", help="ray-marching step in world units (0 = Nyquist)")
+    step.add_argument(
+        "--step-voxels", type=float, metavar="V", help="ray-marching step in units of the smallest voxel spacing"
+    )
+    parser.add_argument("--compositing", choices=COMPOSITING, help="ray-marching compositing model")
+    parser.add_argument(
+        "--no-pixel-jitter",
+        action="store_true",
+        help="Monte Carlo samples through pixel centres (as the reference) instead of over the pixel area",
+    )
     parser.add_argument("--quiet", action="store_true", help="print nothing on success")
     args = parser.parse_args(argv)
+    for opt, v in (("--step", args.step), ("--step-voxels", args.step_voxels)):
+        if v is not None and not (v >= 0.0 and v < float("inf")):
+            parser.error("%s: expected a finite number >= 0, got %s" % (opt, v))
+    if args.step_voxels is not None and args.step_voxels == 0.0:
+        parser.error("--step-voxels: must be > 0 (use --step 0 for the Nyquist rate)")
 
     for opt, fn in (("-o", args.output), ("--raw", args.raw), ("--raw-alpha", args.raw_alpha)):
         if fn is None:
@@ -959,6 +1005,16 @@ def main(argv=None):
             scene["image_size"] = args.size
         if args.backend is not None:
             scene["backend"] = args.backend
+        if args.reference:
+            scene["renderer"] = "raymarch"
+        if args.step is not None:
+            scene["step"] = args.step
+        if args.step_voxels is not None:
+            scene["step_voxels"] = args.step_voxels
+        if args.compositing is not None:
+            scene["compositing"] = args.compositing
+        if args.no_pixel_jitter:
+            scene["pixel_jitter"] = False
         render(scene, args, ErrorCollector(), log)
     except SceneError as e:
         print("%s: %s: %s" % (name, e.key or "(top level)", e.message), file=sys.stderr)

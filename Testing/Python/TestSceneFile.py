@@ -164,6 +164,45 @@ def main():
         if outs[0] is not None and outs[1] is not None:
             t.check(np.array_equal(outs[0], outs[1]), "two renders of %s differ" % scenes[0])
 
+    # The ray-marching reference from the command line and from the scene
+    # file: one deterministic image, close to a Monte Carlo render of the
+    # same scene through pixel centres.
+    if scenes:
+        ref_out = os.path.join(work, "reference.png")
+        r = run(program, [scenes[0], "-o", ref_out, "--size", "48x48", "--reference", "--step-voxels", "0.5",
+                          "--raw", os.path.join(work, "reference.pfm")])
+        t.check(r.returncode == 0 and "ray march, step" in r.stderr, "--reference: %d %r" % (r.returncode, r.stderr))
+        r2 = run(program, [scenes[0], "-o", os.path.join(work, "reference2.png"), "--size", "48x48", "--reference",
+                           "--step-voxels", "0.5", "--quiet"])
+        t.check(r2.returncode == 0, "--reference again: %r" % r2.stderr)
+        t.check(np.array_equal(read_png(ref_out), read_png(os.path.join(work, "reference2.png"))),
+                "the reference image is deterministic")
+        r = run(program, [scenes[0], "-o", os.path.join(work, "mc.png"), "--size", "48x48", "--spp", "256",
+                          "--no-pixel-jitter", "--backend", "cpu", "--raw", os.path.join(work, "mc.pfm"), "--quiet"])
+        t.check(r.returncode == 0, "--no-pixel-jitter: %r" % r.stderr)
+        if r.returncode == 0:
+            ref = read_pfm(os.path.join(work, "reference.pfm"))
+            mc = read_pfm(os.path.join(work, "mc.pfm"))
+            rmse = float(np.sqrt(((ref - mc) ** 2).mean()))
+            # 256 spp leave a noise of a few hundredths; a different scene,
+            # camera or blend mode would differ by tenths.
+            t.check(rmse < 0.05, "reference and Monte Carlo renders differ: RMSE %.4f" % rmse)
+        with open(scenes[0]) as f:
+            data = json.load(f)
+        if isinstance(data.get("input"), str):  # relative to the scene's folder
+            data["input"] = os.path.join(os.path.dirname(os.path.abspath(scenes[0])), data["input"])
+        data.update({"renderer": "raymarch", "step": 0.0, "compositing": "opacity"})
+        fn = os.path.join(work, "reference-scene.json")
+        with open(fn, "w") as f:
+            json.dump(data, f)
+        r = run(program, [fn, "-o", os.path.join(work, "ref-scene.png"), "--size", "32x32"])
+        t.check(r.returncode == 0 and "opacity compositing" in r.stderr, "renderer key: %d %r" % (r.returncode, r.stderr))
+        data.update({"renderer": "raytrace"})
+        with open(fn, "w") as f:
+            json.dump(data, f)
+        r = run(program, [fn, "-o", os.path.join(work, "ref-bad.png"), "--size", "32x32"])
+        t.check(r.returncode == 2 and "renderer:" in r.stderr, "bad renderer: %d %r" % (r.returncode, r.stderr))
+
     # Bad scenes: status 2, the key named, no traceback, no image.
     bad_dir = os.path.join(work, "bad")
     os.makedirs(bad_dir, exist_ok=True)

@@ -1,0 +1,324 @@
+// SPDX-License-Identifier: BSD-3-Clause
+//
+// mcvol-accuracy: renders the images of the accuracy-versus-time study for
+// one dataset and blend mode (VTK-free; Benchmarks/accuracy_study.py runs it
+// for every dataset and mode and scores the images):
+//   reference.f32        ray march, extinction model, --ref-step voxels
+//   reference_mc.f32     Monte Carlo (1-DDA) at --ref-spp, the cross-check
+//   mc_<tracker>_<spp>.f32  progressive Monte Carlo, spp = 1, 2, 4, ... --spp-max
+//   rm_<model>_<step>.f32   ray march at each --steps (voxels), both models
+//   timings.csv          method,variant,param,ms (MC: cumulative render time)
+// Images are W x H premultiplied RGBA float32, rows from the bottom. Monte
+// Carlo samples pixel centres (no pixel jitter) like the ray marcher, so both
+// estimate the same image.
+
+#include "mcvol/CameraMath.h"
+#include "mcvol/DemoData.h"
+#include "mcvol/RayMarcher.h"
+#include "mcvol/Renderer.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+namespace
+{
+using Clock = std::chrono::steady_clock;
+
+double msSince(Clock::time_point t0)
+{
+  return 1e3 * std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+struct Options
+{
+  std::string dataset = "cosmology";
+  std::array<int, 3> dims = { 0, 0, 0 };
+  std::string blend = "density";
+  int width = 256;
+  int height = 256;
+  std::string out = ".";
+  int sppMax = 1024;
+  std::vector<double> steps = { 4, 2, 1, 0.5, 0.25, 0.125 };
+  double refStep = 1.0 / 16.0;
+  int refSpp = 4096;
+  int macrocell = 8;
+  int reps = 3;
+  mcvol::Backend backend = mcvol::Backend::CPU;
+};
+
+std::vector<double> splitDoubles(const std::string& s)
+{
+  std::vector<double> v;
+  std::stringstream ss(s);
+  std::string item;
+  while (std::getline(ss, item, ','))
+  {
+    v.push_back(std::stod(item));
+  }
+  return v;
+}
+
+Options parse(int argc, char** argv)
+{
+  Options o;
+  for (int i = 1; i < argc; ++i)
+  {
+    const std::string a = argv[i];
+    auto need = [&](int n)
+    {
+      if (i + n >= argc)
+      {
+        throw std::invalid_argument(a + " needs " + std::to_string(n) + " value(s)");
+      }
+    };
+    if (a == "--dataset")
+    {
+      need(1);
+      o.dataset = argv[++i];
+    }
+    else if (a == "--dims")
+    {
+      need(3);
+      for (int k = 0; k < 3; ++k)
+        o.dims[size_t(k)] = std::stoi(argv[++i]);
+    }
+    else if (a == "--blend")
+    {
+      need(1);
+      o.blend = argv[++i];
+    }
+    else if (a == "--size")
+    {
+      need(2);
+      o.width = std::stoi(argv[++i]);
+      o.height = std::stoi(argv[++i]);
+    }
+    else if (a == "--out")
+    {
+      need(1);
+      o.out = argv[++i];
+    }
+    else if (a == "--spp-max")
+    {
+      need(1);
+      o.sppMax = std::stoi(argv[++i]);
+    }
+    else if (a == "--steps")
+    {
+      need(1);
+      o.steps = splitDoubles(argv[++i]);
+    }
+    else if (a == "--ref-step")
+    {
+      need(1);
+      o.refStep = std::stod(argv[++i]);
+    }
+    else if (a == "--ref-spp")
+    {
+      need(1);
+      o.refSpp = std::stoi(argv[++i]);
+    }
+    else if (a == "--macrocell")
+    {
+      need(1);
+      o.macrocell = std::stoi(argv[++i]);
+    }
+    else if (a == "--reps")
+    {
+      need(1);
+      o.reps = std::stoi(argv[++i]);
+    }
+    else if (a == "--backend")
+    {
+      need(1);
+      const std::string b = argv[++i];
+      o.backend = b == "cuda" ? mcvol::Backend::CUDA : mcvol::Backend::CPU;
+    }
+    else
+    {
+      throw std::invalid_argument("unknown option " + a);
+    }
+  }
+  return o;
+}
+
+mcvol::BlendMode blendOf(const std::string& s)
+{
+  if (s == "density")
+    return mcvol::BlendMode::Density;
+  if (s == "max")
+    return mcvol::BlendMode::Max;
+  if (s == "mix")
+    return mcvol::BlendMode::Mix;
+  if (s == "composite")
+    return mcvol::BlendMode::Composite;
+  throw std::invalid_argument("unknown blend mode " + s);
+}
+
+void writeImage(const std::string& path, const mcvol::Accumulator& a)
+{
+  std::ofstream f(path, std::ios::binary);
+  f.write(reinterpret_cast<const char*>(a.rgba()), std::streamsize(sizeof(float) * 4 * a.width() * a.height()));
+  if (!f)
+  {
+    throw std::runtime_error("cannot write " + path);
+  }
+}
+
+std::string stepName(double s)
+{
+  char b[32];
+  std::snprintf(b, sizeof(b), "%g", s);
+  return b;
+}
+} // namespace
+
+int main(int argc, char** argv)
+{
+  Options o;
+  try
+  {
+    o = parse(argc, argv);
+  }
+  catch (const std::exception& e)
+  {
+    std::fprintf(stderr, "mcvol-accuracy: %s\n", e.what());
+    return 2;
+  }
+  try
+  {
+    const mcvol::DemoVolume v = mcvol::makeDemo(o.dataset, o.dims);
+    mcvol::Scene scene;
+    std::vector<mcvol::ChannelSource> src;
+    for (int n = 0; n < v.numChannels(); ++n)
+    {
+      src.push_back(v.source(n));
+    }
+    scene.setVolume(v.dims, v.numChannels(), src.data());
+    for (int n = 0; n < v.numChannels(); ++n)
+    {
+      const std::array<float, 2> r = v.range(n);
+      scene.setTransferFunction(
+        n, mcvol::sampleTransferFunction(v.transferFunctions[size_t(n)], r[0], r[1], 1024, v.spacing[0]));
+    }
+    scene.setMacrocellSize(o.macrocell);
+    scene.setBlendMode(blendOf(o.blend));
+    scene.update();
+    const mcvol::Camera cam = mcvol::orbitCamera(v.dims, v.spacing, o.width, o.height, 30, 20);
+    const double voxel = 2.0 * mcvol::RayMarcher::nyquistStep(cam); // smallest spacing
+    std::vector<std::string> rows = { "method,variant,param,ms" };
+    auto row = [&](const std::string& m, const std::string& var, double p, double ms)
+    {
+      std::ostringstream s;
+      s << m << "," << var << "," << p << "," << ms;
+      rows.push_back(s.str());
+    };
+    int threads = 1;
+#ifdef _OPENMP
+    threads = omp_get_max_threads();
+#endif
+    std::fprintf(stderr, "mcvol-accuracy: %s %dx%dx%d, %s, %dx%d, %d threads\n", o.dataset.c_str(), v.dims[0],
+      v.dims[1], v.dims[2], o.blend.c_str(), o.width, o.height, threads);
+
+    // Reference: fine-step ray march (no early termination).
+    mcvol::RayMarcher marcher;
+    mcvol::Accumulator img;
+    mcvol::MarchSettings ms;
+    ms.terminateTransmittance = 0.f;
+    ms.step = o.refStep * voxel;
+    auto t0 = Clock::now();
+    marcher.render(scene, cam, ms, nullptr, img);
+    row("reference", "raymarch", o.refStep, msSince(t0));
+    writeImage(o.out + "/reference.f32", img);
+
+    // Monte Carlo: cross-check at refSpp, then the progressive series.
+    std::unique_ptr<mcvol::Renderer> r = mcvol::Renderer::create(o.backend);
+    mcvol::RenderSettings rs;
+    rs.jitterPixels = false;
+    {
+      mcvol::Accumulator acc;
+      rs.seed = 999;
+      rs.samplesPerPixel = 64;
+      t0 = Clock::now();
+      while (int(acc.samples()) < o.refSpp)
+      {
+        r->render(scene, cam, rs, nullptr, acc);
+      }
+      row("reference", "montecarlo", o.refSpp, msSince(t0));
+      writeImage(o.out + "/reference_mc.f32", acc);
+    }
+    for (auto t : { mcvol::Tracker::OneDDA, mcvol::Tracker::NDDA })
+    {
+      const std::string name = t == mcvol::Tracker::OneDDA ? "1dda" : "ndda";
+      // Warm-up (threads, caches) on a throw-away image.
+      {
+        mcvol::Accumulator w;
+        rs.samplesPerPixel = 2;
+        rs.tracker = t;
+        r->render(scene, cam, rs, nullptr, w);
+      }
+      mcvol::Accumulator acc;
+      rs.seed = 1;
+      rs.tracker = t;
+      double total = 0;
+      for (int spp = 1; spp <= o.sppMax; spp *= 2)
+      {
+        rs.samplesPerPixel = spp - int(acc.samples());
+        t0 = Clock::now();
+        r->render(scene, cam, rs, nullptr, acc);
+        r->finish();
+        total += msSince(t0);
+        row("montecarlo", name, spp, total);
+        writeImage(o.out + "/mc_" + name + "_" + std::to_string(spp) + ".f32", acc);
+      }
+    }
+
+    // Ray marching at each step, both models (early termination at 1e-4, the
+    // mapper's default); the median of --reps runs.
+    for (auto model : { mcvol::Compositing::Extinction, mcvol::Compositing::Opacity })
+    {
+      const std::string name = model == mcvol::Compositing::Extinction ? "extinction" : "opacity";
+      ms.compositing = model;
+      ms.terminateTransmittance = 1e-4f;
+      for (double s : o.steps)
+      {
+        ms.step = s * voxel;
+        std::vector<double> t;
+        for (int k = 0; k < std::max(1, o.reps); ++k)
+        {
+          t0 = Clock::now();
+          marcher.render(scene, cam, ms, nullptr, img);
+          t.push_back(msSince(t0));
+        }
+        std::sort(t.begin(), t.end());
+        row("raymarch", name, s, t[t.size() / 2]);
+        writeImage(o.out + "/rm_" + name + "_" + stepName(s) + ".f32", img);
+      }
+    }
+    std::ofstream f(o.out + "/timings.csv");
+    for (const auto& l : rows)
+    {
+      f << l << "\n";
+    }
+    std::ofstream m(o.out + "/meta.txt");
+    m << "dataset " << o.dataset << "\ndims " << v.dims[0] << " " << v.dims[1] << " " << v.dims[2] << "\nchannels "
+      << v.numChannels() << "\nblend " << o.blend << "\nsize " << o.width << " " << o.height << "\nthreads " << threads
+      << "\nbackend " << r->name() << "\nvoxel " << voxel << "\n";
+  }
+  catch (const std::exception& e)
+  {
+    std::fprintf(stderr, "mcvol-accuracy: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,84 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "vtkMultiChannelRayMarchMapper.h"
+
+#include "vtkObjectFactory.h"
+
+#include "mcvol/RayMarcher.h"
+#include "mcvol/Renderer.h"
+#include "mcvol/Scene.h"
+
+#include <chrono>
+#include <exception>
+
+vtkStandardNewMacro(vtkMultiChannelRayMarchMapper);
+
+//------------------------------------------------------------------------------
+vtkMultiChannelRayMarchMapper::vtkMultiChannelRayMarchMapper()
+{
+  // The march runs on the CPU; a CPU "backend" keeps the Scene's host grids.
+  this->Backend = BACKEND_CPU;
+}
+
+//------------------------------------------------------------------------------
+vtkMultiChannelRayMarchMapper::~vtkMultiChannelRayMarchMapper() = default;
+
+//------------------------------------------------------------------------------
+const char* vtkMultiChannelRayMarchMapper::GetCompositingModelAsString()
+{
+  return this->CompositingModel == OPACITY_COMPOSITING ? "opacity" : "extinction";
+}
+
+//------------------------------------------------------------------------------
+bool vtkMultiChannelRayMarchMapper::NeedsHostGrids(const mcvol::Renderer&)
+{
+  return true; // the ray marcher skips empty space with the host grids
+}
+
+//------------------------------------------------------------------------------
+bool vtkMultiChannelRayMarchMapper::TraceImage(const mcvol::Scene& scene, const mcvol::Camera& camera,
+  const float* depth, mcvol::Renderer&, mcvol::Accumulator& accum, std::string& error)
+{
+  if (accum.samples() > 0)
+  {
+    // Nothing changed since the image was traced: draw it again.
+    this->LastTraceSeconds = 0.0;
+    return true;
+  }
+  mcvol::MarchSettings ms;
+  ms.step = this->StepSize;
+  ms.jitter = this->Jitter;
+  ms.seed = this->Seed;
+  ms.terminateTransmittance = static_cast<float>(this->TerminationTransmittance);
+  ms.skipEmpty = this->EmptySpaceSkipping;
+  ms.compositing =
+    this->CompositingModel == OPACITY_COMPOSITING ? mcvol::Compositing::Opacity : mcvol::Compositing::Extinction;
+  try
+  {
+    const auto t0 = std::chrono::steady_clock::now();
+    mcvol::RayMarcher marcher;
+    mcvol::MarchCounters counters;
+    this->LastStepSize = mcvol::RayMarcher::effectiveStep(camera, ms);
+    marcher.render(scene, camera, ms, depth, accum, &counters);
+    this->LastSampleCount = static_cast<double>(counters.samples);
+    this->LastSkippedCells = static_cast<double>(counters.skippedCells);
+    this->LastTraceSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  }
+  catch (const std::exception& e)
+  {
+    error = e.what();
+    return false;
+  }
+  return true;
+}
+
+//------------------------------------------------------------------------------
+void vtkMultiChannelRayMarchMapper::PrintSelf(ostream& os, vtkIndent indent)
+{
+  this->Superclass::PrintSelf(os, indent);
+  os << indent << "StepSize: " << this->StepSize << (this->StepSize == 0.0 ? " (Nyquist)" : "") << "\n";
+  os << indent << "LastStepSize: " << this->LastStepSize << "\n";
+  os << indent << "Jitter: " << this->Jitter << "\n";
+  os << indent << "TerminationTransmittance: " << this->TerminationTransmittance << "\n";
+  os << indent << "EmptySpaceSkipping: " << this->EmptySpaceSkipping << "\n";
+  os << indent << "CompositingModel: " << this->GetCompositingModelAsString() << "\n";
+}
