@@ -18,6 +18,8 @@
 #include "mcvol/Renderer.h"
 
 #include <algorithm>
+#include <cmath>
+#include <utility>
 #include <chrono>
 #include <cstdio>
 #include <fstream>
@@ -54,6 +56,7 @@ struct Options
   int macrocell = 8;
   int reps = 3;
   mcvol::Backend backend = mcvol::Backend::CPU;
+  bool scoreOnly = false; ///< no image files: RMSE and PSNR in the CSV instead
 };
 
 std::vector<double> splitDoubles(const std::string& s)
@@ -138,6 +141,10 @@ Options parse(int argc, char** argv)
       need(1);
       o.reps = std::stoi(argv[++i]);
     }
+    else if (a == "--score-only")
+    {
+      o.scoreOnly = true;
+    }
     else if (a == "--backend")
     {
       need(1);
@@ -163,6 +170,25 @@ mcvol::BlendMode blendOf(const std::string& s)
   if (s == "composite")
     return mcvol::BlendMode::Composite;
   throw std::invalid_argument("unknown blend mode " + s);
+}
+
+/// RMSE and PSNR (peak 1) of the premultiplied RGB clipped to [0, 1], as
+/// accuracy_study.py scores images.
+std::pair<double, double> score(const mcvol::Accumulator& a, const std::vector<float>& ref)
+{
+  double se = 0;
+  const size_t P = size_t(a.width()) * size_t(a.height());
+  for (size_t p = 0; p < P; ++p)
+  {
+    for (int c = 0; c < 3; ++c)
+    {
+      const double x = std::min(1.0, std::max(0.0, double(a.rgba()[4 * p + c])));
+      const double y = std::min(1.0, std::max(0.0, double(ref[4 * p + c])));
+      se += (x - y) * (x - y);
+    }
+  }
+  const double mse = se / double(3 * P);
+  return { std::sqrt(mse), mse > 0 ? -10.0 * std::log10(mse) : 300.0 };
 }
 
 void writeImage(const std::string& path, const mcvol::Accumulator& a)
@@ -216,11 +242,23 @@ int main(int argc, char** argv)
     scene.update();
     const mcvol::Camera cam = mcvol::orbitCamera(v.dims, v.spacing, o.width, o.height, 30, 20);
     const double voxel = 2.0 * mcvol::RayMarcher::nyquistStep(cam); // smallest spacing
-    std::vector<std::string> rows = { "method,variant,param,ms" };
-    auto row = [&](const std::string& m, const std::string& var, double p, double ms)
+    std::vector<std::string> rows = { o.scoreOnly ? "method,variant,param,ms,rmse,psnr" : "method,variant,param,ms" };
+    std::vector<float> refImage;
+    // Writes the image (or, with --score-only, scores it) and adds its row.
+    auto emit = [&](const std::string& m, const std::string& var, double p, double ms, const std::string& file,
+                  const mcvol::Accumulator& a)
     {
       std::ostringstream s;
       s << m << "," << var << "," << p << "," << ms;
+      if (o.scoreOnly)
+      {
+        const auto e = score(a, refImage);
+        s << "," << e.first << "," << e.second;
+      }
+      else
+      {
+        writeImage(o.out + "/" + file, a);
+      }
       rows.push_back(s.str());
     };
     int threads = 1;
@@ -238,13 +276,15 @@ int main(int argc, char** argv)
     ms.step = o.refStep * voxel;
     auto t0 = Clock::now();
     marcher.render(scene, cam, ms, nullptr, img);
-    row("reference", "raymarch", o.refStep, msSince(t0));
-    writeImage(o.out + "/reference.f32", img);
+    const double refMs = msSince(t0);
+    refImage.assign(img.rgba(), img.rgba() + size_t(4) * img.width() * img.height());
+    emit("reference", "raymarch", o.refStep, refMs, "reference.f32", img);
 
     // Monte Carlo: cross-check at refSpp, then the progressive series.
     std::unique_ptr<mcvol::Renderer> r = mcvol::Renderer::create(o.backend);
     mcvol::RenderSettings rs;
     rs.jitterPixels = false;
+    rs.readBack = false; // device backends: the copy-back is not part of the timed render
     {
       mcvol::Accumulator acc;
       rs.seed = 999;
@@ -254,8 +294,8 @@ int main(int argc, char** argv)
       {
         r->render(scene, cam, rs, nullptr, acc);
       }
-      row("reference", "montecarlo", o.refSpp, msSince(t0));
-      writeImage(o.out + "/reference_mc.f32", acc);
+      r->readBack(acc);
+      emit("reference", "montecarlo", o.refSpp, msSince(t0), "reference_mc.f32", acc);
     }
     for (auto t : { mcvol::Tracker::OneDDA, mcvol::Tracker::NDDA })
     {
@@ -278,8 +318,8 @@ int main(int argc, char** argv)
         r->render(scene, cam, rs, nullptr, acc);
         r->finish();
         total += msSince(t0);
-        row("montecarlo", name, spp, total);
-        writeImage(o.out + "/mc_" + name + "_" + std::to_string(spp) + ".f32", acc);
+        r->readBack(acc);
+        emit("montecarlo", name, spp, total, "mc_" + name + "_" + std::to_string(spp) + ".f32", acc);
       }
     }
 
@@ -301,8 +341,7 @@ int main(int argc, char** argv)
           t.push_back(msSince(t0));
         }
         std::sort(t.begin(), t.end());
-        row("raymarch", name, s, t[t.size() / 2]);
-        writeImage(o.out + "/rm_" + name + "_" + stepName(s) + ".f32", img);
+        emit("raymarch", name, s, t[t.size() / 2], "rm_" + name + "_" + stepName(s) + ".f32", img);
       }
     }
     std::ofstream f(o.out + "/timings.csv");

@@ -7,6 +7,7 @@
 #   dense     the paper stage's frame rates with opacities 8x denser
 #   macrocell frame rate against macrocell size (paper Fig. 8), CUDA and CPU
 #   channels  frame rate against channel count 1..16 (paper Fig. 9), CUDA and CPU
+#   accuracy  the accuracy study's Monte Carlo series with the CUDA backend
 #   rebuild   GPU majorant rebuild after one transfer-function change
 #   block     render-kernel block shapes (NYX-like)
 #   profile   Nsight Compute on the render kernel of the slowest paper case
@@ -67,6 +68,19 @@ for stage in "$@"; do
         --warmup 10 --frames 100 --channel-counts 1,2,3,4,5,6,7,8,9,10,11,12,13,14,15,16 --sections channels
       run channels-cpu --backend cpu --dataset cosmology --dims 512 512 512 --label NYX-like --size 1024 1024 \
         --warmup 1 --frames 3 --channel-counts 1,2,4,8,12,16 --sections channels
+      ;;
+    accuracy)
+      # The accuracy study's Monte Carlo series on the GPU (scores only; the
+      # reference is the same CPU ray march): merged by accuracy_study.py --gpu.
+      for ds in figure3 microscopy cosmology weather; do
+        for mode in density max mix composite; do
+          mkdir -p "$out/accuracy/$ds-$mode"
+          "$b/bin/mcvol-accuracy" --backend cuda --score-only --dataset "$ds" --blend "$mode" --size 256 256 \
+            --ref-spp 2048 --spp-max 1024 --out "$out/accuracy/$ds-$mode" 2> "$out/accuracy/$ds-$mode/log.txt" \
+            || { echo "accuracy $ds $mode failed"; tail -3 "$out/accuracy/$ds-$mode/log.txt"; }
+        done
+      done
+      grep -h "montecarlo,1dda,1024" "$out"/accuracy/*/timings.csv | head -4
       ;;
     rebuild)
       # One channel's transfer function changes: GPU majorant rebuild time.

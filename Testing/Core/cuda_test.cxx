@@ -220,7 +220,7 @@ TEST(CudaAgreement, SameSeedGlobalSamplingNearlyIdentical)
       }
       const double frac = double(close) / double(a.size() / 4);
       std::printf("same seed, %s %s: %.4f of pixels within 1e-4\n", toString(mode), toString(t), frac);
-      EXPECT_GE(frac, 0.95) << toString(mode) << " " << toString(t);
+      EXPECT_GE(frac, 0.99) << toString(mode) << " " << toString(t); // measured: 1.0000 on an H200
     }
   }
 }
