@@ -70,7 +70,8 @@ def scores(img, ref):
 
 
 def run_tool(binary, dataset, mode, size, work, ref_spp, spp_max):
-    folder = os.path.join(work, "%s-%s" % (dataset, mode))
+    # The cache folder names every option, so a rerun with others re-renders.
+    folder = os.path.join(work, "%s-%s-%d-%d-%d" % (dataset, mode, size, ref_spp, spp_max))
     if os.path.exists(os.path.join(folder, "timings.csv")):
         return folder
     os.makedirs(folder, exist_ok=True)
@@ -172,36 +173,44 @@ def best_within(s, ms):
 def grid_dataset(rows, dataset, size, peers, out):
     """Like the paper's Figure 10, density blending: equal time (each method's
     best image within the time of the ray march at the Nyquist rate) and
-    equal quality (each method's cheapest image reaching that march's PSNR),
-    plus VTK's mappers for comparison (another blend formula)."""
+    equal quality (each method's cheapest image reaching 35 dB), plus VTK's
+    mappers for comparison (another blend formula)."""
     rs = [r for r in rows if r["dataset"] == dataset and r["mode"] == "density"]
     ref = [r for r in rs if r["method"] == "reference" and r["variant"] == "raymarch"][0]
     nyq = [r for r in rs if r["method"] == "raymarch" and r["variant"] == "extinction" and r["param"] == 0.5][0]
-    budget, target = nyq["ms"], min(nyq["psnr"], 45.0)
+    budget, target = nyq["ms"], 35.0
     cols = []
     for label, pick in (("equal time: %.0f ms" % budget, lambda s: best_within(s, budget)),
                         ("equal quality: %.1f dB" % target, lambda s: cheapest_reaching(s, target))):
         for method, variant, name in METHODS:
             r = pick(series(rs, method, variant))
             cols.append((label, name, r))
-    n = len(cols) + 1 + len(peers)
-    fig, axes = plt.subplots(1, n, figsize=(2.3 * n, 2.9))
-    axes[0].imshow(display(load(ref["file"], size, size)))
-    axes[0].set_title("reference\n(RM, 1/16 voxel)", fontsize=7)
-    for ax, (label, name, r) in zip(axes[1:], cols):
-        if r is None:
-            ax.text(0.5, 0.5, "not reached", ha="center", va="center", fontsize=7)
-            ax.set_title("%s\n%s" % (label, name), fontsize=7)
-        else:
+    # Two rows: equal time, then equal quality; the reference and VTK's
+    # mappers (another blend formula: pictured, not scored) in the outer
+    # columns.
+    fig, axes = plt.subplots(2, len(METHODS) + 2, figsize=(2.4 * (len(METHODS) + 2), 5.6))
+    ref_img = display(load(ref["file"], size, size))
+    for row in range(2):
+        axes[row][0].imshow(ref_img)
+        axes[row][0].set_title("reference\n(RM extinction, 1/16 voxel)", fontsize=7)
+        for ax, (label, name, r) in zip(axes[row][1:1 + len(METHODS)], cols[row * len(METHODS):(row + 1) * len(METHODS)]):
+            if r is None:
+                ax.text(0.5, 0.5, "not reached", ha="center", va="center", fontsize=8)
+                ax.set_title("%s\n%s" % (label, name), fontsize=7)
+                continue
             ax.imshow(display(load(r["file"], size, size)))
             param = ("%d spp" % r["param"]) if r["method"] == "montecarlo" else ("step %g" % r["param"])
             ax.set_title("%s\n%s, %s\n%.0f ms, %.1f dB" % (label, name, param, r["ms"], r["psnr"]), fontsize=7)
-    for ax, (name, ms, png) in zip(axes[1 + len(cols):], peers):
-        if png and os.path.exists(png):
-            ax.imshow(plt.imread(png))
-        ax.set_title("VTK %s\n%.0f ms (other blend\nformula: not scored)" % (name, ms), fontsize=7)
-    for ax in axes:
-        ax.axis("off")
+        ax = axes[row][-1]
+        if row < len(peers):
+            name, ms, png = peers[row]
+            if png and os.path.exists(png):
+                ax.imshow(plt.imread(png))
+            ax.set_title("VTK %s mapper\n%.0f ms (its own blend\nformula: not scored)" % (name, ms), fontsize=7)
+    for row in axes:
+        for ax in row:
+            ax.axis("off")
+    fig.suptitle("%s, density blending: equal time (top) and equal quality (bottom)" % dataset, fontsize=9)
     fig.tight_layout()
     fig.savefig(out, dpi=100)
     plt.close(fig)
@@ -257,7 +266,7 @@ def main():
     ap.add_argument("--ref-spp", type=int, default=2048)
     ap.add_argument("--spp-max", type=int, default=1024)
     ap.add_argument("--datasets", default=",".join(DATASETS))
-    ap.add_argument("--no-peers", action="store_true")
+    ap.add_argument("--no-peers", action="store_true", help="do not time VTK's mappers (reuse vtk-peers.csv if present)")
     ap.add_argument("--gpu", default="", help="folder of CUDA Monte Carlo series (<dataset>-<mode>.csv)")
     ap.add_argument("--gpu-label", default="GPU", help="how the plots name the GPU")
     args = ap.parse_args()
@@ -273,7 +282,10 @@ def main():
     global GPU_LABEL
     GPU_LABEL = args.gpu_label
     if args.gpu:
-        rows += load_gpu(args.gpu, datasets)
+        gpu = load_gpu(args.gpu, datasets)
+        if not gpu:
+            sys.exit("accuracy_study.py: --gpu %s: no <dataset>-<mode>.csv series found" % args.gpu)
+        rows += gpu
     with open(os.path.join(args.out, "accuracy.csv"), "w", newline="") as f:
         w = csv.writer(f)
         w.writerow(["dataset", "mode", "method", "variant", "param", "ms", "rmse", "psnr_db", "ssim"])
@@ -281,7 +293,14 @@ def main():
             w.writerow([r["dataset"], r["mode"], r["method"], r["variant"], r["param"], "%.3f" % r["ms"],
                         "%.6f" % r["rmse"], "%.3f" % r["psnr"], "" if math.isnan(r["ssim"]) else "%.5f" % r["ssim"]])
     peers = {}
-    if not args.no_peers:
+    peer_csv = os.path.join(args.out, "vtk-peers.csv")
+    if args.no_peers and os.path.exists(peer_csv):
+        # Reuse the recorded VTK timings and pictures.
+        with open(peer_csv) as f:
+            for r in csv.DictReader(f):
+                png = os.path.join(args.out, "vtk-%s-%s.png" % (r["dataset"], r["mapper"].lower()))
+                peers.setdefault(r["dataset"], []).append((r["mapper"], float(r["ms"]), png))
+    elif not args.no_peers:
         with open(os.path.join(args.out, "vtk-peers.csv"), "w", newline="") as f:
             w = csv.writer(f)
             w.writerow(["dataset", "mapper", "channels", "ms"])

@@ -149,6 +149,10 @@ Options parse(int argc, char** argv)
     {
       need(1);
       const std::string b = argv[++i];
+      if (b != "cuda" && b != "cpu")
+      {
+        throw std::invalid_argument("--backend takes cpu or cuda, not " + b);
+      }
       o.backend = b == "cuda" ? mcvol::Backend::CUDA : mcvol::Backend::CPU;
     }
     else
@@ -292,6 +296,7 @@ int main(int argc, char** argv)
       t0 = Clock::now();
       while (int(acc.samples()) < o.refSpp)
       {
+        rs.samplesPerPixel = std::min(64, o.refSpp - int(acc.samples()));
         r->render(scene, cam, rs, nullptr, acc);
       }
       r->readBack(acc);

@@ -42,6 +42,9 @@ def short(ds):
 
 def sweep(rows, section, xkey, title, xlabel, out, logx=False):
     sets = sorted({short(r["dataset"]) for r in rows if r["section"] == section})
+    if not sets:
+        print("no %s rows: %s not written" % (section, out))
+        return
     fig, axes = plt.subplots(1, len(sets), figsize=(4.2 * len(sets), 3.8), squeeze=False)
     for ax, ds in zip(axes[0], sets):
         lines = defaultdict(list)

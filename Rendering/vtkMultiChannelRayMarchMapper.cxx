@@ -13,11 +13,7 @@
 vtkStandardNewMacro(vtkMultiChannelRayMarchMapper);
 
 //------------------------------------------------------------------------------
-vtkMultiChannelRayMarchMapper::vtkMultiChannelRayMarchMapper()
-{
-  // The march runs on the CPU; a CPU "backend" keeps the Scene's host grids.
-  this->Backend = BACKEND_CPU;
-}
+vtkMultiChannelRayMarchMapper::vtkMultiChannelRayMarchMapper() = default;
 
 //------------------------------------------------------------------------------
 vtkMultiChannelRayMarchMapper::~vtkMultiChannelRayMarchMapper() = default;
@@ -29,14 +25,14 @@ const char* vtkMultiChannelRayMarchMapper::GetCompositingModelAsString()
 }
 
 //------------------------------------------------------------------------------
-bool vtkMultiChannelRayMarchMapper::NeedsHostGrids(const mcvol::Renderer&)
+bool vtkMultiChannelRayMarchMapper::UsesRenderBackend()
 {
-  return true; // the ray marcher skips empty space with the host grids
+  return false; // the march runs on the CPU with the Scene's host grids
 }
 
 //------------------------------------------------------------------------------
 bool vtkMultiChannelRayMarchMapper::TraceImage(const mcvol::Scene& scene, const mcvol::Camera& camera,
-  const float* depth, mcvol::Renderer&, mcvol::Accumulator& accum, std::string& error)
+  const float* depth, mcvol::Renderer*, mcvol::Accumulator& accum, std::string& error)
 {
   if (accum.samples() > 0)
   {

@@ -14,9 +14,9 @@
  *
  * The image is computed once per change (anything that would reset the Monte
  * Carlo mapper's accumulation) and drawn again unchanged otherwise;
- * GetTotalSamples() is 1 once it exists. SamplesPerPixel, TrackingMethod and
- * Backend do not apply (the march always runs on the CPU); Seed sets the
- * jitter pattern.
+ * GetTotalSamples() is 1 once it exists. SamplesPerPixel, TrackingMethod,
+ * PixelJitter and Backend do not apply (the march always runs on the CPU and
+ * no Monte Carlo backend is created); Seed sets the jitter pattern.
  *
  * Two compositing models (Kraus and Buerger 2008):
  * - EXTINCTION_COMPOSITING (default): the channels' extinctions are
@@ -68,7 +68,8 @@ public:
   /**
    * Early ray termination: a ray stops once its transmittance falls below
    * this value (default 1e-4), so the image differs from the full march by at
-   * most this much per pixel. 0 disables it.
+   * most this much per pixel and component (composite blending: this much per
+   * channel). 0 disables it.
    */
   vtkSetClampMacro(TerminationTransmittance, double, 0.0, 0.999);
   vtkGetMacro(TerminationTransmittance, double);
@@ -117,8 +118,8 @@ protected:
 
 #ifndef __VTK_WRAP__
   bool TraceImage(const mcvol::Scene& scene, const mcvol::Camera& camera, const float* depth,
-    mcvol::Renderer& renderer, mcvol::Accumulator& accum, std::string& error) override;
-  bool NeedsHostGrids(const mcvol::Renderer& renderer) override;
+    mcvol::Renderer* renderer, mcvol::Accumulator& accum, std::string& error) override;
+  bool UsesRenderBackend() override;
 #endif
 
   double StepSize = 0.0;

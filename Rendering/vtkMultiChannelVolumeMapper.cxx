@@ -237,8 +237,13 @@ const char* vtkMultiChannelVolumeMapper::GetBackendAsString()
 
 //------------------------------------------------------------------------------
 bool vtkMultiChannelVolumeMapper::TraceImage(const mcvol::Scene& scene, const mcvol::Camera& camera,
-  const float* depth, mcvol::Renderer& renderer, mcvol::Accumulator& accum, std::string& error)
+  const float* depth, mcvol::Renderer* renderer, mcvol::Accumulator& accum, std::string& error)
 {
+  if (!renderer)
+  {
+    error = "no rendering backend";
+    return false;
+  }
   mcvol::RenderSettings settings;
   settings.samplesPerPixel = this->SamplesPerPixel;
   settings.seed = this->Seed;
@@ -246,7 +251,7 @@ bool vtkMultiChannelVolumeMapper::TraceImage(const mcvol::Scene& scene, const mc
   settings.jitterPixels = this->PixelJitter;
   try
   {
-    renderer.render(scene, camera, settings, depth, accum);
+    renderer->render(scene, camera, settings, depth, accum);
   }
   catch (const std::exception& e)
   {
@@ -257,16 +262,20 @@ bool vtkMultiChannelVolumeMapper::TraceImage(const mcvol::Scene& scene, const mc
 }
 
 //------------------------------------------------------------------------------
-bool vtkMultiChannelVolumeMapper::NeedsHostGrids(const mcvol::Renderer& renderer)
+bool vtkMultiChannelVolumeMapper::UsesRenderBackend()
 {
-  return !renderer.buildsAccelerationOnDevice();
+  return true;
 }
 
 //------------------------------------------------------------------------------
 const char* vtkMultiChannelVolumeMapper::GetActiveBackendName()
 {
   vtkInternals& in = *this->Internals;
-  if (in.RendererBackend != this->Backend)
+  if (!this->UsesRenderBackend())
+  {
+    in.BackendName = "cpu";
+  }
+  else if (in.RendererBackend != this->Backend)
   {
     // Not rendered with this setting yet: say what create() would pick.
     std::string why;
@@ -290,6 +299,11 @@ const char* vtkMultiChannelVolumeMapper::GetActiveBackendName()
 const char* vtkMultiChannelVolumeMapper::GetBackendReport()
 {
   vtkInternals& in = *this->Internals;
+  if (!this->UsesRenderBackend())
+  {
+    in.BackendReport = "CPU ray marcher (the reference; no Monte Carlo backend is used)";
+    return in.BackendReport.c_str();
+  }
   if (in.RendererBackend == this->Backend)
   {
     in.BackendReport = in.Renderer ? in.BackendWhy : "unavailable: " + in.BackendWhy;
@@ -577,6 +591,15 @@ void vtkMultiChannelVolumeMapper::ReleaseGraphicsResources(vtkWindow* window)
     this->Internals->Texture->ReleaseGraphicsResources(window);
     this->Internals->Texture = nullptr;
   }
+  // A device backend holds the data (twice, with textures) and the grids in
+  // GPU memory: give them back too; the next render uploads again.
+  vtkInternals& in = *this->Internals;
+  if (in.Renderer && in.Renderer->buildsAccelerationOnDevice())
+  {
+    in.Renderer.reset();
+    in.RendererBackend = -1;
+    in.HaveKey = false;
+  }
 }
 
 //------------------------------------------------------------------------------
@@ -777,7 +800,12 @@ void vtkMultiChannelVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
   }
 
   // ---- Backend ------------------------------------------------------------
-  if (!in.Renderer || in.RendererBackend != this->Backend)
+  if (!this->UsesRenderBackend())
+  {
+    in.Renderer.reset();
+    in.RendererBackend = -1;
+  }
+  else if (!in.Renderer || in.RendererBackend != this->Backend)
   {
     in.Renderer.reset();
     in.RendererBackend = this->Backend;
@@ -803,7 +831,7 @@ void vtkMultiChannelVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
   {
     // A device backend builds macrocells and majorants itself from its own
     // copy of the data; the host then spends neither time nor memory on them.
-    in.Scene.setHostAcceleration(this->NeedsHostGrids(*in.Renderer));
+    in.Scene.setHostAcceleration(!in.Renderer || !in.Renderer->buildsAccelerationOnDevice());
     bool volumeChanged =
       !in.VolumeSet || in.Scene.numChannels() != numChannels || !std::equal(dims, dims + 3, in.Scene.dims());
     for (int c = 0; c < numChannels && !volumeChanged; ++c)
@@ -1059,7 +1087,7 @@ void vtkMultiChannelVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
   // ---- Trace --------------------------------------------------------------
   {
     std::string error;
-    if (!this->TraceImage(in.Scene, camera, in.LastDepth.data(), *in.Renderer, in.Accum, error))
+    if (!this->TraceImage(in.Scene, camera, in.LastDepth.data(), in.Renderer.get(), in.Accum, error))
     {
       vtkErrorMacro("Rendering failed: " << error);
       in.HaveKey = false;

@@ -329,14 +329,14 @@ protected:
   /**
    * Traces one render into `accum`, which was reset to zero samples whenever
    * the image changed. The Monte Carlo mapper adds SamplesPerPixel samples
-   * with the chosen backend; vtkMultiChannelRayMarchMapper replaces it with
+   * with the chosen backend (`renderer`); vtkMultiChannelRayMarchMapper replaces it with
    * the deterministic ray march. Returns false and sets `error` on failure.
    */
   virtual bool TraceImage(const mcvol::Scene& scene, const mcvol::Camera& camera, const float* depth,
-    mcvol::Renderer& renderer, mcvol::Accumulator& accum, std::string& error);
-  /// Whether the Scene must build its macrocell grids on the host (a
-  /// backend that builds them on the device does not need them).
-  virtual bool NeedsHostGrids(const mcvol::Renderer& renderer);
+    mcvol::Renderer* renderer, mcvol::Accumulator& accum, std::string& error);
+  /// Whether rendering needs a Monte Carlo backend (Backend); without one,
+  /// TraceImage gets nullptr and the Scene keeps its host grids.
+  virtual bool UsesRenderBackend();
 #endif
 
   int ChannelBlendMode = MC_DENSITY_BLEND;

@@ -806,9 +806,10 @@ def render(scene, args, errors, log):
         "composite": mapper.SetChannelBlendModeToComposite,
     }[scene["blend"]]()
     mapper.SetTrackingMethod(mapper.N_DDA if scene["tracking"] == "n-dda" else mapper.ONE_DDA)
-    {"auto": mapper.SetBackendToAuto, "cpu": mapper.SetBackendToCPU, "cuda": mapper.SetBackendToCUDA}[
-        scene["backend"]
-    ]()
+    if not reference:  # the reference always marches on the CPU
+        {"auto": mapper.SetBackendToAuto, "cpu": mapper.SetBackendToCPU, "cuda": mapper.SetBackendToCUDA}[
+            scene["backend"]
+        ]()
     mapper.SetSeed(scene["seed"])
     mapper.SetMacrocellSize(scene["macrocell_size"])
     mapper.SetPixelJitter(scene["pixel_jitter"])
@@ -1015,6 +1016,12 @@ def main(argv=None):
             scene["compositing"] = args.compositing
         if args.no_pixel_jitter:
             scene["pixel_jitter"] = False
+        if scene["renderer"] != "raymarch" and (
+            args.step is not None or args.step_voxels is not None or args.compositing is not None
+        ):
+            print("%s: --step, --step-voxels and --compositing apply to the ray-marching reference: add --reference "
+                  "(or \"renderer\": \"raymarch\" in the scene)" % PROG, file=sys.stderr)
+            return 2
         render(scene, args, ErrorCollector(), log)
     except SceneError as e:
         print("%s: %s: %s" % (name, e.key or "(top level)", e.message), file=sys.stderr)

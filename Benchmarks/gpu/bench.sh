@@ -72,15 +72,20 @@ for stage in "$@"; do
     accuracy)
       # The accuracy study's Monte Carlo series on the GPU (scores only; the
       # reference is the same CPU ray march): merged by accuracy_study.py --gpu.
+      # Writes accuracy/<dataset>-<mode>.csv, the layout accuracy_study.py --gpu reads.
+      mkdir -p "$out/accuracy"
       for ds in figure3 microscopy cosmology weather; do
         for mode in density max mix composite; do
-          mkdir -p "$out/accuracy/$ds-$mode"
-          "$b/bin/mcvol-accuracy" --backend cuda --score-only --dataset "$ds" --blend "$mode" --size 256 256 \
-            --ref-spp 2048 --spp-max 1024 --out "$out/accuracy/$ds-$mode" 2> "$out/accuracy/$ds-$mode/log.txt" \
-            || { echo "accuracy $ds $mode failed"; tail -3 "$out/accuracy/$ds-$mode/log.txt"; }
+          work="$(mktemp -d)"
+          if "$b/bin/mcvol-accuracy" --backend cuda --score-only --dataset "$ds" --blend "$mode" --size 256 256 \
+            --ref-spp 2048 --spp-max 1024 --out "$work" 2> "$out/accuracy/$ds-$mode.log"; then
+            cp "$work/timings.csv" "$out/accuracy/$ds-$mode.csv"
+          else
+            echo "accuracy $ds $mode failed"; tail -3 "$out/accuracy/$ds-$mode.log"
+          fi
         done
       done
-      grep -h "montecarlo,1dda,1024" "$out"/accuracy/*/timings.csv | head -4
+      grep -h "montecarlo,1dda,1024" "$out"/accuracy/*.csv | head -4
       ;;
     rebuild)
       # One channel's transfer function changes: GPU majorant rebuild time.

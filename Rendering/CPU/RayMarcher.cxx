@@ -122,29 +122,29 @@ void RayMarcher::render(const Scene& scene, const Camera& camera, const MarchSet
   }
   const double step = effectiveStep(camera, settings);
   // Work guard: a step far below the voxel size over a long ray would run
-  // for hours. The longest ray through the box is at most the sum of its
-  // edges (in world units, nyquistStep's column norms times the extents).
+  // for hours, and past about 2^22 samples per ray the float sample
+  // positions stop being distinct. The longest ray through the box is at
+  // most the sum of its edges, each edge's world length its index extent
+  // times that axis's spacing (the column norms of the index-to-world map).
   {
-    const double voxel = 2.0 * nyquistStep(camera); // smallest spacing
-    double longest = 0.0;
-    for (int a = 0; a < 3; ++a)
-    {
-      longest += double(s.volume.boxHi[a] - s.volume.boxLo[a]) + 1.0;
-    }
-    // Spacing can differ per axis: bound with the largest column norm.
     const double* w = camera.worldToIndex;
-    double rowMin = HUGE_VAL;
-    for (int r = 0; r < 3; ++r)
+    const double a = w[0], b = w[1], c = w[2], d = w[4], e = w[5], f = w[6], g = w[8], h = w[9], i = w[10];
+    const double det = a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g);
+    const double inv[9] = { (e * i - f * h) / det, (c * h - b * i) / det, (b * f - c * e) / det,
+      (f * g - d * i) / det, (a * i - c * g) / det, (c * d - a * f) / det, (d * h - e * g) / det,
+      (b * g - a * h) / det, (a * e - b * d) / det };
+    double longest = 0.0;
+    for (int col = 0; col < 3; ++col)
     {
-      rowMin =
-        std::min(rowMin, std::sqrt(w[4 * r] * w[4 * r] + w[4 * r + 1] * w[4 * r + 1] + w[4 * r + 2] * w[4 * r + 2]));
+      const double spacing =
+        std::sqrt(inv[col] * inv[col] + inv[3 + col] * inv[3 + col] + inv[6 + col] * inv[6 + col]);
+      longest += (double(s.volume.boxHi[col] - s.volume.boxLo[col]) + 1.0) * spacing;
     }
-    const double perIndex = rowMin > 0.0 ? std::max(voxel, 1.0 / rowMin) : voxel;
-    const double samples = longest * perIndex / step;
-    if (samples > double(1 << 24))
+    const double samples = longest / step;
+    if (!(samples <= double(1 << 22)))
     {
-      throw std::invalid_argument("mcvol: the ray-marching step " + std::to_string(step) + " would take about " +
-        std::to_string(samples) + " samples per ray (at most 2^24 are allowed); use a larger step");
+      throw std::invalid_argument("mcvol: the ray-marching step " + std::to_string(step) + " would take up to " +
+        std::to_string(samples) + " samples per ray (at most 2^22 are allowed); use a larger step");
     }
   }
   const CameraView cam = toView(camera);

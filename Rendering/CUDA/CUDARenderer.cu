@@ -27,7 +27,8 @@ void check(cudaError_t e, const char* what)
 {
   if (e != cudaSuccess)
   {
-    // Clear a sticky launch error so that later calls report their own.
+    // Reset the last-error state (a sticky error, such as an illegal
+    // address, cannot be cleared: the context stays unusable).
     (void)cudaGetLastError();
     throw std::runtime_error(std::string("mcvol (CUDA): ") + what + " failed: " + cudaGetErrorString(e));
   }
@@ -81,10 +82,11 @@ struct DeviceChannel
   cudaTextureObject_t point = 0;
   float textureScale = 1.f;
   size_t arrayBytes = 0;
-  /// Holds NaN voxels: sampled from global memory even with texture
-  /// sampling on, since hardware filtering drops a NaN corner whose weight
-  /// rounds to 0 where the core's rule makes every such sample NaN.
-  bool hasNaN = false;
+  /// Holds NaN or infinite voxels: sampled from global memory even with
+  /// texture sampling on, since hardware filtering drops a non-finite corner
+  /// whose weight rounds to 0, where the core's arithmetic (0 * Inf, NaN)
+  /// makes the sample NaN or infinite.
+  bool nonFinite = false;
 
   DeviceChannel() = default;
   DeviceChannel(const DeviceChannel&) = delete;
@@ -118,11 +120,34 @@ __device__ MCVOL_FORCE_INLINE int3 cellOf(int64_t c, int3 g)
   return make_int3(int(c % g.x), int((c / g.x) % g.y), int(c / (int64_t(g.x) * g.y)));
 }
 
+__global__ void probeKernel() {}
+
+// Warp reductions with shuffles (any architecture from sm_70), 64-bit sums so
+// that high sample counts cannot wrap.
+__device__ MCVOL_FORCE_INLINE unsigned warpMaxU32(unsigned v)
+{
+  for (int o = 16; o > 0; o >>= 1)
+  {
+    const unsigned w = __shfl_xor_sync(0xffffffffu, v, o);
+    v = w > v ? w : v;
+  }
+  return v;
+}
+
+__device__ MCVOL_FORCE_INLINE unsigned long long warpSumU64(unsigned long long v)
+{
+  for (int o = 16; o > 0; o >>= 1)
+  {
+    v += __shfl_xor_sync(0xffffffffu, v, o);
+  }
+  return v;
+}
+
 /// Scalar range of channel n over each macrocell's voxels (NaN voxels
 /// skipped, as on the host): one thread per cell.
 template <typename T>
 __global__ void rangeKernel(const T* __restrict__ data, int3 dims, int3 gdims, int macrocell, int numChannels, int n,
-  int64_t cells, float2* __restrict__ ranges, unsigned* __restrict__ hasNaN)
+  int64_t cells, float2* __restrict__ ranges, unsigned* __restrict__ nonFiniteFlags)
 {
   const int64_t c = int64_t(blockIdx.x) * blockDim.x + threadIdx.x;
   if (c >= cells)
@@ -137,7 +162,7 @@ __global__ void rangeKernel(const T* __restrict__ data, int3 dims, int3 gdims, i
   cellVoxelBounds(d, macrocell, cell, lo, hi);
   float mn = __int_as_float(0x7f800000);  // +inf
   float mx = -__int_as_float(0x7f800000); // -inf
-  bool nan = false;
+  bool nonFinite = false;
   for (int k = lo[2]; k <= hi[2]; ++k)
   {
     for (int j = lo[1]; j <= hi[1]; ++j)
@@ -151,17 +176,14 @@ __global__ void rangeKernel(const T* __restrict__ data, int3 dims, int3 gdims, i
           mn = fminf(mn, v);
           mx = fmaxf(mx, v);
         }
-        else
-        {
-          nan = true;
-        }
+        nonFinite = nonFinite || !isfinite(v);
       }
     }
   }
   ranges[c * numChannels + n] = make_float2(mn, mx);
-  if (nan)
+  if (nonFinite)
   {
-    atomicOr(hasNaN + n, 1u);
+    atomicOr(nonFiniteFlags + n, 1u);
   }
 }
 
@@ -180,7 +202,7 @@ __global__ void majorantKernel(const __grid_constant__ TableView tv, int n, int 
     m = cellMajorant(tv, n, r.x, r.y, sparse);
     majorants[c * numChannels + n] = m;
   }
-  const unsigned warpMax = __reduce_max_sync(0xffffffffu, __float_as_uint(m));
+  const unsigned warpMax = warpMaxU32(__float_as_uint(m));
   if ((threadIdx.x & 31) == 0 && warpMax != 0u)
   {
     atomicMax(channelMax + n, warpMax);
@@ -210,23 +232,22 @@ __global__ void renderKernel(const __grid_constant__ SceneView s, const __grid_c
   }
   if (Count)
   {
-    const unsigned full = 0xffffffffu;
-    const unsigned dda = __reduce_add_sync(full, c.ddaSteps);
-    const unsigned tent = __reduce_add_sync(full, c.tentative);
-    const unsigned real = __reduce_add_sync(full, c.real);
-    const unsigned smp = __reduce_add_sync(full, c.samples);
+    const unsigned long long dda = warpSumU64(c.ddaSteps);
+    const unsigned long long tent = warpSumU64(c.tentative);
+    const unsigned long long real = warpSumU64(c.real);
+    const unsigned long long smp = warpSumU64(c.samples);
     const unsigned lane = (threadIdx.y * blockDim.x + threadIdx.x) & 31u;
     if (lane == 0)
     {
-      atomicAdd(counters + 0, (unsigned long long)dda);
-      atomicAdd(counters + 1, (unsigned long long)tent);
-      atomicAdd(counters + 2, (unsigned long long)real);
-      atomicAdd(counters + 3, (unsigned long long)smp);
+      atomicAdd(counters + 0, dda);
+      atomicAdd(counters + 1, tent);
+      atomicAdd(counters + 2, real);
+      atomicAdd(counters + 3, smp);
     }
   }
 }
 
-__global__ void probeKernel() {}
+
 
 template <BlendMode Mode>
 void launchRender(bool count, dim3 grid, dim3 block, const SceneView& s, const CameraView& cam, const FrameParams& fp,
@@ -305,7 +326,7 @@ struct CUDARenderer::Internal
   SceneView View; ///< device pointers; per-render fields filled in render()
 
   DeviceBuffer<float4> Accum;
-  const Accumulator* AccumOwner = nullptr;
+  uint64_t AccumId = 0; ///< Accumulator::id() of the image in Accum (0: none)
   uint32_t AccumSamples = 0;
   DeviceBuffer<float> Depth;
   std::vector<float> LastDepth;
@@ -315,6 +336,22 @@ struct CUDARenderer::Internal
   cudaEvent_t Stop = nullptr;
 
   CudaUpdateCounters Updates;
+
+  Internal() = default;
+  Internal(const Internal&) = delete;
+  Internal& operator=(const Internal&) = delete;
+  ~Internal()
+  {
+    cudaSetDevice(this->Device);
+    if (this->Start)
+    {
+      cudaEventDestroy(this->Start);
+    }
+    if (this->Stop)
+    {
+      cudaEventDestroy(this->Stop);
+    }
+  }
 
   void uploadChannels(const Scene& scene);
   void buildTextures();
@@ -330,7 +367,7 @@ struct CUDARenderer::Internal
   }
 };
 
-bool CUDARenderer::deviceUsable(std::string* why)
+bool CUDARenderer::deviceUsable(std::string* why, int device)
 {
   int count = 0;
   const cudaError_t e = cudaGetDeviceCount(&count);
@@ -351,6 +388,23 @@ bool CUDARenderer::deviceUsable(std::string* why)
     }
     return false;
   }
+  if (device < 0 || device >= count)
+  {
+    if (why)
+    {
+      *why = "there is no CUDA device " + std::to_string(device) + " (" + std::to_string(count) + " found)";
+    }
+    return false;
+  }
+  if (cudaSetDevice(device) != cudaSuccess)
+  {
+    (void)cudaGetLastError();
+    if (why)
+    {
+      *why = "CUDA device " + std::to_string(device) + " cannot be used";
+    }
+    return false;
+  }
   // The kernels were compiled for CMAKE_CUDA_ARCHITECTURES: make sure the
   // device can run them.
   cudaFuncAttributes attr;
@@ -368,7 +422,7 @@ bool CUDARenderer::deviceUsable(std::string* why)
   if (why)
   {
     cudaDeviceProp p;
-    if (cudaGetDeviceProperties(&p, 0) == cudaSuccess)
+    if (cudaGetDeviceProperties(&p, device) == cudaSuccess)
     {
       *why = std::string("CUDA device ") + p.name;
     }
@@ -380,7 +434,7 @@ CUDARenderer::CUDARenderer(int device)
   : In(new Internal())
 {
   std::string why;
-  if (!deviceUsable(&why))
+  if (!deviceUsable(&why, device))
   {
     throw std::runtime_error("mcvol: " + why);
   }
@@ -395,17 +449,7 @@ CUDARenderer::CUDARenderer(int device)
   std::fill(std::begin(this->In->ChannelTableVersion), std::end(this->In->ChannelTableVersion), ~0ull);
 }
 
-CUDARenderer::~CUDARenderer()
-{
-  if (this->In->Start)
-  {
-    cudaEventDestroy(this->In->Start);
-  }
-  if (this->In->Stop)
-  {
-    cudaEventDestroy(this->In->Stop);
-  }
-}
+CUDARenderer::~CUDARenderer() = default;
 
 void CUDARenderer::setSampling(CudaSampling s)
 {
@@ -539,6 +583,7 @@ void CUDARenderer::Internal::uploadChannels(const Scene& scene)
 
 void CUDARenderer::Internal::buildTextures()
 {
+  MCVOL_CUDA(cudaDeviceSynchronize()); // no kernel may still read the old textures
   const int* d = this->Dims;
   const bool fits =
     d[0] <= this->Props.maxTexture3D[0] && d[1] <= this->Props.maxTexture3D[1] && d[2] <= this->Props.maxTexture3D[2];
@@ -553,7 +598,16 @@ void CUDARenderer::Internal::buildTextures()
     cudaTextureReadMode mode;
     cudaChannelFormatDesc fmt = formatOf(dc.type, dc.textureScale, mode);
     const cudaExtent ext = make_cudaExtent(size_t(d[0]), size_t(d[1]), size_t(d[2]));
-    MCVOL_CUDA(cudaMalloc3DArray(&dc.array, &fmt, ext));
+    const cudaError_t e = cudaMalloc3DArray(&dc.array, &fmt, ext);
+    if (e == cudaErrorMemoryAllocation)
+    {
+      // No room for a second copy: this channel samples global memory.
+      (void)cudaGetLastError();
+      dc.array = nullptr;
+      ++this->Updates.textureFallbacks;
+      continue;
+    }
+    check(e, "cudaMalloc3DArray");
     const size_t es = size_t(scalarTypeSize(dc.type));
     dc.arrayBytes = size_t(d[0]) * size_t(d[1]) * size_t(d[2]) * es;
     cudaMemcpy3DParms copy{};
@@ -622,7 +676,7 @@ void CUDARenderer::Internal::buildRanges(int macrocell)
   MCVOL_CUDA(cudaMemcpy(flags, this->NaNFlags.ptr, sizeof(flags), cudaMemcpyDeviceToHost));
   for (int n = 0; n < N; ++n)
   {
-    this->Channels[n].hasNaN = flags[n] != 0u;
+    this->Channels[n].nonFinite = flags[n] != 0u;
   }
 }
 
@@ -690,6 +744,12 @@ void CUDARenderer::Internal::sync(const Scene& scene)
     scene.numChannels() != this->NumChannels || !std::equal(this->Dims, this->Dims + 3, scene.dims());
   const bool newGrid = newData || scene.dataVersion() != this->DataVersion;
   const bool newTables = newScene || scene.tableVersion() != this->TableVersion;
+  if (newData || newGrid || newTables)
+  {
+    // Buffers and textures are about to be replaced: let every kernel that
+    // may read them (renders issued with readBack off) finish first.
+    MCVOL_CUDA(cudaDeviceSynchronize());
+  }
   if (newData)
   {
     this->uploadChannels(scene);
@@ -781,7 +841,7 @@ void CUDARenderer::render(const Scene& scene, const Camera& camera, const Render
     c.stride = 1;
     c.type = dc.type;
     c.offset = 0.0;
-    c.texture = textures && !dc.hasNaN ? (hv.volume.nearest ? dc.point : dc.linear) : 0;
+    c.texture = textures && !dc.nonFinite && dc.array ? (hv.volume.nearest ? dc.point : dc.linear) : 0;
     c.textureScale = dc.textureScale;
   }
   const CameraView cam = toView(camera);
@@ -790,12 +850,18 @@ void CUDARenderer::render(const Scene& scene, const Camera& camera, const Render
   // Accumulation buffer: continue the device mean only if it is this
   // Accumulator's, at its sample count; otherwise start from the host's.
   const size_t P = size_t(camera.width) * size_t(camera.height);
+  if (accum.pendingOnDevice() && in.AccumId != accum.id())
+  {
+    throw std::logic_error("mcvol: this Accumulator's image was left on the device (RenderSettings::readBack = "
+                           "false) and has since been replaced by another Accumulator's; call readBack() before "
+                           "rendering another Accumulator");
+  }
   if (in.Accum.count != P)
   {
     in.Accum.resize(P);
-    in.AccumOwner = nullptr;
+    in.AccumId = 0;
   }
-  if (in.AccumOwner != &accum || in.AccumSamples != accum.samples())
+  if (in.AccumId != accum.id() || in.AccumSamples != accum.samples())
   {
     if (accum.samples() == 0)
     {
@@ -805,7 +871,7 @@ void CUDARenderer::render(const Scene& scene, const Camera& camera, const Render
     {
       MCVOL_CUDA(cudaMemcpy(in.Accum.ptr, accum.rgba(), in.Accum.bytes(), cudaMemcpyHostToDevice));
     }
-    in.AccumOwner = &accum;
+    in.AccumId = accum.id();
   }
 
   // Depth: uploaded when it changes (geometry or view), else reused.
@@ -861,6 +927,7 @@ void CUDARenderer::render(const Scene& scene, const Camera& camera, const Render
   }
   accum.addSamples(uint32_t(settings.samplesPerPixel));
   in.AccumSamples = accum.samples();
+  accum.setPendingOnDevice(true);
   if (count)
   {
     unsigned long long c[4];
@@ -880,16 +947,26 @@ void CUDARenderer::render(const Scene& scene, const Camera& camera, const Render
 void CUDARenderer::readBack(Accumulator& accum)
 {
   Internal& in = *this->In;
-  if (in.AccumOwner != &accum || in.Accum.count != size_t(accum.width()) * size_t(accum.height()))
+  const bool mine = in.AccumId == accum.id() && in.AccumSamples == accum.samples() &&
+    in.Accum.count == size_t(accum.width()) * size_t(accum.height());
+  if (!mine)
   {
-    return; // nothing of this Accumulator's is on the device
+    if (accum.pendingOnDevice())
+    {
+      throw std::logic_error("mcvol: this Accumulator's image is no longer on the device (another Accumulator "
+                             "was rendered since); it cannot be read back");
+    }
+    return; // the host copy is current
   }
+  MCVOL_CUDA(cudaSetDevice(in.Device));
   MCVOL_CUDA(cudaMemcpy(accum.rgba(), in.Accum.ptr, in.Accum.bytes(), cudaMemcpyDeviceToHost));
+  accum.setPendingOnDevice(false);
   ++in.Updates.imageDownloads;
 }
 
 void CUDARenderer::finish()
 {
+  MCVOL_CUDA(cudaSetDevice(this->In->Device));
   MCVOL_CUDA(cudaDeviceSynchronize());
 }
 } // namespace mcvol

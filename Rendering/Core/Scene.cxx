@@ -79,6 +79,7 @@ void Accumulator::resize(int width, int height)
     this->Height = height;
     this->RGBA.assign(size_t(width) * size_t(height) * 4, 0.f);
     this->Samples = 0;
+    this->Pending = false;
   }
 }
 
@@ -86,30 +87,31 @@ void Accumulator::reset()
 {
   std::fill(this->RGBA.begin(), this->RGBA.end(), 0.f);
   this->Samples = 0;
+  this->Pending = false;
 }
 
 namespace
 {
-uint64_t nextSceneId()
+uint64_t nextObjectId()
 {
   static std::atomic<uint64_t> counter{ 0 };
   return ++counter;
 }
 } // namespace
 
-SceneId::SceneId()
-  : value(nextSceneId())
+ObjectId::ObjectId()
+  : value(nextObjectId())
 {
 }
 
-SceneId::SceneId(const SceneId&)
-  : value(nextSceneId())
+ObjectId::ObjectId(const ObjectId&)
+  : value(nextObjectId())
 {
 }
 
-SceneId& SceneId::operator=(const SceneId&)
+ObjectId& ObjectId::operator=(const ObjectId&)
 {
-  this->value = nextSceneId();
+  this->value = nextObjectId();
   return *this;
 }
 

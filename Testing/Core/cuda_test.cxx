@@ -2,10 +2,10 @@
 // The CUDA backend against the CPU backend (needs a CUDA device; TestMain
 // skips with 125 without one).
 //
-// Significance: CudaAgreement runs 2 samplings x 3 types x 5 channel counts
-// x 4 blend modes x 2 trackers = 240 image comparisons, each of 12 checks
+// Significance: CudaAgreement runs 2 samplings x 5 types x 5 channel counts
+// x 4 blend modes x 2 trackers = 400 image comparisons, each of 12 checks
 // (3 statistics x R, G, B, A); the family-wise level is kAlpha = 0.001, so
-// each check runs at kAlpha / 2880 (Bonferroni). Seeds are fixed.
+// each check runs at kAlpha / 4800 (Bonferroni). Seeds are fixed.
 #include "TestUtil.h"
 
 #include "mcvol/CUDARenderer.h"
@@ -28,7 +28,9 @@ struct TypedVolume
   int dims[3] = { 0, 0, 0 };
   ScalarType type = ScalarType::Float32;
   std::vector<std::vector<uint8_t>> bytes;
-  float maxValue = 1.f;
+  double minValue = 0.0;
+  double maxValue = 1.0;
+  double offset = 0.0; ///< float64: the data sit at 1e6 + [0, 1]
 
   TypedVolume(ScalarType t, int n, int nx, int ny, int nz)
   {
@@ -36,7 +38,26 @@ struct TypedVolume
     this->dims[1] = ny;
     this->dims[2] = nz;
     this->type = t;
-    this->maxValue = t == ScalarType::UInt8 ? 255.f : (t == ScalarType::UInt16 ? 65535.f : 1.f);
+    switch (t)
+    {
+      case ScalarType::UInt8:
+        this->maxValue = 255;
+        break;
+      case ScalarType::UInt16:
+        this->maxValue = 65535;
+        break;
+      case ScalarType::Int16: // the whole range, -32768 included (snorm's edge)
+        this->minValue = -32768;
+        this->maxValue = 32767;
+        break;
+      case ScalarType::Float64:
+        this->offset = 1e6;
+        this->minValue = 1e6;
+        this->maxValue = 1e6 + 1;
+        break;
+      default:
+        break;
+    }
     const size_t voxels = size_t(nx) * ny * nz;
     const size_t es = size_t(scalarTypeSize(t));
     this->bytes.assign(size_t(n), std::vector<uint8_t>(voxels * es));
@@ -64,6 +85,16 @@ struct TypedVolume
               const uint16_t u = uint16_t(std::lround(std::min(1.0, std::max(0.0, v)) * 65535));
               std::memcpy(p, &u, 2);
             }
+            else if (t == ScalarType::Int16)
+            {
+              const int16_t u = int16_t(std::lround(std::min(1.0, std::max(0.0, v)) * 65535 - 32768));
+              std::memcpy(p, &u, 2);
+            }
+            else if (t == ScalarType::Float64)
+            {
+              const double f = 1e6 + v;
+              std::memcpy(p, &f, 8);
+            }
             else
             {
               float f = float(v);
@@ -84,6 +115,7 @@ struct TypedVolume
     {
       src[n].data = this->bytes[n].data();
       src[n].type = this->type;
+      src[n].offset = this->offset;
     }
     scene.setVolume(this->dims, int(src.size()), src.data());
     const float colours[6][3] = { { 1, 0.2f, 0.1f }, { 0.1f, 1, 0.2f }, { 0.2f, 0.3f, 1 }, { 1, 1, 0.1f },
@@ -93,7 +125,7 @@ struct TypedVolume
       // Opacity ramps up over the upper part of the range, so every channel
       // has empty, thin and dense regions.
       TransferFunctionDesc tf;
-      tf.scalarMin = 0;
+      tf.scalarMin = this->minValue;
       tf.scalarMax = this->maxValue;
       tf.unitDistance = 1.f + 0.5f * float(n % 3);
       const int K = 64;
@@ -141,13 +173,14 @@ std::vector<float> renderImage(Renderer& r, const Scene& scene, const Camera& ca
 } // namespace
 
 // Statistical agreement of CPU and CUDA images for every blend mode, both
-// trackers, uint8/uint16/float data, N = 1, 3, 4, 12, 16, with texture and
+// trackers, uint8/int16/uint16/float32/float64 data (float64 at 1e6 + [0, 1],
+// read relative to its offset), N = 1, 3, 4, 12, 16, with texture and
 // with global-memory sampling. Independent seeds on the two sides, so the
 // per-pixel differences have mean zero exactly when both backends compute the
 // same expectation (expectSameImage: image-mean z, sum of z^2, max |z|).
 TEST(CudaAgreement, EveryModeTrackerTypeAndChannelCount)
 {
-  const int combos = 2 * 3 * 5 * 4 * 2;
+  const int combos = 2 * 5 * 5 * 4 * 2;
   const double alpha = kAlpha / (combos * 12);
   CPURenderer cpu;
   const std::unique_ptr<CUDARenderer> tex = cudaRenderer(CudaSampling::Texture);
@@ -155,7 +188,8 @@ TEST(CudaAgreement, EveryModeTrackerTypeAndChannelCount)
   RenderSettings rs;
   const int renders = 24;
   uint32_t seed = 1;
-  for (ScalarType type : { ScalarType::UInt8, ScalarType::UInt16, ScalarType::Float32 })
+  for (ScalarType type :
+    { ScalarType::UInt8, ScalarType::Int16, ScalarType::UInt16, ScalarType::Float32, ScalarType::Float64 })
   {
     for (int N : { 1, 3, 4, 12, 16 })
     {

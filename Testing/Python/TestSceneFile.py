@@ -227,7 +227,8 @@ def main():
     r = run(program, [fn, "-o", os.path.join(bad_dir, "invalid.png")])
     t.check(r.returncode == 2 and "invalid JSON" in r.stderr and "line 2" in r.stderr, "invalid JSON: %d %r" % (r.returncode, r.stderr))
     if scenes:
-        for extra, what in ((["--size", "64"], "--size"), (["--spp", "0"], "--spp"), (["--raw", "x.exr"], "--raw")):
+        for extra, what in ((["--size", "64"], "--size"), (["--spp", "0"], "--spp"), (["--raw", "x.exr"], "--raw"),
+                            (["--step", "1"], "--reference"), (["--reference", "--step-voxels", "0"], "--step-voxels")):
             r = run(program, [scenes[0], "-o", os.path.join(bad_dir, "arg.png")] + extra)
             t.check(r.returncode == 2 and what in r.stderr, "argument %s: %d %r" % (extra, r.returncode, r.stderr.strip()))
     t.finish()

@@ -82,8 +82,9 @@ public:
   /// The active-channel list the last update computed.
   std::vector<int> activeChannels() const;
 
-  /// True if a CUDA device can be used; `why` gets the reason when not.
-  static bool deviceUsable(std::string* why = nullptr);
+  /// True if CUDA device `device` can run this build's kernels; `why` gets
+  /// the reason when not (or the device's name when it can).
+  static bool deviceUsable(std::string* why = nullptr, int device = 0);
 
 private:
   struct Internal;

@@ -234,15 +234,16 @@ MCVOL_HOT Vec4f marchChannels(const SceneView& s, const MarchParams& mp, const i
     if (empty)
     {
       // Jump over the cell's samples (at or before the first one past it).
-      const float kEnd = floorf(dda.t1 / mp.step - phase);
-      if (kEnd > float(k))
+      const double kEnd = floor(double(dda.t1) / double(mp.step) - double(phase));
+      if (kEnd > double(k))
       {
         k = int64_t(kEnd);
       }
     }
     while (true)
     {
-      const float t = (float(k) + phase) * mp.step;
+      // In double: float(k) + phase loses the phase once k nears 2^22.
+      const float t = float((double(k) + double(phase)) * double(mp.step));
       if (!(t < dda.t1))
       {
         break;

@@ -34,7 +34,10 @@ struct RenderSettings
   /// Device backends: copy the accumulated image into the Accumulator at the
   /// end of render(). false leaves it on the device (the frame may still be
   /// running when render() returns) until readBack() or the next render with
-  /// readBack on; the Accumulator's sample count is updated either way.
+  /// readBack on; the Accumulator's sample count is updated either way and it
+  /// is marked pendingOnDevice(). The device holds one image: rendering
+  /// another Accumulator replaces it, after which readBack() or render() of
+  /// the first throws std::logic_error instead of returning a stale image.
   bool readBack = true;
 };
 
@@ -65,11 +68,20 @@ public:
   float* rgba() { return this->RGBA.data(); }
   /// Called by backends after adding `k` samples per pixel.
   void addSamples(uint32_t k) { this->Samples += k; }
+  /// Unique per Accumulator object (copies get their own): device backends
+  /// key their copy of the image on it.
+  uint64_t id() const { return this->Id.value; }
+  /// True while the latest image exists only on a device
+  /// (RenderSettings::readBack = false): rgba() is stale until readBack().
+  bool pendingOnDevice() const { return this->Pending; }
+  void setPendingOnDevice(bool pending) { this->Pending = pending; }
 
 private:
   int Width = 0;
   int Height = 0;
   uint32_t Samples = 0;
+  bool Pending = false;
+  ObjectId Id;
   std::vector<float> RGBA;
 };
 

@@ -58,6 +58,16 @@ struct MemoryStats
   size_t tableBytes = 0;
 };
 
+/// An identity that copies do not share (a copied Scene or Accumulator is a
+/// new object for the device caches keyed on it).
+struct ObjectId
+{
+  ObjectId();
+  ObjectId(const ObjectId&);
+  ObjectId& operator=(const ObjectId&);
+  uint64_t value = 0;
+};
+
 /**
  * Host-side owner of everything a render needs except the camera: the
  * channels (not copied), transfer-function tables, the macrocell grid of
@@ -69,16 +79,6 @@ struct MemoryStats
  *
  * Bad arguments throw std::invalid_argument with a message naming the cause.
  */
-/// An identity that copies do not share: a copied Scene is a new scene for
-/// the device caches keyed on it (its versions restart as they please).
-struct SceneId
-{
-  SceneId();
-  SceneId(const SceneId&);
-  SceneId& operator=(const SceneId&);
-  uint64_t value = 0;
-};
-
 class Scene
 {
 public:
@@ -154,7 +154,7 @@ private:
   std::array<ChannelSource, kMaxChannels> Channels{};
   std::array<bool, kMaxChannels> HasTF{};
   std::array<bool, kMaxChannels> MajorantDirty{};
-  SceneId Id;
+  ObjectId Id;
   bool MacrocellsDirty = true;
   bool HostAcceleration = true;
   uint64_t ContentVersion = 0;
