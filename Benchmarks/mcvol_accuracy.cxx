@@ -18,14 +18,14 @@
 #include "mcvol/Renderer.h"
 
 #include <algorithm>
-#include <cmath>
-#include <utility>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #ifdef _OPENMP

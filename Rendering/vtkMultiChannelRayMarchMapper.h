@@ -117,8 +117,8 @@ protected:
   ~vtkMultiChannelRayMarchMapper() override;
 
 #ifndef __VTK_WRAP__
-  bool TraceImage(const mcvol::Scene& scene, const mcvol::Camera& camera, const float* depth,
-    mcvol::Renderer* renderer, mcvol::Accumulator& accum, std::string& error) override;
+  bool TraceImage(const mcvol::Scene& scene, const mcvol::Camera& camera, const float* depth, mcvol::Renderer* renderer,
+    mcvol::Accumulator& accum, std::string& error) override;
   bool UsesRenderBackend() override;
 #endif
 

@@ -236,8 +236,8 @@ const char* vtkMultiChannelVolumeMapper::GetBackendAsString()
 }
 
 //------------------------------------------------------------------------------
-bool vtkMultiChannelVolumeMapper::TraceImage(const mcvol::Scene& scene, const mcvol::Camera& camera,
-  const float* depth, mcvol::Renderer* renderer, mcvol::Accumulator& accum, std::string& error)
+bool vtkMultiChannelVolumeMapper::TraceImage(const mcvol::Scene& scene, const mcvol::Camera& camera, const float* depth,
+  mcvol::Renderer* renderer, mcvol::Accumulator& accum, std::string& error)
 {
   if (!renderer)
   {

@@ -130,14 +130,13 @@ void RayMarcher::render(const Scene& scene, const Camera& camera, const MarchSet
     const double* w = camera.worldToIndex;
     const double a = w[0], b = w[1], c = w[2], d = w[4], e = w[5], f = w[6], g = w[8], h = w[9], i = w[10];
     const double det = a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g);
-    const double inv[9] = { (e * i - f * h) / det, (c * h - b * i) / det, (b * f - c * e) / det,
-      (f * g - d * i) / det, (a * i - c * g) / det, (c * d - a * f) / det, (d * h - e * g) / det,
-      (b * g - a * h) / det, (a * e - b * d) / det };
+    const double inv[9] = { (e * i - f * h) / det, (c * h - b * i) / det, (b * f - c * e) / det, (f * g - d * i) / det,
+      (a * i - c * g) / det, (c * d - a * f) / det, (d * h - e * g) / det, (b * g - a * h) / det,
+      (a * e - b * d) / det };
     double longest = 0.0;
     for (int col = 0; col < 3; ++col)
     {
-      const double spacing =
-        std::sqrt(inv[col] * inv[col] + inv[3 + col] * inv[3 + col] + inv[6 + col] * inv[6 + col]);
+      const double spacing = std::sqrt(inv[col] * inv[col] + inv[3 + col] * inv[3 + col] + inv[6 + col] * inv[6 + col]);
       longest += (double(s.volume.boxHi[col] - s.volume.boxLo[col]) + 1.0) * spacing;
     }
     const double samples = longest / step;

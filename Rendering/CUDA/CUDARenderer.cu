@@ -247,8 +247,6 @@ __global__ void renderKernel(const __grid_constant__ SceneView s, const __grid_c
   }
 }
 
-
-
 template <BlendMode Mode>
 void launchRender(bool count, dim3 grid, dim3 block, const SceneView& s, const CameraView& cam, const FrameParams& fp,
   const float* depth, float4* accum, uint32_t previous, unsigned long long* counters)

@@ -430,6 +430,23 @@ TEST(CudaAccumulation, ProgressiveDeviceMeanAndReset)
   {
     ASSERT_NEAR(progressive.rgba()[i], once[i], 2e-6f) << "value " << i;
   }
+  // An image left on the device is replaced by another Accumulator's render:
+  // reading it back, or rendering on, is an error, not a stale image.
+  {
+    Accumulator a, b;
+    RenderSettings lazy;
+    lazy.readBack = false;
+    g.render(scene, cam, lazy, nullptr, a);
+    EXPECT_TRUE(a.pendingOnDevice());
+    g.render(scene, cam, lazy, nullptr, b);
+    EXPECT_THROW(g.readBack(a), std::logic_error);
+    EXPECT_THROW(g.render(scene, cam, lazy, nullptr, a), std::logic_error);
+    g.readBack(b);
+    EXPECT_FALSE(b.pendingOnDevice());
+    a.reset(); // a fresh start is fine
+    EXPECT_NO_THROW(g.render(scene, cam, lazy, nullptr, a));
+    g.finish();
+  }
   // Reset on the host: the next render starts a new mean.
   progressive.reset();
   rs.readBack = true;

@@ -36,6 +36,7 @@ struct CudaUpdateCounters
   uint64_t imageDownloads = 0;        ///< accumulated images copied to the host
   double lastMajorantMs = 0.0;        ///< GPU time of the last majorant rebuild (all channels it touched)
   double lastRangeMs = 0.0;           ///< GPU time of the last range build
+  uint64_t textureFallbacks = 0;      ///< channels sampled from global memory for lack of room for a texture
 };
 
 /**
