@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "mcvol/CPURenderer.h"
 
-#include "mcvol/Integrator.h"
+#include "mcvol/RenderSetup.h"
 
 #include <stdexcept>
 
@@ -13,22 +13,6 @@ namespace mcvol
 {
 namespace
 {
-CameraView toView(const Camera& c)
-{
-  CameraView v;
-  v.width = c.width;
-  v.height = c.height;
-  for (int i = 0; i < 16; ++i)
-  {
-    v.invViewProj[i] = c.invViewProj[i];
-  }
-  for (int i = 0; i < 12; ++i)
-  {
-    v.worldToIndex[i] = c.worldToIndex[i];
-  }
-  return v;
-}
-
 template <BlendMode Mode>
 void renderRows(const SceneView& s, const CameraView& cam, const FrameParams& fp, const float* depth, float* rgba,
   uint32_t previous, int threads, RenderCounters* counters)
@@ -70,18 +54,7 @@ void renderRows(const SceneView& s, const CameraView& cam, const FrameParams& fp
 void CPURenderer::render(const Scene& scene, const Camera& camera, const RenderSettings& settings, const float* depth,
   Accumulator& accum, RenderCounters* counters)
 {
-  if (camera.width <= 0 || camera.height <= 0)
-  {
-    throw std::invalid_argument("mcvol: the image size must be positive");
-  }
-  if (accum.width() != camera.width || accum.height() != camera.height)
-  {
-    accum.resize(camera.width, camera.height);
-  }
-  if (settings.samplesPerPixel < 1)
-  {
-    throw std::invalid_argument("mcvol: samples per pixel must be at least 1");
-  }
+  checkRenderArguments(camera, settings, accum);
   // A copy: the extinction limit belongs to this render's camera.
   SceneView s = scene.view();
   if (s.volume.numChannels == 0 || s.tables.size < 2)
@@ -95,12 +68,7 @@ void CPURenderer::render(const Scene& scene, const Camera& camera, const RenderS
   }
   const CameraView cam = toView(camera);
   s.sigmaLimit = extinctionLimit(cam);
-  FrameParams fp;
-  fp.samplesPerPixel = settings.samplesPerPixel;
-  fp.firstSample = accum.samples();
-  fp.seed = settings.seed;
-  fp.tracker = settings.tracker;
-  fp.jitter = settings.jitterPixels;
+  const FrameParams fp = frameParams(settings, accum.samples());
   float* rgba = accum.rgba();
   const uint32_t previous = accum.samples();
   switch (s.blend.mode)

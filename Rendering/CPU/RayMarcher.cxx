@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "mcvol/RayMarcher.h"
+#include "mcvol/RenderSetup.h"
 
 #include <algorithm>
 #include <cmath>
@@ -51,21 +52,6 @@ void marchRows(const SceneView& s, const CameraView& cam, const MarchParams& mp,
   }
 }
 
-CameraView toView(const Camera& c)
-{
-  CameraView v;
-  v.width = c.width;
-  v.height = c.height;
-  for (int i = 0; i < 16; ++i)
-  {
-    v.invViewProj[i] = c.invViewProj[i];
-  }
-  for (int i = 0; i < 12; ++i)
-  {
-    v.worldToIndex[i] = c.worldToIndex[i];
-  }
-  return v;
-}
 } // namespace
 
 double RayMarcher::nyquistStep(const Camera& camera)

@@ -8,7 +8,7 @@
 #include "mcvol/CUDARenderer.h"
 
 #include "mcvol/Acceleration.h"
-#include "mcvol/Integrator.h"
+#include "mcvol/RenderSetup.h"
 
 #include <cuda_runtime.h>
 
@@ -259,16 +259,6 @@ void launchRender(bool count, dim3 grid, dim3 block, const SceneView& s, const C
   {
     renderKernel<Mode, false><<<grid, block>>>(s, cam, fp, depth, accum, previous, counters);
   }
-}
-
-CameraView toView(const Camera& c)
-{
-  CameraView v;
-  v.width = c.width;
-  v.height = c.height;
-  std::copy(std::begin(c.invViewProj), std::end(c.invViewProj), v.invViewProj);
-  std::copy(std::begin(c.worldToIndex), std::end(c.worldToIndex), v.worldToIndex);
-  return v;
 }
 
 /// Narrow-integer storage of a channel for the texture path.
@@ -806,18 +796,7 @@ void CUDARenderer::render(const Scene& scene, const Camera& camera, const Render
   Accumulator& accum, RenderCounters* counters)
 {
   Internal& in = *this->In;
-  if (camera.width <= 0 || camera.height <= 0)
-  {
-    throw std::invalid_argument("mcvol: the image size must be positive");
-  }
-  if (settings.samplesPerPixel < 1)
-  {
-    throw std::invalid_argument("mcvol: samples per pixel must be at least 1");
-  }
-  if (accum.width() != camera.width || accum.height() != camera.height)
-  {
-    accum.resize(camera.width, camera.height);
-  }
+  checkRenderArguments(camera, settings, accum);
   MCVOL_CUDA(cudaSetDevice(in.Device));
   in.sync(scene);
 
@@ -886,12 +865,7 @@ void CUDARenderer::render(const Scene& scene, const Camera& camera, const Render
     devDepth = in.Depth.ptr;
   }
 
-  FrameParams fp;
-  fp.samplesPerPixel = settings.samplesPerPixel;
-  fp.firstSample = accum.samples();
-  fp.seed = settings.seed;
-  fp.tracker = settings.tracker;
-  fp.jitter = settings.jitterPixels;
+  const FrameParams fp = frameParams(settings, accum.samples());
   const bool count = counters != nullptr;
   if (count)
   {

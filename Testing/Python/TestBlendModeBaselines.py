@@ -20,14 +20,12 @@ import numpy as np
 
 import vtkmodules.vtkRenderingOpenGL2  # noqa: F401
 from vtkmodules.vtkCommonDataModel import vtkPiecewiseFunction
-from vtkmodules.vtkIOImage import vtkPNGReader, vtkPNGWriter
 from vtkmodules.vtkRenderingCore import (vtkColorTransferFunction, vtkRenderer, vtkRenderWindow, vtkVolume,
                                          vtkVolumeProperty, vtkWindowToImageFilter)
-from vtkmodules.util.numpy_support import vtk_to_numpy, numpy_to_vtk
-from vtkmodules.vtkCommonDataModel import vtkImageData
+from vtkmodules.util.numpy_support import vtk_to_numpy
 
 from mcvol import vtkMultiChannelDemoSource, vtkMultiChannelVolumeMapper
-from mcvolTesting import Checker
+from mcvolTesting import Checker, read_png_rgb, write_png_rgb
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 BASELINES = os.path.join(HERE, "..", "Data", "Baseline")
@@ -99,23 +97,7 @@ def render(dataset, mode, tracker, spp=SPP, seed=7):
     return arr
 
 
-def read_png(path):
-    r = vtkPNGReader()
-    r.SetFileName(path)
-    r.Update()
-    img = r.GetOutput()
-    w, h, _ = img.GetDimensions()
-    return vtk_to_numpy(img.GetPointData().GetScalars()).reshape(h, w, -1)[:, :, :3].astype(np.float64)
 
-
-def write_png(path, arr):
-    img = vtkImageData()
-    img.SetDimensions(SIZE, SIZE, 1)
-    img.GetPointData().SetScalars(numpy_to_vtk(arr.reshape(-1, 3).astype(np.uint8), deep=True))
-    w = vtkPNGWriter()
-    w.SetFileName(path)
-    w.SetInputData(img)
-    w.Write()
 
 
 def main():
@@ -130,12 +112,12 @@ def main():
                 img = render(dataset, mode, tracker)
                 if not os.path.exists(path):
                     if generate:
-                        write_png(path, img)
+                        write_png_rgb(path, img)
                         print("generated", path)
                         continue
                     t.check(False, "%s: baseline missing (run with --generate, review, commit)" % name)
                     continue
-                diff = np.abs(img - read_png(path))
+                diff = np.abs(img - read_png_rgb(path))
                 t.check(diff.max() <= 2.0 and diff.mean() < 0.1,
                         "%s: differs from the baseline: max %.1f, mean %.3f levels" % (name, diff.max(), diff.mean()))
                 print("%s: max %.1f mean %.4f levels" % (name, diff.max(), diff.mean()))

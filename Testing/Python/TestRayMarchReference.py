@@ -29,14 +29,13 @@ import numpy as np
 
 import vtkmodules.vtkRenderingOpenGL2  # noqa: F401
 from vtkmodules.vtkCommonCore import vtkFloatArray
-from vtkmodules.vtkCommonDataModel import vtkImageData, vtkPiecewiseFunction
-from vtkmodules.vtkIOImage import vtkPNGReader, vtkPNGWriter
+from vtkmodules.vtkCommonDataModel import vtkPiecewiseFunction
 from vtkmodules.vtkRenderingCore import (vtkColorTransferFunction, vtkRenderer, vtkRenderWindow, vtkVolume,
                                          vtkVolumeProperty, vtkWindowToImageFilter)
-from vtkmodules.util.numpy_support import numpy_to_vtk, vtk_to_numpy
+from vtkmodules.util.numpy_support import vtk_to_numpy
 
 from mcvol import vtkMultiChannelDemoSource, vtkMultiChannelRayMarchMapper, vtkMultiChannelVolumeMapper
-from mcvolTesting import Checker
+from mcvolTesting import Checker, read_png_rgb, write_png_rgb
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 BASELINES = os.path.join(HERE, "..", "Data", "Baseline")
@@ -171,23 +170,7 @@ def convergence_statistic(mc, ref):
     return max(zs), np.sqrt((d ** 2).mean()), np.sqrt(v.mean()), int(usable.sum())
 
 
-def read_png(path):
-    r = vtkPNGReader()
-    r.SetFileName(path)
-    r.Update()
-    img = r.GetOutput()
-    w, h, _ = img.GetDimensions()
-    return vtk_to_numpy(img.GetPointData().GetScalars()).reshape(h, w, -1)[:, :, :3].astype(np.float64)
 
-
-def write_png(path, arr):
-    img = vtkImageData()
-    img.SetDimensions(SIZE, SIZE, 1)
-    img.GetPointData().SetScalars(numpy_to_vtk(arr.reshape(-1, 3).astype(np.uint8), deep=True))
-    w = vtkPNGWriter()
-    w.SetFileName(path)
-    w.SetInputData(img)
-    w.Write()
 
 
 def main():
@@ -204,12 +187,12 @@ def main():
             path = os.path.join(BASELINES, name)
             if not os.path.exists(path):
                 if generate:
-                    write_png(path, ref8)
+                    write_png_rgb(path, ref8)
                     print("generated", path)
                 else:
                     t.check(False, "%s: baseline missing (run with --generate, review, commit)" % name)
             else:
-                diff = np.abs(ref8 - read_png(path))
+                diff = np.abs(ref8 - read_png_rgb(path))
                 t.check(diff.max() <= 2.0 and diff.mean() < 0.1,
                         "%s: differs from the baseline: max %.1f, mean %.3f" % (name, diff.max(), diff.mean()))
             # 1b. Monte Carlo against the reference, threshold from its noise.

@@ -23,6 +23,36 @@ def capture_rgba(window):
     return vtk_to_numpy(image.GetPointData().GetScalars()).reshape(h, w, 4).copy()
 
 
+def read_png_rgb(path):
+    """A PNG as an (H, W, 3) float64 array (row 0 at the bottom)."""
+    import numpy as np
+    from vtkmodules.vtkIOImage import vtkPNGReader
+
+    reader = vtkPNGReader()
+    reader.SetFileName(path)
+    reader.Update()
+    img = reader.GetOutput()
+    w, h, _ = img.GetDimensions()
+    return vtk_to_numpy(img.GetPointData().GetScalars()).reshape(h, w, -1)[:, :, :3].astype(np.float64)
+
+
+def write_png_rgb(path, arr):
+    """Writes an (H, W, 3) array of 0..255 values as a PNG (row 0 at the bottom)."""
+    import numpy as np
+    from vtkmodules.vtkCommonDataModel import vtkImageData
+    from vtkmodules.vtkIOImage import vtkPNGWriter
+    from vtkmodules.util.numpy_support import numpy_to_vtk
+
+    h, w = arr.shape[0], arr.shape[1]
+    img = vtkImageData()
+    img.SetDimensions(w, h, 1)
+    img.GetPointData().SetScalars(numpy_to_vtk(arr.reshape(-1, 3).astype(np.uint8), deep=True))
+    writer = vtkPNGWriter()
+    writer.SetFileName(path)
+    writer.SetInputData(img)
+    writer.Write()
+
+
 def world_to_pixel(renderer, point):
     """Display (x, y) pixel of a world point."""
     renderer.SetWorldPoint(point[0], point[1], point[2], 1.0)

@@ -80,15 +80,7 @@ MCVOL_HOT Corners cornersOf(const VolumeView& vol, Vec3f p)
   Corners c;
   if (vol.nearest)
   {
-    int64_t v = 0;
-    int64_t stride = 1;
-    for (int a = 0; a < 3; ++a)
-    {
-      const int i = int(clampf(p[a], 0.f, float(vol.dims[a] - 1)) + 0.5f);
-      v += stride * int64_t(i < vol.dims[a] ? i : vol.dims[a] - 1);
-      stride *= vol.dims[a];
-    }
-    c.index[0] = v;
+    c.index[0] = nearestVoxel(vol, p);
     c.weight[0] = 1.f;
     c.count = 1;
     return c;
@@ -96,18 +88,7 @@ MCVOL_HOT Corners cornersOf(const VolumeView& vol, Vec3f p)
   int i0[3];
   int i1[3];
   float f[3];
-  for (int a = 0; a < 3; ++a)
-  {
-    const float x = clampf(p[a], 0.f, float(vol.dims[a] - 1));
-    int i = int(x);
-    if (i > vol.dims[a] - 2)
-    {
-      i = vol.dims[a] - 2 < 0 ? 0 : vol.dims[a] - 2;
-    }
-    i0[a] = i;
-    i1[a] = vol.dims[a] > 1 ? i + 1 : i;
-    f[a] = vol.dims[a] > 1 ? x - float(i) : 0.f;
-  }
+  trilinearFootprint(vol, p, i0, i1, f);
   const int64_t sy = vol.dims[0];
   const int64_t sz = int64_t(vol.dims[0]) * vol.dims[1];
   for (int k = 0; k < 8; ++k)

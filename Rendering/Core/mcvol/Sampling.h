@@ -27,6 +27,39 @@ MCVOL_HOT float fetchVoxel(const ChannelView& c, int64_t v)
   return 0.f;
 }
 
+/// Index of the voxel nearest to p, clamped to the grid.
+MCVOL_HOT int64_t nearestVoxel(const VolumeView& vol, Vec3f p)
+{
+  int64_t v = 0;
+  int64_t stride = 1;
+  for (int a = 0; a < 3; ++a)
+  {
+    const int i = int(clampf(p[a], 0.f, float(vol.dims[a] - 1)) + 0.5f);
+    v += stride * int64_t(i < vol.dims[a] ? i : vol.dims[a] - 1);
+    stride *= vol.dims[a];
+  }
+  return v;
+}
+
+/// The trilinear footprint of p, clamped to the grid: lower and upper voxel
+/// and the weight of the upper one per axis (an axis with one voxel uses it
+/// for both, weight 0).
+MCVOL_HOT void trilinearFootprint(const VolumeView& vol, Vec3f p, int i0[3], int i1[3], float f[3])
+{
+  for (int a = 0; a < 3; ++a)
+  {
+    const float x = clampf(p[a], 0.f, float(vol.dims[a] - 1));
+    int i = int(x);
+    if (i > vol.dims[a] - 2)
+    {
+      i = vol.dims[a] - 2 < 0 ? 0 : vol.dims[a] - 2;
+    }
+    i0[a] = i;
+    i1[a] = vol.dims[a] > 1 ? i + 1 : i;
+    f[a] = vol.dims[a] > 1 ? x - float(i) : 0.f;
+  }
+}
+
 /**
  * Trilinear interpolation (or the nearest voxel, if vol.nearest) of channel n
  * at continuous index p, clamped to the grid (axes with one voxel are
@@ -50,32 +83,12 @@ MCVOL_HOT float sampleChannel(const VolumeView& vol, int n, Vec3f p)
 #endif
   if (vol.nearest)
   {
-    int64_t v = 0;
-    int64_t stride = 1;
-    for (int a = 0; a < 3; ++a)
-    {
-      const int i = int(clampf(p[a], 0.f, float(vol.dims[a] - 1)) + 0.5f);
-      v += stride * int64_t(i < vol.dims[a] ? i : vol.dims[a] - 1);
-      stride *= vol.dims[a];
-    }
-    return fetchVoxel(c, v);
+    return fetchVoxel(c, nearestVoxel(vol, p));
   }
   int i0[3];
   int i1[3];
   float f[3];
-  for (int a = 0; a < 3; ++a)
-  {
-    const float hi = float(vol.dims[a] - 1);
-    const float x = clampf(p[a], 0.f, hi);
-    int i = int(x);
-    if (i > vol.dims[a] - 2)
-    {
-      i = vol.dims[a] - 2 < 0 ? 0 : vol.dims[a] - 2;
-    }
-    i0[a] = i;
-    i1[a] = vol.dims[a] > 1 ? i + 1 : i;
-    f[a] = vol.dims[a] > 1 ? x - float(i) : 0.f;
-  }
+  trilinearFootprint(vol, p, i0, i1, f);
   const int64_t sx = 1;
   const int64_t sy = vol.dims[0];
   const int64_t sz = int64_t(vol.dims[0]) * vol.dims[1];

@@ -1,0 +1,59 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#pragma once
+
+#include "mcvol/Integrator.h"
+#include "mcvol/Renderer.h"
+
+#include <stdexcept>
+
+namespace mcvol
+{
+/// Host-side set-up every backend does the same way before tracing.
+
+/// The per-ray code's copy of a Camera.
+inline CameraView toView(const Camera& c)
+{
+  CameraView v;
+  v.width = c.width;
+  v.height = c.height;
+  for (int i = 0; i < 16; ++i)
+  {
+    v.invViewProj[i] = c.invViewProj[i];
+  }
+  for (int i = 0; i < 12; ++i)
+  {
+    v.worldToIndex[i] = c.worldToIndex[i];
+  }
+  return v;
+}
+
+/// What a render asks of every pixel, continuing after `firstSample` samples.
+inline FrameParams frameParams(const RenderSettings& s, uint32_t firstSample)
+{
+  FrameParams fp;
+  fp.samplesPerPixel = s.samplesPerPixel;
+  fp.firstSample = firstSample;
+  fp.seed = s.seed;
+  fp.tracker = s.tracker;
+  fp.jitter = s.jitterPixels;
+  return fp;
+}
+
+/// The argument checks of Renderer::render, shared by the backends; sizes
+/// `accum` to the camera (which restarts it when the size changes).
+inline void checkRenderArguments(const Camera& camera, const RenderSettings& settings, Accumulator& accum)
+{
+  if (camera.width <= 0 || camera.height <= 0)
+  {
+    throw std::invalid_argument("mcvol: the image size must be positive");
+  }
+  if (settings.samplesPerPixel < 1)
+  {
+    throw std::invalid_argument("mcvol: samples per pixel must be at least 1");
+  }
+  if (accum.width() != camera.width || accum.height() != camera.height)
+  {
+    accum.resize(camera.width, camera.height);
+  }
+}
+} // namespace mcvol
