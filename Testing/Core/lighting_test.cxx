@@ -1,0 +1,247 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Lighting building blocks (Lighting.h): the Henyey-Greenstein phase
+// function and the shadow-ray transmittance estimators.
+//
+// Significance: each TEST has a family-wise level kAlpha = 0.001, split
+// evenly (Bonferroni) over its statistical checks; seeds are fixed.
+#include "TestUtil.h"
+
+#include "mcvol/Lighting.h"
+
+using namespace mcvol;
+using namespace mcvol::test;
+
+namespace
+{
+constexpr double kAlpha = 1e-3;
+
+/// CDF of mu under Henyey-Greenstein, in double (for expected bin counts).
+double hgCdf(double mu, double g)
+{
+  if (std::fabs(g) < 1e-3)
+  {
+    return 0.5 * (mu + 1.0);
+  }
+  // P(mu' <= mu) = (1 - g^2) / (2 g) * (1 / sqrt(1 + g^2 - 2 g mu) - 1 / (1 + g))
+  return (1.0 - g * g) / (2.0 * g) * (1.0 / std::sqrt(1.0 + g * g - 2.0 * g * mu) - 1.0 / (1.0 + g));
+}
+} // namespace
+
+// The phase function integrates to 1 over the sphere for every g.
+TEST(HenyeyGreenstein, Normalised)
+{
+  for (float g : { -0.9f, -0.5f, 0.f, 0.3f, 0.8f, 0.95f })
+  {
+    // Midpoint rule on mu with many bins: 2 pi * integral of p(mu) dmu.
+    const int n = 200000;
+    double sum = 0;
+    for (int i = 0; i < n; ++i)
+    {
+      const double mu = -1.0 + (i + 0.5) * 2.0 / n;
+      sum += double(hgPhase(float(mu), g)) * 2.0 / n;
+    }
+    EXPECT_NEAR(2.0 * M_PI * sum, 1.0, 2e-3) << "g = " << g;
+  }
+}
+
+// Sampled mu follow the HG density (chi-square over 20 bins of equal
+// probability) and their mean is g (z-test); 6 values of g x 2 checks.
+TEST(HenyeyGreenstein, SamplingMatchesDensityAndMeanCosineIsG)
+{
+  const double alpha = kAlpha / 12;
+  const int n = 200000;
+  const int bins = 20;
+  uint32_t key = 0;
+  for (float g : { -0.7f, -0.2f, 0.f, 0.4f, 0.8f, 0.95f })
+  {
+    std::vector<double> edges(bins + 1);
+    edges[0] = -1.0;
+    edges[bins] = 1.0;
+    // Bin edges of equal probability by bisection on the CDF.
+    for (int b = 1; b < bins; ++b)
+    {
+      double lo = -1.0, hi = 1.0;
+      for (int it = 0; it < 100; ++it)
+      {
+        const double mid = 0.5 * (lo + hi);
+        (hgCdf(mid, g) < double(b) / bins ? lo : hi) = mid;
+      }
+      edges[size_t(b)] = 0.5 * (lo + hi);
+    }
+    std::vector<double> counts(bins, 0.0), probs(bins, 1.0 / bins);
+    double sum = 0, sumSq = 0;
+    Rng rng(7, key++, 11);
+    for (int i = 0; i < n; ++i)
+    {
+      const double mu = sampleHGCosine(g, rng.next());
+      ASSERT_TRUE(mu >= -1.0 && mu <= 1.0);
+      const int b = int(std::upper_bound(edges.begin(), edges.end(), mu) - edges.begin()) - 1;
+      counts[size_t(std::min(std::max(b, 0), bins - 1))] += 1;
+      sum += mu;
+      sumSq += mu * mu;
+    }
+    EXPECT_GT(chiSquarePValue(counts, probs), alpha) << "g = " << g;
+    const double mean = sum / n;
+    const double var = sumSq / n - mean * mean;
+    const double z = (mean - g) / std::sqrt(var / n);
+    EXPECT_GT(normalTwoSided(z), alpha) << "g = " << g << ": mean cosine " << mean;
+  }
+}
+
+// directionAround gives unit vectors at the requested angle.
+TEST(HenyeyGreenstein, DirectionAroundKeepsTheAngle)
+{
+  TestRand r(3);
+  for (int i = 0; i < 10000; ++i)
+  {
+    Vec3f d(float(r.uniform(-1, 1)), float(r.uniform(-1, 1)), float(r.uniform(-1, 1)));
+    if (i % 100 == 0)
+    {
+      d = Vec3f(0.f, 0.f, i % 200 == 0 ? 1.f : -1.f); // the basis' special cases
+    }
+    d = d * (1.f / length(d));
+    const float mu = float(r.uniform(-1, 1));
+    const Vec3f w = directionAround(d, mu, float(r.uniform()));
+    ASSERT_NEAR(length(w), 1.f, 1e-5f);
+    ASSERT_NEAR(dot(w, d), mu, 2e-5f);
+  }
+}
+
+// Transmittance along a ray through a field whose extinction grows linearly
+// (trilinear interpolation of a linear field is exact, and so is the
+// transfer function's linear extinction): T = exp(-integral sigma). Both
+// estimators, density (one channel and two summed) and max blending;
+// 2 estimators x 3 scenes x 1 z-test each.
+TEST(ShadowTransmittance, LinearFieldIsAnalytic)
+{
+  const double alpha = kAlpha / 6;
+  const int n = 40000;
+  TestVolume v(33, 3, 3, 2, 0.f);
+  for (int k = 0; k < 3; ++k)
+    for (int j = 0; j < 3; ++j)
+      for (int i = 0; i < 33; ++i)
+      {
+        v.channels[0][v.index(i, j, k)] = float(i) / 32.f;
+        v.channels[1][v.index(i, j, k)] = 1.f - float(i) / 32.f;
+      }
+  const double tau = 0.1; // extinction per world unit at scalar 1
+  auto tf = [&](int K)
+  {
+    TransferFunctionDesc t = flatTF(0.f, 1, 1, 1, 1.f, K, 0.f, 1.f);
+    for (int i = 0; i < K; ++i)
+    {
+      t.opacity[size_t(i)] = float(-std::expm1(-tau * double(i) / double(K - 1)));
+    }
+    return t;
+  };
+  struct Case
+  {
+    const char* name;
+    BlendMode mode;
+    int channels;
+    double opticalDepth; // along x from 2 to 30
+  };
+  // Channel 0: sigma = tau x / 32 -> integral over [2, 30] = tau (30^2 - 2^2) / 64.
+  const double d0 = tau * (900.0 - 4.0) / 64.0;
+  // Channel 1: sigma = tau (1 - x / 32) -> tau (28 - (900 - 4) / 64).
+  const double d1 = tau * (28.0 - 896.0 / 64.0);
+  // Max: the larger of the two, switching at x = 16.
+  const double dmax = tau * ((16.0 - 2.0) - (256.0 - 4.0) / 64.0) + tau * (900.0 - 256.0) / 64.0;
+  for (const Case& cs : { Case{ "density, one channel", BlendMode::Density, 1, d0 },
+         Case{ "density, two channels", BlendMode::Density, 2, d0 + d1 },
+         Case{ "max, two channels", BlendMode::Max, 2, dmax } })
+  {
+    Scene scene;
+    TestVolume w = v;
+    w.channels.resize(size_t(cs.channels));
+    std::vector<TransferFunctionDesc> tfs(size_t(cs.channels), tf(1025));
+    configure(scene, w, tfs, 4, cs.mode);
+    const SceneView& s = scene.view();
+    const double expected = std::exp(-cs.opticalDepth);
+    for (ShadowEstimator est : { ShadowEstimator::Ratio, ShadowEstimator::Delta })
+    {
+      double sum = 0, sumSq = 0;
+      ShadowCounters c;
+      for (int i = 0; i < n; ++i)
+      {
+        Rng rng(uint32_t(i), 5u, uint32_t(est));
+        float T = 0.f;
+        if (cs.mode == BlendMode::Density)
+        {
+          T = shadowTransmittance<BlendMode::Density>(
+            s, s.active, s.numActive, Vec3f(2.f, 1.f, 1.f), Vec3f(1.f, 0.f, 0.f), 28.f, est, rng, c);
+        }
+        else
+        {
+          T = shadowTransmittance<BlendMode::Max>(
+            s, s.active, s.numActive, Vec3f(2.f, 1.f, 1.f), Vec3f(1.f, 0.f, 0.f), 28.f, est, rng, c);
+        }
+        ASSERT_TRUE(T >= 0.f && T <= 1.f);
+        if (est == ShadowEstimator::Delta)
+        {
+          ASSERT_TRUE(T == 0.f || T == 1.f);
+        }
+        sum += T;
+        sumSq += double(T) * T;
+      }
+      const double mean = sum / n;
+      const double var = std::max(sumSq / n - mean * mean, 1e-12);
+      const double z = (mean - expected) / std::sqrt(var / n);
+      EXPECT_GT(normalTwoSided(z), alpha) << cs.name << (est == ShadowEstimator::Ratio ? " ratio" : " delta")
+                                          << ": mean " << mean << ", expected " << expected << " (z = " << z << ")";
+      EXPECT_EQ(c.rays, uint32_t(n));
+      EXPECT_GT(c.tentative, 0u);
+    }
+  }
+}
+
+// Ratio tracking has less variance than delta tracking where the majorant
+// is loose (the reason to offer it), and an empty path costs no tentative
+// collision.
+TEST(ShadowTransmittance, RatioIsSmootherAndEmptySpaceIsFree)
+{
+  // A field that varies inside each macrocell, so the majorant lies above
+  // the extinction at most points (where the two estimators differ; with a
+  // tight majorant ratio tracking degenerates to delta tracking).
+  TestVolume v(33, 3, 3, 1, 0.f);
+  for (int k = 0; k < 3; ++k)
+    for (int j = 0; j < 3; ++j)
+      for (int i = 0; i < 33; ++i)
+        v.channels[0][v.index(i, j, k)] = float((i * 7) % 9) / 8.f;
+  Scene scene;
+  configure(scene, v, { flatTF(0.f, 1, 1, 1, 1.f, 2, 0.f, 1.f) }, 8);
+  TransferFunctionDesc ramp = flatTF(0.f, 1, 1, 1, 1.f, 2, 0.f, 1.f);
+  ramp.opacity[1] = opacityFor(0.1, 1.0);
+  scene.setTransferFunction(0, ramp);
+  scene.update();
+  const SceneView& s = scene.view();
+  double var[2];
+  for (ShadowEstimator est : { ShadowEstimator::Ratio, ShadowEstimator::Delta })
+  {
+    double sum = 0, sumSq = 0;
+    ShadowCounters c;
+    for (int i = 0; i < 20000; ++i)
+    {
+      Rng rng(uint32_t(i), 9u, 1u);
+      const float T = shadowTransmittance<BlendMode::Density>(
+        s, s.active, s.numActive, Vec3f(0.f, 1.f, 1.f), Vec3f(1.f, 0.f, 0.f), 32.f, est, rng, c);
+      sum += T;
+      sumSq += double(T) * T;
+    }
+    var[int(est)] = sumSq / 20000 - (sum / 20000) * (sum / 20000);
+  }
+  std::printf("transmittance variance: ratio %.4f, delta %.4f\n", var[0], var[1]);
+  EXPECT_LT(var[0], 0.5 * var[1]);
+
+  TestVolume empty(17, 3, 3, 1, 0.f);
+  Scene es;
+  configure(es, empty, { flatTF(0.f, 1, 1, 1) }, 4);
+  ShadowCounters c;
+  Rng rng(1, 1, 1);
+  const SceneView& e = es.view();
+  const int all[1] = { 0 };
+  EXPECT_EQ(shadowTransmittance<BlendMode::Density>(
+              e, all, 1, Vec3f(0.f, 1.f, 1.f), Vec3f(1.f, 0.f, 0.f), 16.f, ShadowEstimator::Ratio, rng, c),
+    1.f);
+  EXPECT_EQ(c.tentative, 0u) << "zero majorants: no sampling at all";
+}
