@@ -8,6 +8,8 @@
 
 #include "mcvol/Lighting.h"
 
+#include <cstring>
+
 using namespace mcvol;
 using namespace mcvol::test;
 
@@ -244,4 +246,207 @@ TEST(ShadowTransmittance, RatioIsSmootherAndEmptySpaceIsFree)
               e, all, 1, Vec3f(0.f, 1.f, 1.f), Vec3f(1.f, 0.f, 0.f), 16.f, ShadowEstimator::Ratio, rng, c),
     1.f);
   EXPECT_EQ(c.tentative, 0u) << "zero majorants: no sampling at all";
+}
+
+namespace
+{
+/// Mean and standard error of per-pixel values f(R, G, B, A) over K renders
+/// of one sample each (pixels and renders independent).
+struct MeanSE
+{
+  double mean = 0, se = 0;
+};
+
+template <typename F>
+MeanSE pixelStatistic(
+  Renderer& r, const Scene& scene, const Camera& cam, int K, F f, RenderCounters* counters = nullptr)
+{
+  double sum = 0, sumSq = 0;
+  long n = 0;
+  for (int k = 0; k < K; ++k)
+  {
+    Accumulator acc;
+    RenderSettings rs;
+    rs.seed = uint32_t(100 + k);
+    r.render(scene, cam, rs, nullptr, acc, counters);
+    for (int p = 0; p < cam.width * cam.height; ++p)
+    {
+      const float* v = acc.rgba() + 4 * p;
+      const double x = f(v[0], v[1], v[2], v[3]);
+      sum += x;
+      sumSq += x * x;
+      ++n;
+    }
+  }
+  MeanSE m;
+  m.mean = sum / n;
+  m.se = std::sqrt(std::max(0.0, sumSq / n - m.mean * m.mean) / n);
+  return m;
+}
+
+/// A slab of constant extinction sigma, 12 voxels deep along z, white.
+void slabScene(Scene& scene, TestVolume& v, double sigma)
+{
+  v = TestVolume(6, 6, 13, 1, 1.f);
+  configure(scene, v, { flatTF(opacityFor(sigma, 1.0), 1, 1, 1) }, 4);
+}
+} // namespace
+
+// Single scattering from a directional light on the viewer's side of a
+// homogeneous slab (albedo 1, white): a collision at depth t has density
+// sigma e^(-sigma t) and sends p(-1) E e^(-sigma t) back, so
+// E[R] = E p(-1) (1 - e^(-2 sigma L)) / 2 and E[alpha] = 1 - e^(-sigma L);
+// g = 0 and g = 0.5, ratio and delta shadows: 4 scenes x 2 z-tests.
+TEST(Lighting, SingleScatteringSlabIsAnalytic)
+{
+  const double alpha = kAlpha / 8;
+  const double sigma = 0.15, L = 12.0, E = 2.0;
+  Scene scene;
+  TestVolume v;
+  slabScene(scene, v, sigma);
+  const Camera cam = orthoAlongZ(8, 8, 1, 4, 1, 4, 20, 40); // rays along -z through the slab
+  CPURenderer r;
+  for (float g : { 0.f, 0.5f })
+  {
+    for (bool delta : { false, true })
+    {
+      LightingDesc ld;
+      LightDesc light;
+      light.vector[0] = 0;
+      light.vector[1] = 0;
+      light.vector[2] = 1; // towards the light: back along the rays
+      light.intensity = E;
+      ld.lights.push_back(light);
+      ld.albedo = { 1.f };
+      ld.anisotropy = { g };
+      ld.deltaShadows = delta;
+      ld.maxDepth = 1;
+      scene.setLighting(ld);
+      ASSERT_TRUE(scene.lit());
+      RenderCounters c;
+      const MeanSE R = pixelStatistic(
+        r, scene, cam, 64, [](float x, float, float, float) { return double(x); }, &c);
+      const MeanSE A = pixelStatistic(r, scene, cam, 64, [](float, float, float, float a) { return double(a); });
+      // Henyey-Greenstein at mu = -1, written out independently of hgPhase().
+      const double p = (1.0 - double(g) * g) / (4.0 * M_PI * std::pow(1.0 + g, 3.0));
+      const double expectR = E * p * (1.0 - std::exp(-2.0 * sigma * L)) / 2.0;
+      const double expectA = 1.0 - std::exp(-sigma * L);
+      std::printf("slab g %.1f %s: R %.5f +- %.5f (expected %.5f), alpha %.4f (expected %.4f)\n", g,
+        delta ? "delta" : "ratio", R.mean, R.se, expectR, A.mean, expectA);
+      EXPECT_GT(normalTwoSided((R.mean - expectR) / R.se), alpha)
+        << "g " << g << (delta ? " delta" : " ratio") << ": R " << R.mean << " expected " << expectR;
+      EXPECT_GT(normalTwoSided((A.mean - expectA) / A.se), alpha) << "alpha " << A.mean << " expected " << expectA;
+      EXPECT_GT(c.scatteringEvents, 0u);
+      EXPECT_EQ(c.shadowRays, c.scatteringEvents) << "one shadow ray per scattering event and light";
+      EXPECT_EQ(c.gradientEvaluations, 0u);
+    }
+  }
+}
+
+// White furnace: an albedo-1 white medium under uniform ambient radiance A,
+// with multiple scattering, returns A wherever the camera ray collides:
+// E[R - A alpha] = 0 (z-test, 2 scenes).
+TEST(Lighting, FurnaceConvergesToTheAmbientRadiance)
+{
+  const double alpha = kAlpha / 2;
+  const double A = 0.6;
+  for (double sigma : { 0.1, 0.5 })
+  {
+    Scene scene;
+    TestVolume v;
+    slabScene(scene, v, sigma);
+    LightingDesc ld;
+    ld.ambient[0] = ld.ambient[1] = ld.ambient[2] = A;
+    ld.albedo = { 1.f };
+    ld.anisotropy = { 0.3f };
+    ld.maxDepth = 1024;
+    scene.setLighting(ld);
+    const Camera cam = orbitCamera(v.dims, std::array<double, 3>{ 1, 1, 1 }.data(), 16, 16, 30, 20);
+    CPURenderer r;
+    const MeanSE D =
+      pixelStatistic(r, scene, cam, 256, [A](float x, float, float, float a) { return double(x) - A * double(a); });
+    std::printf("furnace sigma %.1f: mean R - A alpha = %.8f +- %.5f\n", sigma, D.mean, D.se);
+    EXPECT_GT(normalTwoSided(D.mean / D.se), alpha) << "sigma " << sigma << ": mean R - A alpha = " << D.mean;
+  }
+}
+
+// Effects that are off cost nothing: no lights and no ambient run the unlit
+// kernel (the same image, bit for bit, and no lighting work); shadows off
+// traces no shadow ray; albedo 0 never scatters; gradient shading off
+// evaluates no gradient.
+TEST(Lighting, EffectsThatAreOffCostNothing)
+{
+  const DemoVolume v = makeDemo("cosmology", { 24, 24, 24 });
+  Scene scene;
+  configureDemo(scene, v, 4);
+  const Camera cam = orbitCamera(v.dims, v.spacing, 24, 24, 30, 20);
+  CPURenderer r;
+  Accumulator a, b;
+  RenderSettings rs;
+  rs.samplesPerPixel = 4;
+  RenderCounters c0;
+  r.render(scene, cam, rs, nullptr, a, &c0);
+  LightingDesc dark; // a light of intensity 0 and no ambient: not lit
+  dark.lights.push_back(LightDesc());
+  dark.lights[0].intensity = 0;
+  scene.setLighting(dark);
+  EXPECT_FALSE(scene.lit());
+  RenderCounters c1;
+  r.render(scene, cam, rs, nullptr, b, &c1);
+  EXPECT_EQ(0, std::memcmp(a.rgba(), b.rgba(), sizeof(float) * 4 * 24 * 24)) << "unlit image changed";
+  for (const RenderCounters& c : { c0, c1 })
+  {
+    EXPECT_EQ(c.scatteringEvents + c.shadowRays + c.gradientEvaluations, 0u);
+  }
+  LightingDesc ld;
+  ld.lights.push_back(LightDesc());
+  ld.albedo.assign(4, 0.8f);
+  ld.shadows = false;
+  scene.setLighting(ld);
+  RenderCounters c2;
+  Accumulator acc;
+  r.render(scene, cam, rs, nullptr, acc, &c2);
+  EXPECT_GT(c2.scatteringEvents, 0u);
+  EXPECT_EQ(c2.shadowRays, 0u) << "shadows off";
+  EXPECT_EQ(c2.gradientEvaluations, 0u) << "gradient shading off";
+  ld.albedo.assign(4, 0.f);
+  ld.shadows = true;
+  scene.setLighting(ld);
+  RenderCounters c3;
+  acc.reset();
+  r.render(scene, cam, rs, nullptr, acc, &c3);
+  EXPECT_EQ(c3.scatteringEvents + c3.shadowRays, 0u) << "albedo 0 never scatters";
+  ld.albedo.assign(4, 0.8f);
+  ld.gradientShading = true;
+  scene.setLighting(ld);
+  RenderCounters c4;
+  acc.reset();
+  r.render(scene, cam, rs, nullptr, acc, &c4);
+  EXPECT_EQ(c4.gradientEvaluations, c4.scatteringEvents) << "one gradient per scattering event";
+  EXPECT_GT(c4.shadowRays, 0u);
+}
+
+// Bad lighting input is an error.
+TEST(Lighting, BadInputIsAnError)
+{
+  Scene scene;
+  LightingDesc ld;
+  ld.albedo = { 1.5f };
+  EXPECT_THROW(scene.setLighting(ld), std::invalid_argument);
+  ld.albedo = { 0.5f };
+  ld.anisotropy = { 1.f };
+  EXPECT_THROW(scene.setLighting(ld), std::invalid_argument);
+  ld.anisotropy = { 0.f };
+  ld.maxDepth = 0;
+  EXPECT_THROW(scene.setLighting(ld), std::invalid_argument);
+  ld.maxDepth = 1;
+  LightDesc bad;
+  bad.vector[0] = bad.vector[1] = bad.vector[2] = 0;
+  ld.lights.push_back(bad);
+  EXPECT_THROW(scene.setLighting(ld), std::invalid_argument);
+  ld.lights[0].vector[2] = 1;
+  ld.lights[0].intensity = -1;
+  EXPECT_THROW(scene.setLighting(ld), std::invalid_argument);
+  ld.lights.assign(9, LightDesc());
+  EXPECT_THROW(scene.setLighting(ld), std::invalid_argument);
 }

@@ -148,4 +148,196 @@ MCVOL_HOT float shadowTransmittance(const SceneView& s, const int* channels, int
   }
   return T;
 }
+
+/// 3x3 row-major matrix times vector.
+MCVOL_FUNC Vec3f mul3(const float* m, Vec3f v)
+{
+  return Vec3f(
+    m[0] * v.x + m[1] * v.y + m[2] * v.z, m[3] * v.x + m[4] * v.y + m[5] * v.z, m[6] * v.x + m[7] * v.y + m[8] * v.z);
+}
+
+/// Transposed 3x3 row-major matrix times vector.
+MCVOL_FUNC Vec3f mul3T(const float* m, Vec3f v)
+{
+  return Vec3f(
+    m[0] * v.x + m[3] * v.y + m[6] * v.z, m[1] * v.x + m[4] * v.y + m[7] * v.z, m[2] * v.x + m[5] * v.y + m[8] * v.z);
+}
+
+/// Distance (world units) from index point x to the volume box along the
+/// index direction d (the image of a unit world direction); 0 if outside.
+MCVOL_FUNC float boxExit(const VolumeView& vol, Vec3f x, Vec3f d)
+{
+  float t0 = 0.f, t1 = 3.4e38f;
+  return intersectBox(vol.boxLo, vol.boxHi, x, d, t0, t1) ? t1 : 0.f;
+}
+
+/**
+ * Gradient of the blend's extinction at index point p, in world units
+ * (central differences one voxel apart, mapped by the transpose of the
+ * world-to-index matrix).
+ */
+template <BlendMode Mode>
+MCVOL_HOT Vec3f extinctionGradient(const SceneView& s, const int* channels, int count, Vec3f p, RayCounters& c)
+{
+  ++c.gradients;
+  Vec3f g;
+  for (int a = 0; a < 3; ++a)
+  {
+    Vec3f lo = p, hi = p;
+    lo[a] -= 1.f;
+    hi[a] += 1.f;
+    g[a] =
+      0.5f * (blendedOptics<Mode>(s, channels, count, hi).sigma - blendedOptics<Mode>(s, channels, count, lo).sigma);
+  }
+  return mul3T(s.lighting.toIndex, g);
+}
+
+/**
+ * Scattering function at a scattering vertex: Henyey-Greenstein plus, with
+ * gradient shading, the Blinn-Phong term of paper 004 Section 3 scaled by
+ * the gradient magnitude: |grad| (H . N)^n (N . wl)_+, with N = -grad / |grad|
+ * (pointing out of denser material) and H the half vector of the light
+ * direction wl and the direction back to the viewer -w.
+ */
+MCVOL_HOT float scatterFunction(
+  const LightingView& L, float g, Vec3f w, Vec3f wl, bool gradient, Vec3f grad, float gradLen)
+{
+  float f = hgPhase(dot(w, wl), g);
+  if (gradient && gradLen > 0.f)
+  {
+    const Vec3f n = grad * (-1.f / gradLen);
+    Vec3f h = wl - w;
+    const float hl = length(h);
+    const float nl = dot(n, wl);
+    if (hl > 0.f && nl > 0.f)
+    {
+      h = h * (1.f / hl);
+      const float nh = fmaxf(0.f, dot(n, h));
+      f += gradLen * powf(nh, L.shininess) * nl;
+    }
+  }
+  return f;
+}
+
+/**
+ * One lit Monte Carlo sample (Lerzer and Dachsbacher Eq. 1-2 with the
+ * paper's multi-density tracking): the camera path is tracked as in the
+ * unlit case; a real collision with channel n scatters with probability
+ * albedo_n and otherwise absorbs and emits the blend's colour. At a
+ * scattering vertex the path's throughput takes the blend's colour, each
+ * light is sampled (next-event estimation with a shadow ray) and the ambient
+ * environment through one phase-sampled direction (its phase value over its
+ * pdf is 1); the path then continues in a phase-sampled direction, up to
+ * maxDepth scattering events, with Russian roulette from the third.
+ * `w` is the ray's unit world direction, `d` its index-space image.
+ */
+template <BlendMode Mode>
+MCVOL_HOT Vec4f traceLitSample(const SceneView& s, Tracker tracker, Vec3f o, Vec3f d, Vec3f w, float tmax, Rng& rng,
+  RayCounters& c, ShadowCounters& sc)
+{
+  const LightingView& L = s.lighting;
+  const ShadowEstimator est = L.shadowEstimator == 1 ? ShadowEstimator::Delta : ShadowEstimator::Ratio;
+  Vec4f out;
+  Vec3f radiance;
+  Vec3f throughput(1.f, 1.f, 1.f);
+  for (int depth = 0;; ++depth)
+  {
+    const Hit hit = tracker == Tracker::OneDDA ? track1DDA<Mode>(s, o, d, 0.f, tmax, rng, c)
+                                               : trackNDDA<Mode>(s, o, d, 0.f, tmax, rng, c);
+    if (!hit.found())
+    {
+      break; // escaped: the environment was counted at the vertices
+    }
+    if (depth == 0)
+    {
+      out.a = 1.f;
+    }
+    const Vec3f x = o + d * hit.t;
+    if (!(rng.next() < L.albedo[hit.channel]))
+    {
+      radiance += throughput * hit.rgb; // absorbed: emits
+      break;
+    }
+    ++c.scattering;
+    throughput = throughput * hit.rgb;
+    const float g = L.anisotropy[hit.channel];
+    Vec3f grad;
+    float gradLen = 0.f;
+    if (L.gradientShading)
+    {
+      grad = extinctionGradient<Mode>(s, s.active, s.numActive, x, c);
+      gradLen = length(grad);
+    }
+    for (int l = 0; l < L.numLights; ++l)
+    {
+      Vec3f wl, dl;
+      float dist = 3.4e38f;
+      float falloff = 1.f;
+      if (L.lightType[l] == 0)
+      {
+        wl = L.lightVector[l];
+        dl = mul3(L.toIndex, wl);
+      }
+      else
+      {
+        const Vec3f toLight = mul3(L.toIndex, L.lightVector[l]) + L.indexOffset - x; // index space
+        const Vec3f worldVec = mul3(L.toWorld, toLight);
+        dist = length(worldVec);
+        if (!(dist > 0.f))
+        {
+          continue;
+        }
+        wl = worldVec * (1.f / dist);
+        dl = toLight * (1.f / dist);
+        falloff = 1.f / (dist * dist);
+      }
+      const float f = scatterFunction(L, g, w, wl, L.gradientShading, grad, gradLen);
+      if (!(f > 0.f))
+      {
+        continue;
+      }
+      float T = 1.f;
+      if (L.shadows)
+      {
+        ++c.shadowRays;
+        T = shadowTransmittance<Mode>(
+          s, s.active, s.numActive, x, dl, minf(boxExit(s.volume, x, dl), dist), est, rng, sc);
+      }
+      radiance += throughput * L.lightRadiance[l] * (f * T * falloff);
+    }
+    if (L.ambient.x > 0.f || L.ambient.y > 0.f || L.ambient.z > 0.f)
+    {
+      const Vec3f wa = directionAround(w, sampleHGCosine(g, rng.next()), rng.next());
+      float T = 1.f;
+      if (L.shadows)
+      {
+        ++c.shadowRays;
+        const Vec3f da = mul3(L.toIndex, wa);
+        T = shadowTransmittance<Mode>(s, s.active, s.numActive, x, da, boxExit(s.volume, x, da), est, rng, sc);
+      }
+      radiance += throughput * L.ambient * T;
+    }
+    if (depth + 1 >= L.maxDepth)
+    {
+      break;
+    }
+    if (depth >= 2)
+    {
+      const float q = clampf(fmaxf(throughput.x, fmaxf(throughput.y, throughput.z)), 0.05f, 1.f);
+      if (!(rng.next() < q))
+      {
+        break;
+      }
+      throughput = throughput * (1.f / q);
+    }
+    w = directionAround(w, sampleHGCosine(g, rng.next()), rng.next());
+    d = mul3(L.toIndex, w);
+    o = x;
+    tmax = boxExit(s.volume, o, d);
+  }
+  out.r = radiance.x;
+  out.g = radiance.y;
+  out.b = radiance.z;
+  return out;
+}
 } // namespace mcvol
