@@ -305,7 +305,8 @@ TEST(Lighting, SingleScatteringSlabIsAnalytic)
   TestVolume v;
   slabScene(scene, v, sigma);
   const Camera cam = orthoAlongZ(8, 8, 1, 4, 1, 4, 20, 40); // rays along -z through the slab
-  CPURenderer r;
+  const std::unique_ptr<Renderer> rp = testRenderer();
+  Renderer& r = *rp;
   for (float g : { 0.f, 0.5f })
   {
     for (bool delta : { false, true })
@@ -362,7 +363,8 @@ TEST(Lighting, FurnaceConvergesToTheAmbientRadiance)
     ld.maxDepth = 1024;
     scene.setLighting(ld);
     const Camera cam = orbitCamera(v.dims, std::array<double, 3>{ 1, 1, 1 }.data(), 16, 16, 30, 20);
-    CPURenderer r;
+    const std::unique_ptr<Renderer> rp = testRenderer();
+    Renderer& r = *rp;
     const MeanSE D =
       pixelStatistic(r, scene, cam, 256, [A](float x, float, float, float a) { return double(x) - A * double(a); });
     std::printf("furnace sigma %.1f: mean R - A alpha = %.8f +- %.5f\n", sigma, D.mean, D.se);
@@ -380,7 +382,8 @@ TEST(Lighting, EffectsThatAreOffCostNothing)
   Scene scene;
   configureDemo(scene, v, 4);
   const Camera cam = orbitCamera(v.dims, v.spacing, 24, 24, 30, 20);
-  CPURenderer r;
+  const std::unique_ptr<Renderer> rp = testRenderer();
+  Renderer& r = *rp;
   Accumulator a, b;
   RenderSettings rs;
   rs.samplesPerPixel = 4;
