@@ -6,6 +6,8 @@
 #include "vtkDataArray.h"
 #include "vtkFloatArray.h"
 #include "vtkImageData.h"
+#include "vtkLight.h"
+#include "vtkLightCollection.h"
 #include "vtkMath.h"
 #include "vtkMatrix3x3.h"
 #include "vtkMatrix4x4.h"
@@ -97,6 +99,7 @@ struct AccumulationKey
   vtkMTimeType MapperMTime = 0;
   vtkMTimeType PropertyMTime = 0;
   vtkMTimeType DataMTime = 0;
+  vtkMTimeType LightsMTime = 0; ///< the renderer's lights (lighting only)
   int Width = 0;
   int Height = 0;
   double InvViewProj[16] = {};
@@ -106,7 +109,8 @@ struct AccumulationKey
   bool operator==(const AccumulationKey& o) const
   {
     return this->MapperMTime == o.MapperMTime && this->PropertyMTime == o.PropertyMTime &&
-      this->DataMTime == o.DataMTime && this->Width == o.Width && this->Height == o.Height &&
+      this->DataMTime == o.DataMTime && this->LightsMTime == o.LightsMTime && this->Width == o.Width &&
+      this->Height == o.Height &&
       std::equal(std::begin(this->InvViewProj), std::end(this->InvViewProj), std::begin(o.InvViewProj)) &&
       std::equal(std::begin(this->WorldToIndex), std::end(this->WorldToIndex), std::begin(o.WorldToIndex)) &&
       this->Renderer == o.Renderer;
@@ -128,6 +132,8 @@ struct vtkMultiChannelVolumeMapper::vtkInternals
   std::array<vtkSmartPointer<vtkPiecewiseFunction>, kMaxChannels> Opacities;
   std::array<double, kMaxChannels> UnitDistances{};
   std::array<double, kMaxChannels> MixWeights;
+  std::array<double, kMaxChannels> Albedo;
+  std::array<double, kMaxChannels> Anisotropy;
 
   // What the Scene holds now.
   bool VolumeSet = false;
@@ -155,7 +161,12 @@ struct vtkMultiChannelVolumeMapper::vtkInternals
   std::string BackendReport = "no backend chosen yet";
   std::string BackendWhy; // from Renderer::create when Renderer was made
 
-  vtkInternals() { this->MixWeights.fill(1.0); }
+  vtkInternals()
+  {
+    this->MixWeights.fill(1.0);
+    this->Albedo.fill(1.0);
+    this->Anisotropy.fill(0.0);
+  }
 
   void ForgetVolume()
   {
@@ -347,6 +358,48 @@ void vtkMultiChannelVolumeMapper::SetMixWeight(int channel, double weight)
     this->Internals->MixWeights[channel] = weight;
     this->Modified();
   }
+}
+
+//------------------------------------------------------------------------------
+void vtkMultiChannelVolumeMapper::SetChannelAlbedo(int channel, double albedo)
+{
+  if (channel < 0 || channel >= kMaxChannels || !(albedo >= 0.0 && albedo <= 1.0))
+  {
+    vtkErrorMacro("SetChannelAlbedo: channel must be in [0, " << kMaxChannels << ") and the albedo in [0, 1].");
+    return;
+  }
+  if (this->Internals->Albedo[channel] != albedo)
+  {
+    this->Internals->Albedo[channel] = albedo;
+    this->Modified();
+  }
+}
+
+//------------------------------------------------------------------------------
+double vtkMultiChannelVolumeMapper::GetChannelAlbedo(int channel)
+{
+  return channel >= 0 && channel < kMaxChannels ? this->Internals->Albedo[channel] : 0.0;
+}
+
+//------------------------------------------------------------------------------
+void vtkMultiChannelVolumeMapper::SetChannelAnisotropy(int channel, double g)
+{
+  if (channel < 0 || channel >= kMaxChannels || !(g > -1.0 && g < 1.0))
+  {
+    vtkErrorMacro("SetChannelAnisotropy: channel must be in [0, " << kMaxChannels << ") and g in (-1, 1).");
+    return;
+  }
+  if (this->Internals->Anisotropy[channel] != g)
+  {
+    this->Internals->Anisotropy[channel] = g;
+    this->Modified();
+  }
+}
+
+//------------------------------------------------------------------------------
+double vtkMultiChannelVolumeMapper::GetChannelAnisotropy(int channel)
+{
+  return channel >= 0 && channel < kMaxChannels ? this->Internals->Anisotropy[channel] : 0.0;
 }
 
 //------------------------------------------------------------------------------
@@ -705,6 +758,7 @@ void vtkMultiChannelVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
   // when only its origin, spacing or direction do, which needs no rebuild
   // (those reach the renderer through worldToIndex).
   vtkMTimeType dataMTime = 0;
+  vtkMTimeType lightsMTime = 0; // the lights, when lighting is on
   const vtkMTimeType imageMTime = image->GetMTime();
   std::array<double, 15> geometry;
   std::copy(image->GetOrigin(), image->GetOrigin() + 3, geometry.begin());
@@ -964,6 +1018,48 @@ void vtkMultiChannelVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
       weights[c] = static_cast<float>(in.MixWeights[c]);
     }
     in.Scene.setMixWeights(weights.data(), numChannels);
+    // Lighting: only with ShadeOn (the lights' state joins the reset key).
+    mcvol::LightingDesc lighting;
+    lightsMTime = 0;
+    if (property && property->GetShade())
+    {
+      vtkLightCollection* lights = ren->GetLights();
+      lightsMTime = lights->GetMTime();
+      vtkCollectionSimpleIterator it;
+      lights->InitTraversal(it);
+      while (vtkLight* light = lights->GetNextLight(it))
+      {
+        lightsMTime = std::max(lightsMTime, light->GetMTime());
+        if (!light->GetSwitch() || lighting.lights.size() >= size_t(mcvol::kMaxLights))
+        {
+          continue;
+        }
+        mcvol::LightDesc ld;
+        double pos[3], focal[3];
+        light->GetTransformedPosition(pos);
+        light->GetTransformedFocalPoint(focal);
+        ld.point = light->GetPositional() != 0;
+        for (int a = 0; a < 3; ++a)
+        {
+          ld.vector[a] = ld.point ? pos[a] : pos[a] - focal[a];
+          ld.color[a] = light->GetDiffuseColor()[a];
+        }
+        ld.intensity = light->GetIntensity();
+        lighting.lights.push_back(ld);
+      }
+      std::copy(this->AmbientRadiance, this->AmbientRadiance + 3, lighting.ambient);
+      for (int c = 0; c < numChannels; ++c)
+      {
+        lighting.albedo.push_back(static_cast<float>(in.Albedo[c]));
+        lighting.anisotropy.push_back(static_cast<float>(in.Anisotropy[c]));
+      }
+      lighting.shadows = this->ShadowMode != NO_SHADOWS;
+      lighting.deltaShadows = this->ShadowMode == DELTA_TRACKING_SHADOWS;
+      lighting.maxDepth = this->MaxScatteringDepth;
+      lighting.gradientShading = this->GradientShading;
+      lighting.shininess = static_cast<float>(this->Shininess);
+    }
+    in.Scene.setLighting(lighting);
     in.Scene.update();
   }
   catch (const std::exception& e)
@@ -1062,6 +1158,7 @@ void vtkMultiChannelVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
   key.MapperMTime = this->GetMTime();
   key.PropertyMTime = property ? property->GetMTime() : 0;
   key.DataMTime = std::max(dataMTime, imageMTime);
+  key.LightsMTime = lightsMTime;
   key.Width = width;
   key.Height = height;
   std::copy(std::begin(camera.invViewProj), std::end(camera.invViewProj), key.InvViewProj);

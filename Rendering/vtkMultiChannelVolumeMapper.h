@@ -214,6 +214,46 @@ public:
 
   ///@{
   /**
+   * Lighting (with vtkVolumeProperty::ShadeOn(), VTK's convention; with
+   * ShadeOff the volume is pure emission-absorption and none of this costs
+   * anything). The renderer's switched-on lights are used (VTK creates a
+   * headlight when the renderer has none, unless AutomaticLightCreationOff):
+   * positional lights as point lights at their position, the others as
+   * directional lights from their position towards their focal point, with
+   * their intensity and diffuse colour. A real collision with channel c
+   * scatters with probability ChannelAlbedo(c) (default 1) and otherwise
+   * emits the channel's colour; scattering samples every light through a
+   * shadow ray and the ambient radiance through the Henyey-Greenstein phase
+   * function of anisotropy ChannelAnisotropy(c) (default 0).
+   */
+  void SetChannelAlbedo(int channel, double albedo);
+  double GetChannelAlbedo(int channel);
+  void SetChannelAnisotropy(int channel, double g);
+  double GetChannelAnisotropy(int channel);
+  /// Environment radiance arriving from every direction (default 0.2 grey).
+  vtkSetVector3Macro(AmbientRadiance, double);
+  vtkGetVector3Macro(AmbientRadiance, double);
+  enum ShadowModes
+  {
+    NO_SHADOWS = 0,
+    RATIO_TRACKING_SHADOWS = 1, ///< smooth transmittance (default)
+    DELTA_TRACKING_SHADOWS = 2  ///< binary, as the paper's viewer
+  };
+  vtkSetClampMacro(ShadowMode, int, NO_SHADOWS, DELTA_TRACKING_SHADOWS);
+  vtkGetMacro(ShadowMode, int);
+  /// Scattering events per path: 1 is single scattering (default).
+  vtkSetClampMacro(MaxScatteringDepth, int, 1, 1024);
+  vtkGetMacro(MaxScatteringDepth, int);
+  /// The Blinn-Phong term on the extinction gradient (paper 004), default off.
+  vtkSetMacro(GradientShading, bool);
+  vtkGetMacro(GradientShading, bool);
+  vtkBooleanMacro(GradientShading, bool);
+  vtkSetClampMacro(Shininess, double, 0.0, 1e4);
+  vtkGetMacro(Shininess, double);
+  ///@}
+
+  ///@{
+  /**
    * Weight of a channel in MC_MIX_BLEND (default 1, >= 0). Weights are
    * normalised to sum 1; all zero means equal weights.
    */
@@ -344,6 +384,11 @@ protected:
   int SamplesPerPixel = 1;
   unsigned int Seed = 0;
   bool PixelJitter = true;
+  double AmbientRadiance[3] = { 0.2, 0.2, 0.2 };
+  int ShadowMode = RATIO_TRACKING_SHADOWS;
+  int MaxScatteringDepth = 1;
+  bool GradientShading = false;
+  double Shininess = 32.0;
   int MacrocellSize = 8;
   int Backend = BACKEND_AUTO;
   int NumberOfChannels = 0;

@@ -256,7 +256,11 @@ TOP_KEYS = {
     "step",
     "compositing",
     "pixel_jitter",
+    "lighting",
 }
+LIGHTING_KEYS = {"lights", "ambient", "shadows", "max_scattering_depth", "gradient_shading", "shininess"}
+LIGHT_KEYS = {"type", "direction", "position", "color", "intensity"}
+SHADOWS = ("ratio", "delta", "none")
 CHANNEL_KEYS = {
     "name",
     "array",
@@ -267,6 +271,8 @@ CHANNEL_KEYS = {
     "range",
     "unit_distance",
     "mix_weight",
+    "albedo",
+    "anisotropy",
 }
 CAMERA_KEYS = {
     "position",
@@ -341,6 +347,55 @@ def parse_color(v, path, scene_dir, presets):
     )
 
 
+def parse_lighting(v):
+    """The "lighting" object: lights, ambient radiance and scattering settings
+    (Documentation/scene-format.md). Its presence turns ShadeOn."""
+    if not isinstance(v, dict):
+        raise SceneError("lighting", "expected an object, got %s" % json.dumps(v))
+    for k in v:
+        if k not in LIGHTING_KEYS:
+            raise SceneError(_join("lighting", k), "unknown key (known: %s)" % ", ".join(sorted(LIGHTING_KEYS)))
+    out = {"lights": [], "ambient": [0.2, 0.2, 0.2], "shadows": "ratio", "max_scattering_depth": 1,
+           "gradient_shading": False, "shininess": 32.0}
+    lights = v.get("lights", [])
+    if not isinstance(lights, list) or len(lights) > 8:
+        raise SceneError("lighting.lights", "expected a list of at most 8 light objects")
+    for i, l in enumerate(lights):
+        path = "lighting.lights[%d]" % i
+        if not isinstance(l, dict):
+            raise SceneError(path, "expected a light object")
+        for k in l:
+            if k not in LIGHT_KEYS:
+                raise SceneError(_join(path, k), "unknown key (known: %s)" % ", ".join(sorted(LIGHT_KEYS)))
+        kind = get_string(l.get("type", "directional"), _join(path, "type"), ("directional", "point"))
+        key = "direction" if kind == "directional" else "position"
+        if key not in l:
+            raise SceneError(path, "a %s light needs \"%s\"" % (kind, key))
+        vec = get_vector(l[key], _join(path, key), 3, "[x, y, z]")
+        if kind == "directional" and not any(vec):
+            raise SceneError(_join(path, key), "the direction must not be zero")
+        out["lights"].append({
+            "type": kind, "vector": vec,
+            "color": get_vector(l["color"], _join(path, "color"), 3, "[r, g, b] >= 0", lo=0.0) if "color" in l
+            else [1.0, 1.0, 1.0],
+            "intensity": get_number(l["intensity"], _join(path, "intensity"), lo=0.0) if "intensity" in l else 1.0,
+        })
+    if "ambient" in v:
+        out["ambient"] = get_vector(v["ambient"], "lighting.ambient", 3, "[r, g, b] >= 0", lo=0.0)
+    if "shadows" in v:
+        out["shadows"] = get_string(v["shadows"], "lighting.shadows", SHADOWS)
+    if "max_scattering_depth" in v:
+        out["max_scattering_depth"] = get_number(v["max_scattering_depth"], "lighting.max_scattering_depth", lo=1,
+                                                 hi=1024, integer=True)
+    if "gradient_shading" in v:
+        if not isinstance(v["gradient_shading"], bool):
+            raise SceneError("lighting.gradient_shading", "expected true or false")
+        out["gradient_shading"] = v["gradient_shading"]
+    if "shininess" in v:
+        out["shininess"] = get_number(v["shininess"], "lighting.shininess", lo=0.0, hi=1e4)
+    return out
+
+
 def parse_channel(v, path, scene_dir, presets):
     check_keys(v, path, CHANNEL_KEYS)
     ch = {"path": path}
@@ -368,6 +423,11 @@ def parse_channel(v, path, scene_dir, presets):
         ch["unit_distance"] = get_number(v["unit_distance"], _join(path, "unit_distance"), lo=0, lo_open=True)
     if "mix_weight" in v:
         ch["mix_weight"] = get_number(v["mix_weight"], _join(path, "mix_weight"), lo=0)
+    if "albedo" in v:
+        ch["albedo"] = get_number(v["albedo"], _join(path, "albedo"), lo=0.0, hi=1.0)
+    if "anisotropy" in v:
+        ch["anisotropy"] = get_number(v["anisotropy"], _join(path, "anisotropy"), lo=-1.0, hi=1.0, lo_open=True,
+                                      hi_open=True)
     return ch
 
 
@@ -444,6 +504,7 @@ def parse_scene(data, scene_dir, presets):
     s["compositing"] = (
         get_string(data["compositing"], "compositing", COMPOSITING) if "compositing" in data else "extinction"
     )
+    s["lighting"] = parse_lighting(data["lighting"]) if "lighting" in data else None
     if "pixel_jitter" in data:
         if not isinstance(data["pixel_jitter"], bool):
             raise SceneError("pixel_jitter", "expected true or false, got %s" % json.dumps(data["pixel_jitter"]))
@@ -799,6 +860,10 @@ def render(scene, args, errors, log):
             mapper.SetChannelScalarOpacityUnitDistance(i, unit)
         if "mix_weight" in channels[i]:
             mapper.SetMixWeight(i, channels[i]["mix_weight"])
+        if "albedo" in channels[i]:
+            mapper.SetChannelAlbedo(i, channels[i]["albedo"])
+        if "anisotropy" in channels[i]:
+            mapper.SetChannelAnisotropy(i, channels[i]["anisotropy"])
     {
         "density": mapper.SetChannelBlendModeToDensity,
         "max": mapper.SetChannelBlendModeToMax,
@@ -834,6 +899,34 @@ def render(scene, args, errors, log):
     renderer = vtkRenderer()
     renderer.SetBackground(*scene["background"])
     renderer.AddVolume(volume)
+    lighting = scene.get("lighting")
+    if lighting is not None:
+        # The lighting object turns shading on; its lights replace VTK's
+        # headlight (none listed: the headlight).
+        from vtkmodules.vtkRenderingCore import vtkLight
+
+        prop.ShadeOn()
+        mapper.SetAmbientRadiance(*lighting["ambient"])
+        mapper.SetShadowMode({"none": mapper.NO_SHADOWS, "ratio": mapper.RATIO_TRACKING_SHADOWS,
+                              "delta": mapper.DELTA_TRACKING_SHADOWS}[lighting["shadows"]])
+        mapper.SetMaxScatteringDepth(lighting["max_scattering_depth"])
+        mapper.SetGradientShading(lighting["gradient_shading"])
+        mapper.SetShininess(lighting["shininess"])
+        if lighting["lights"]:
+            renderer.AutomaticLightCreationOff()
+            for l in lighting["lights"]:
+                light = vtkLight()
+                light.SetLightTypeToSceneLight()
+                light.SetColor(*l["color"])
+                light.SetIntensity(l["intensity"])
+                if l["type"] == "point":
+                    light.PositionalOn()
+                    light.SetConeAngle(180.0)
+                    light.SetPosition(*l["vector"])
+                else:
+                    light.SetFocalPoint(0.0, 0.0, 0.0)
+                    light.SetPosition(*l["vector"])
+                renderer.AddLight(light)
     window = vtkRenderWindow()
     if window.GetClassName() == "vtkXOpenGLRenderWindow" and not os.environ.get("DISPLAY"):
         raise RenderError("no X display: run under an X server (for example `xvfb-run -a %s ...`)" % PROG)

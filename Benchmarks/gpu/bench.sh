@@ -87,6 +87,36 @@ for stage in "$@"; do
       done
       grep -h "montecarlo,1dda,1024" "$out"/accuracy/*.csv | head -4
       ;;
+    effects)
+      # Issue 6: each lighting effect's cost and effect, CUDA and CPU.
+      run effects-cuda --backend cuda --dataset cosmology --dims 256 256 256 --channels 4 --label "cosmology 256^3" \
+        --size 1024 1024 --warmup 10 --frames 100 --reference-spp 256 --sections effects
+      run effects-cpu --backend cpu --dataset cosmology --dims 256 256 256 --channels 4 --label "cosmology 256^3" \
+        --size 512 512 --warmup 1 --frames 5 --reference-spp 64 --sections effects
+      grep "^| " "$out/effects-cuda.md" | head -10
+      ;;
+    ea-compare)
+      # Emission-absorption frame time with the lighting code compiled in
+      # (this tree) against the tree before it ($MAIN_SRC, built alike),
+      # interleaved runs of the same command.
+      if [ -n "${MAIN_SRC:-}" ]; then
+        cmake -S "$MAIN_SRC" -B /tmp/b-main -DMCVOL_CORE_ONLY=ON -DCMAKE_BUILD_TYPE=Release -DBUILD_TESTING=OFF \
+          -DCMAKE_CUDA_COMPILER="$(command -v nvcc || echo /usr/local/cuda/bin/nvcc)" > "$out/main-configure.log" 2>&1
+        cmake --build /tmp/b-main -j"$(nproc)" --target mcvol-bench > "$out/main-build.log" 2>&1 || echo "main build failed"
+        for rep in 1 2 3; do
+          for tree in before after; do
+            binary=/tmp/b-main/bin/mcvol-bench
+            [ $tree = after ] && binary="$bench"
+            "$binary" --backend cuda --dataset cosmology --dims 512 512 512 --channels 4 --size 1024 1024 \
+              --warmup 25 --frames 500 --sections paper > "$out/ea-$tree-$rep.md" 2>/dev/null
+            echo "$tree $rep: $(grep -E '^\| 1-DDA' "$out/ea-$tree-$rep.md" | head -1)"
+            "$binary" --backend cpu --dataset cosmology --dims 128 128 128 --channels 4 --size 256 256 \
+              --warmup 2 --frames 20 --sections trackers > "$out/ea-cpu-$tree-$rep.md" 2>/dev/null
+            echo "$tree $rep cpu: $(grep -E '^\| 1-DDA' "$out/ea-cpu-$tree-$rep.md" | head -1)"
+          done
+        done
+      fi
+      ;;
     rebuild)
       # One channel's transfer function changes: GPU majorant rebuild time.
       for s in "${sets[@]}"; do

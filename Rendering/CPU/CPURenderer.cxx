@@ -13,15 +13,15 @@ namespace mcvol
 {
 namespace
 {
-template <BlendMode Mode>
+template <BlendMode Mode, bool Lit>
 void renderRows(const SceneView& s, const CameraView& cam, const FrameParams& fp, const float* depth, float* rgba,
   uint32_t previous, int threads, RenderCounters* counters)
 {
-  uint64_t dda = 0, tentative = 0, real = 0, samples = 0;
+  uint64_t dda = 0, tentative = 0, real = 0, samples = 0, scattering = 0, shadowRays = 0, gradients = 0;
   const int W = cam.width;
   const int H = cam.height;
 #pragma omp parallel num_threads(threads > 0 ? threads : omp_get_max_threads()) \
-  reduction(+ : dda, tentative, real, samples)
+  reduction(+ : dda, tentative, real, samples, scattering, shadowRays, gradients)
   {
 #pragma omp for schedule(dynamic, 1)
     for (int y = 0; y < H; ++y)
@@ -31,13 +31,16 @@ void renderRows(const SceneView& s, const CameraView& cam, const FrameParams& fp
       {
         const size_t p = size_t(y) * size_t(W) + size_t(x);
         const float z = depth ? depth[p] : 1.f;
-        const Vec4f sum = renderPixel<Mode>(s, cam, fp, x, y, z, c);
+        const Vec4f sum = renderPixel<Mode, Lit>(s, cam, fp, x, y, z, c);
         accumulate(rgba + 4 * p, sum, previous, fp.samplesPerPixel);
       }
       dda += c.ddaSteps;
       tentative += c.tentative;
       real += c.real;
       samples += c.samples;
+      scattering += c.scattering;
+      shadowRays += c.shadowRays;
+      gradients += c.gradients;
     }
   }
   if (counters)
@@ -47,6 +50,24 @@ void renderRows(const SceneView& s, const CameraView& cam, const FrameParams& fp
     counters->tentativeCollisions += tentative;
     counters->realCollisions += real;
     counters->channelSamples += samples;
+    counters->scatteringEvents += scattering;
+    counters->shadowRays += shadowRays;
+    counters->gradientEvaluations += gradients;
+  }
+}
+/// The unlit kernel unless the scene asks for lighting (compile-time choice:
+/// the unlit kernel contains none of the lighting code).
+template <BlendMode Mode>
+void rows(bool lit, const SceneView& s, const CameraView& cam, const FrameParams& fp, const float* depth, float* rgba,
+  uint32_t previous, int threads, RenderCounters* counters)
+{
+  if (lit)
+  {
+    renderRows<Mode, true>(s, cam, fp, depth, rgba, previous, threads, counters);
+  }
+  else
+  {
+    renderRows<Mode, false>(s, cam, fp, depth, rgba, previous, threads, counters);
   }
 }
 } // namespace
@@ -69,22 +90,31 @@ void CPURenderer::render(const Scene& scene, const Camera& camera, const RenderS
   const CameraView cam = toView(camera);
   s.sigmaLimit = extinctionLimit(cam);
   const FrameParams fp = frameParams(settings, accum.samples());
+  const bool lit = s.lighting.enabled;
+  if (lit)
+  {
+    if (s.blend.mode == BlendMode::Composite)
+    {
+      throw std::invalid_argument("mcvol: lighting with post-render composite blending is not supported yet");
+    }
+    setLightingFrame(s, camera);
+  }
   float* rgba = accum.rgba();
   const uint32_t previous = accum.samples();
   switch (s.blend.mode)
   {
     case BlendMode::Max:
-      renderRows<BlendMode::Max>(s, cam, fp, depth, rgba, previous, this->Threads, counters);
+      rows<BlendMode::Max>(lit, s, cam, fp, depth, rgba, previous, this->Threads, counters);
       break;
     case BlendMode::Mix:
-      renderRows<BlendMode::Mix>(s, cam, fp, depth, rgba, previous, this->Threads, counters);
+      rows<BlendMode::Mix>(lit, s, cam, fp, depth, rgba, previous, this->Threads, counters);
       break;
     case BlendMode::Composite:
-      renderRows<BlendMode::Composite>(s, cam, fp, depth, rgba, previous, this->Threads, counters);
+      rows<BlendMode::Composite>(lit, s, cam, fp, depth, rgba, previous, this->Threads, counters);
       break;
     case BlendMode::Density:
     default:
-      renderRows<BlendMode::Density>(s, cam, fp, depth, rgba, previous, this->Threads, counters);
+      rows<BlendMode::Density>(lit, s, cam, fp, depth, rgba, previous, this->Threads, counters);
       break;
   }
   accum.addSamples(uint32_t(settings.samplesPerPixel));

@@ -134,6 +134,15 @@ void RayMarcher::render(const Scene& scene, const Camera& camera, const MarchSet
   }
   const CameraView cam = toView(camera);
   s.sigmaLimit = extinctionLimit(cam);
+  if (s.lighting.enabled)
+  {
+    if (s.blend.mode == BlendMode::Composite || settings.compositing != Compositing::Extinction)
+    {
+      throw std::invalid_argument("mcvol: the lit reference supports the extinction model and density, max and "
+                                  "mix blending");
+    }
+    setLightingFrame(s, camera);
+  }
   MarchParams mp;
   mp.step = float(step);
   mp.terminateTransmittance = settings.terminateTransmittance;

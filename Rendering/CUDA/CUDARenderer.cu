@@ -212,7 +212,7 @@ __global__ void majorantKernel(const __grid_constant__ TableView tv, int n, int 
 /// One thread per pixel: renderPixel() from the core, folded into the
 /// running mean in `accum`. Count adds the work counters (warp sums, one
 /// atomic per warp and counter).
-template <BlendMode Mode, bool Count>
+template <BlendMode Mode, bool Count, bool Lit>
 __global__ void renderKernel(const __grid_constant__ SceneView s, const __grid_constant__ CameraView cam,
   const __grid_constant__ FrameParams fp, const float* __restrict__ depth, float4* __restrict__ accum,
   uint32_t previous, unsigned long long* __restrict__ counters)
@@ -224,7 +224,7 @@ __global__ void renderKernel(const __grid_constant__ SceneView s, const __grid_c
   {
     const size_t p = size_t(y) * size_t(cam.width) + size_t(x);
     const float z = depth ? depth[p] : 1.f;
-    const Vec4f sum = renderPixel<Mode>(s, cam, fp, x, y, z, c);
+    const Vec4f sum = renderPixel<Mode, Lit>(s, cam, fp, x, y, z, c);
     const float4 old = accum[p];
     float v[4] = { old.x, old.y, old.z, old.w };
     accumulate(v, sum, previous, fp.samplesPerPixel);
@@ -236,6 +236,9 @@ __global__ void renderKernel(const __grid_constant__ SceneView s, const __grid_c
     const unsigned long long tent = warpSumU64(c.tentative);
     const unsigned long long real = warpSumU64(c.real);
     const unsigned long long smp = warpSumU64(c.samples);
+    const unsigned long long sca = Lit ? warpSumU64(c.scattering) : 0ull;
+    const unsigned long long shd = Lit ? warpSumU64(c.shadowRays) : 0ull;
+    const unsigned long long grd = Lit ? warpSumU64(c.gradients) : 0ull;
     const unsigned lane = (threadIdx.y * blockDim.x + threadIdx.x) & 31u;
     if (lane == 0)
     {
@@ -243,21 +246,39 @@ __global__ void renderKernel(const __grid_constant__ SceneView s, const __grid_c
       atomicAdd(counters + 1, tent);
       atomicAdd(counters + 2, real);
       atomicAdd(counters + 3, smp);
+      if (Lit)
+      {
+        atomicAdd(counters + 4, sca);
+        atomicAdd(counters + 5, shd);
+        atomicAdd(counters + 6, grd);
+      }
     }
   }
 }
 
 template <BlendMode Mode>
-void launchRender(bool count, dim3 grid, dim3 block, const SceneView& s, const CameraView& cam, const FrameParams& fp,
-  const float* depth, float4* accum, uint32_t previous, unsigned long long* counters)
+void launchRender(bool count, bool lit, dim3 grid, dim3 block, const SceneView& s, const CameraView& cam,
+  const FrameParams& fp, const float* depth, float4* accum, uint32_t previous, unsigned long long* counters)
 {
-  if (count)
+  // The unlit kernels contain none of the lighting code.
+  if (lit)
   {
-    renderKernel<Mode, true><<<grid, block>>>(s, cam, fp, depth, accum, previous, counters);
+    if (count)
+    {
+      renderKernel<Mode, true, true><<<grid, block>>>(s, cam, fp, depth, accum, previous, counters);
+    }
+    else
+    {
+      renderKernel<Mode, false, true><<<grid, block>>>(s, cam, fp, depth, accum, previous, counters);
+    }
+  }
+  else if (count)
+  {
+    renderKernel<Mode, true, false><<<grid, block>>>(s, cam, fp, depth, accum, previous, counters);
   }
   else
   {
-    renderKernel<Mode, false><<<grid, block>>>(s, cam, fp, depth, accum, previous, counters);
+    renderKernel<Mode, false, false><<<grid, block>>>(s, cam, fp, depth, accum, previous, counters);
   }
 }
 
@@ -431,7 +452,7 @@ CUDARenderer::CUDARenderer(int device)
   MCVOL_CUDA(cudaGetDeviceProperties(&this->In->Props, device));
   MCVOL_CUDA(cudaEventCreate(&this->In->Start));
   MCVOL_CUDA(cudaEventCreate(&this->In->Stop));
-  this->In->Counters.resize(4);
+  this->In->Counters.resize(7);
   this->In->ChannelMax.resize(kMaxChannels);
   this->In->NaNFlags.resize(kMaxChannels);
   std::fill(std::begin(this->In->ChannelTableVersion), std::end(this->In->ChannelTableVersion), ~0ull);
@@ -823,6 +844,16 @@ void CUDARenderer::render(const Scene& scene, const Camera& camera, const Render
   }
   const CameraView cam = toView(camera);
   s.sigmaLimit = extinctionLimit(cam);
+  s.lighting = hv.lighting;
+  const bool lit = s.lighting.enabled;
+  if (lit)
+  {
+    if (s.blend.mode == BlendMode::Composite)
+    {
+      throw std::invalid_argument("mcvol: lighting with post-render composite blending is not supported yet");
+    }
+    setLightingFrame(s, camera);
+  }
 
   // Accumulation buffer: continue the device mean only if it is this
   // Accumulator's, at its sample count; otherwise start from the host's.
@@ -869,7 +900,7 @@ void CUDARenderer::render(const Scene& scene, const Camera& camera, const Render
   const bool count = counters != nullptr;
   if (count)
   {
-    MCVOL_CUDA(cudaMemsetAsync(in.Counters.ptr, 0, 4 * sizeof(unsigned long long)));
+    MCVOL_CUDA(cudaMemsetAsync(in.Counters.ptr, 0, 7 * sizeof(unsigned long long)));
   }
   const dim3 block = in.Block;
   const dim3 grid((unsigned(camera.width) + block.x - 1) / block.x, (unsigned(camera.height) + block.y - 1) / block.y);
@@ -880,19 +911,21 @@ void CUDARenderer::render(const Scene& scene, const Camera& camera, const Render
     switch (s.blend.mode)
     {
       case BlendMode::Max:
-        launchRender<BlendMode::Max>(count, grid, block, s, cam, fp, devDepth, in.Accum.ptr, previous, in.Counters.ptr);
+        launchRender<BlendMode::Max>(
+          count, lit, grid, block, s, cam, fp, devDepth, in.Accum.ptr, previous, in.Counters.ptr);
         break;
       case BlendMode::Mix:
-        launchRender<BlendMode::Mix>(count, grid, block, s, cam, fp, devDepth, in.Accum.ptr, previous, in.Counters.ptr);
+        launchRender<BlendMode::Mix>(
+          count, lit, grid, block, s, cam, fp, devDepth, in.Accum.ptr, previous, in.Counters.ptr);
         break;
       case BlendMode::Composite:
         launchRender<BlendMode::Composite>(
-          count, grid, block, s, cam, fp, devDepth, in.Accum.ptr, previous, in.Counters.ptr);
+          count, lit, grid, block, s, cam, fp, devDepth, in.Accum.ptr, previous, in.Counters.ptr);
         break;
       case BlendMode::Density:
       default:
         launchRender<BlendMode::Density>(
-          count, grid, block, s, cam, fp, devDepth, in.Accum.ptr, previous, in.Counters.ptr);
+          count, lit, grid, block, s, cam, fp, devDepth, in.Accum.ptr, previous, in.Counters.ptr);
         break;
     }
     MCVOL_CUDA(cudaGetLastError());
@@ -902,13 +935,16 @@ void CUDARenderer::render(const Scene& scene, const Camera& camera, const Render
   accum.setPendingOnDevice(true);
   if (count)
   {
-    unsigned long long c[4];
+    unsigned long long c[7];
     MCVOL_CUDA(cudaMemcpy(c, in.Counters.ptr, sizeof(c), cudaMemcpyDeviceToHost));
     counters->rays += uint64_t(camera.width) * uint64_t(camera.height) * uint64_t(settings.samplesPerPixel);
     counters->ddaSteps += c[0];
     counters->tentativeCollisions += c[1];
     counters->realCollisions += c[2];
     counters->channelSamples += c[3];
+    counters->scatteringEvents += c[4];
+    counters->shadowRays += c[5];
+    counters->gradientEvaluations += c[6];
   }
   if (settings.readBack)
   {

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 
+#include "mcvol/Lighting.h"
 #include "mcvol/RayGen.h"
 #include "mcvol/Tracking.h"
 
@@ -23,10 +24,11 @@ struct FrameParams
  * RGBA. Sample k of a pixel draws from Rng(pixel, firstSample + k, seed), so
  * the result depends on nothing but the pixel, the sample indices and the seed.
  */
-template <BlendMode Mode>
+template <BlendMode Mode, bool Lit = false>
 MCVOL_FUNC Vec4f renderPixel(
   const SceneView& s, const CameraView& cam, const FrameParams& fp, int x, int y, float depth, RayCounters& c)
 {
+  ShadowCounters sc;
   Vec4f sum;
   const uint32_t pixel = uint32_t(y) * uint32_t(cam.width) + uint32_t(x);
   for (int k = 0; k < fp.samplesPerPixel; ++k)
@@ -39,7 +41,8 @@ MCVOL_FUNC Vec4f renderPixel(
     {
       continue;
     }
-    const Vec4f v = traceSample<Mode>(s, fp.tracker, ray.o, ray.d, 0.f, ray.tmax, rng, c);
+    const Vec4f v = Lit ? traceLitSample<Mode>(s, fp.tracker, ray.o, ray.d, ray.world, ray.tmax, rng, c, sc)
+                        : traceSample<Mode>(s, fp.tracker, ray.o, ray.d, 0.f, ray.tmax, rng, c);
     sum.r += v.r;
     sum.g += v.g;
     sum.b += v.b;

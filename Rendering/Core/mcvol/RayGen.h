@@ -24,6 +24,7 @@ struct IndexRay
   Vec3f o;
   Vec3f d;
   float tmax = 0.f;
+  Vec3f world; ///< the unit world direction d is the image of (lighting reads it)
 };
 
 struct Dvec3
@@ -135,6 +136,7 @@ MCVOL_FUNC bool generateRay(
   ray.o = Vec3f(float(o[0] + d[0] * t0), float(o[1] + d[1] * t0), float(o[2] + d[2] * t0));
   ray.d = Vec3f(float(d[0]), float(d[1]), float(d[2]));
   ray.tmax = float(t1 - t0);
+  ray.world = Vec3f(float(dx), float(dy), float(dz));
   return ray.tmax > 0.f;
 }
 } // namespace mcvol

@@ -3,6 +3,7 @@
 
 #include "mcvol/Blend.h"
 #include "mcvol/DDA.h"
+#include "mcvol/Lighting.h"
 #include "mcvol/Random.h"
 #include "mcvol/RayGen.h"
 
@@ -257,6 +258,147 @@ MCVOL_HOT Vec4f marchChannels(const SceneView& s, const MarchParams& mp, const i
   return out;
 }
 
+/// Transmittance from index point x along index direction dl (unit world
+/// length per t) over [0, tmax], marched at the step with the extinction
+/// model: exp(-sum sigma d), sigma the blend's combined extinction.
+template <BlendMode Mode>
+MCVOL_HOT float marchTransmittance(
+  const SceneView& s, const int* channels, int count, Vec3f x, Vec3f dl, float tmax, float step)
+{
+  float tau = 0.f;
+  for (float t = 0.5f * step; t < tmax; t += step)
+  {
+    tau += blendedOptics<Mode>(s, channels, count, x + dl * t).sigma * step;
+  }
+  return expf(-tau);
+}
+
+/**
+ * Lit reference (issue 6): single scattering with shadows, extinction model.
+ * At each sample the source is sum_n sigma_n [(1 - a_n) c_n + a_n c_n S_n]
+ * (density; max and mix: the winning channel with the blend's colour), S_n
+ * the light each channel scatters towards the eye: sum over lights of the
+ * scattering function (Henyey-Greenstein of g_n, plus the gradient term
+ * when on) times the marched transmittance to the light times its radiance.
+ * This is the expectation of the Monte Carlo mapper's lit samples with one
+ * scattering event (maxDepth 1) and no ambient radiance.
+ */
+template <BlendMode Mode>
+MCVOL_HOT Vec4f marchLit(
+  const SceneView& s, const MarchParams& mp, Vec3f o, Vec3f d, Vec3f w, float tmax, float phase, MarchCounters& mc)
+{
+  const LightingView& L = s.lighting;
+  Vec3f C;
+  float T = 1.f;
+  RayCounters rc;
+  for (int64_t k = 0;; ++k)
+  {
+    const float t = float((double(k) + double(phase)) * double(mp.step));
+    if (!(t < tmax))
+    {
+      break;
+    }
+    const Vec3f x = o + d * t;
+    ++mc.samples;
+    // Light arriving at x from each light (direction, radiance * transmittance).
+    Vec3f wl[kMaxLights];
+    Vec3f arriving[kMaxLights];
+    for (int l = 0; l < L.numLights; ++l)
+    {
+      Vec3f dl;
+      float dist = 3.4e38f, falloff = 1.f;
+      if (L.lightType[l] == 0)
+      {
+        wl[l] = L.lightVector[l];
+        dl = mul3(L.toIndex, wl[l]);
+      }
+      else
+      {
+        const Vec3f toLight = mul3(L.toIndex, L.lightVector[l]) + L.indexOffset - x;
+        const Vec3f worldVec = mul3(L.toWorld, toLight);
+        dist = length(worldVec);
+        wl[l] = worldVec * (1.f / dist);
+        dl = toLight * (1.f / dist);
+        falloff = 1.f / (dist * dist);
+      }
+      const float Tl = L.shadows
+        ? marchTransmittance<Mode>(s, s.active, s.numActive, x, dl, minf(boxExit(s.volume, x, dl), dist), mp.step)
+        : 1.f;
+      arriving[l] = L.lightRadiance[l] * (Tl * falloff);
+    }
+    Vec3f grad;
+    float gradLen = 0.f;
+    if (L.gradientShading)
+    {
+      grad = extinctionGradient<Mode>(s, s.active, s.numActive, x, rc);
+      gradLen = length(grad);
+    }
+    auto scattered = [&](int n)
+    {
+      Vec3f S;
+      for (int l = 0; l < L.numLights; ++l)
+      {
+        S += arriving[l] * scatterFunction(L, L.anisotropy[n], w, wl[l], L.gradientShading, grad, gradLen);
+      }
+      return S;
+    };
+    float sigma = 0.f;
+    Vec3f source;
+    if (Mode == BlendMode::Density)
+    {
+      for (int i = 0; i < s.numActive; ++i)
+      {
+        const int n = s.active[i];
+        const TFSample tf = channelOptics(s, n, x);
+        if (tf.sigma > 0.f)
+        {
+          const float a = L.albedo[n];
+          source += (tf.rgb * (1.f - a) + tf.rgb * scattered(n) * a) * tf.sigma;
+          sigma += tf.sigma;
+        }
+      }
+    }
+    else
+    {
+      const PointOptics po = blendedOptics<Mode>(s, s.active, s.numActive, x);
+      int winner = -1;
+      float best = -1.f;
+      for (int i = 0; i < s.numActive; ++i)
+      {
+        const float sn = channelOptics(s, s.active[i], x).sigma;
+        if (winner < 0 || outranks(sn, s.active[i], best, winner))
+        {
+          best = sn;
+          winner = s.active[i];
+        }
+      }
+      sigma = po.sigma;
+      if (sigma > 0.f)
+      {
+        const float a = L.albedo[winner];
+        source = (po.emission * (1.f - a) + po.emission * scattered(winner) * a) * sigma;
+      }
+    }
+    if (sigma > 0.f)
+    {
+      const float alpha = -expm1f(-sigma * mp.step);
+      C += source * (T * alpha / sigma);
+      T *= 1.f - alpha;
+      if (T < mp.terminateTransmittance)
+      {
+        ++mc.terminated;
+        break;
+      }
+    }
+  }
+  Vec4f out;
+  out.r = C.x;
+  out.g = C.y;
+  out.b = C.z;
+  out.a = 1.f - T;
+  return out;
+}
+
 /// Phase of a pixel's sample lattice: 0.5 (midpoint rule), or with jitter a
 /// hash of (pixel, seed) in [0, 1) (deterministic: same image every time).
 MCVOL_FUNC float marchPhase(bool jitter, uint32_t pixel, uint32_t seed)
@@ -282,6 +424,10 @@ MCVOL_FUNC Vec4f marchPixel(const SceneView& s, const CameraView& cam, const Mar
   if (!generateRay(cam, s.volume, float(x) + 0.5f, float(y) + 0.5f, depth, ray))
   {
     return Vec4f();
+  }
+  if (Mode != BlendMode::Composite && s.lighting.enabled)
+  {
+    return marchLit<Mode>(s, mp, ray.o, ray.d, ray.world, ray.tmax, phase, mc);
   }
   if (Mode != BlendMode::Composite)
   {

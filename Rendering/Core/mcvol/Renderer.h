@@ -49,6 +49,10 @@ struct RenderCounters
   uint64_t tentativeCollisions = 0; ///< Woodcock steps that landed inside a cell
   uint64_t realCollisions = 0;
   uint64_t channelSamples = 0; ///< channel values interpolated
+  // Lighting: zero for every effect that is off.
+  uint64_t scatteringEvents = 0;
+  uint64_t shadowRays = 0;
+  uint64_t gradientEvaluations = 0;
 };
 
 /**

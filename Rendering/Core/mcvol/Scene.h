@@ -49,6 +49,32 @@ constexpr float kMaxOpacity = 1.f - 0x1p-20f;
 /// VTK's ScalarOpacityUnitDistance meaning: sigma = -ln(1 - a) / u.
 float opacityToExtinction(float opacity, float unitDistance);
 
+/// One light, in world space.
+struct LightDesc
+{
+  bool point = false;             ///< false: directional
+  double vector[3] = { 0, 0, 1 }; ///< directional: direction towards the light; point: position
+  double color[3] = { 1, 1, 1 };
+  double intensity = 1.0;
+};
+
+/**
+ * What the scene asks of lighting (issue 6). With no light and no ambient,
+ * rendering is pure emission-absorption and none of it costs anything.
+ */
+struct LightingDesc
+{
+  std::vector<LightDesc> lights;
+  double ambient[3] = { 0, 0, 0 }; ///< environment radiance from every direction
+  std::vector<float> albedo;       ///< per channel, [0, 1] (missing: 0.5)
+  std::vector<float> anisotropy;   ///< per channel, (-1, 1) (missing: 0)
+  bool shadows = true;
+  bool deltaShadows = false; ///< delta tracking instead of ratio tracking
+  int maxDepth = 1;          ///< scattering events per path (1 = single scattering)
+  bool gradientShading = false;
+  float shininess = 32.f;
+};
+
 /// Memory of the acceleration structures, for the benchmark (paper Table 1).
 struct MemoryStats
 {
@@ -97,6 +123,9 @@ public:
   /// Non-negative weights, one per channel; normalised to sum 1 (Eq. 10).
   /// All zero means equal weights.
   void setMixWeights(const float* weights, int count);
+  /// Lights and scattering (throws std::invalid_argument on bad values).
+  void setLighting(const LightingDesc& lighting);
+  bool lit() const { return this->View.lighting.enabled; }
 
   /**
    * Whether update() builds the macrocell ranges and majorants on the host

@@ -68,6 +68,35 @@ struct BlendView
   float mixWeights[kMaxChannels]; ///< sum to 1
 };
 
+/// Most lights a scene may have.
+constexpr int kMaxLights = 8;
+
+/**
+ * Lighting (issue 6). enabled is false for pure emission-absorption, and
+ * then nothing below is read: the backends run the unlit kernels.
+ */
+struct LightingView
+{
+  bool enabled = false;
+  int numLights = 0;
+  int lightType[kMaxLights];       ///< 0: directional, 1: point
+  Vec3f lightVector[kMaxLights];   ///< directional: unit world direction towards the light; point: world position
+  Vec3f lightRadiance[kMaxLights]; ///< colour times intensity (point lights: at unit distance)
+  Vec3f ambient;                   ///< radiance arriving from every direction (an environment)
+  float albedo[kMaxChannels];      ///< share of a channel's real collisions that scatter
+  float anisotropy[kMaxChannels];  ///< Henyey-Greenstein g per channel
+  bool shadows = true;             ///< trace shadow rays (else transmittance 1)
+  int shadowEstimator = 0;         ///< ShadowEstimator: 0 ratio, 1 delta
+  int maxDepth = 1;                ///< scattering events per path (1: single scattering)
+  bool gradientShading = false;    ///< Blinn-Phong on the extinction gradient (paper 004)
+  float shininess = 32.f;
+  /// Set per render by the backend from the camera: world-to-index linear
+  /// part (row-major), its inverse, and the translation.
+  float toIndex[9];
+  float toWorld[9];
+  Vec3f indexOffset;
+};
+
 struct SceneView
 {
   VolumeView volume;
@@ -83,5 +112,6 @@ struct SceneView
   /// keeps the number of null collisions in a macrocell bounded when a
   /// transfer function is opaque over a tiny unit distance.
   float sigmaLimit = 3.4e38f;
+  LightingView lighting;
 };
 } // namespace mcvol

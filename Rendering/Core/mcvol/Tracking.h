@@ -19,6 +19,10 @@ struct RayCounters
   uint32_t tentative = 0;
   uint32_t real = 0;
   uint32_t samples = 0;
+  // Lighting (zero whenever lighting is off: the unlit kernels never touch them).
+  uint32_t scattering = 0; ///< real collisions that scattered
+  uint32_t shadowRays = 0;
+  uint32_t gradients = 0; ///< extinction gradients evaluated
 };
 
 /// Result of tracking one ray: the accepted collision, if any.

@@ -1,0 +1,343 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#pragma once
+
+#include "mcvol/Blend.h"
+#include "mcvol/DDA.h"
+#include "mcvol/Random.h"
+#include "mcvol/Tracking.h"
+
+#include <cmath>
+
+namespace mcvol
+{
+/**
+ * Building blocks of lighting (issue 6): the Henyey-Greenstein phase
+ * function and transmittance estimators for shadow rays. Per-ray code, shared
+ * by the backends like the trackers.
+ */
+
+constexpr float kPi = 3.14159265358979323846f;
+
+/**
+ * Henyey-Greenstein phase function, normalised over the sphere, of the angle
+ * between the propagation direction before scattering and the direction
+ * after it (mu = cos theta; g > 0 scatters forward, g = 0 is isotropic).
+ */
+MCVOL_FUNC float hgPhase(float mu, float g)
+{
+  const float denom = 1.f + g * g - 2.f * g * mu;
+  return (1.f - g * g) / (4.f * kPi * denom * sqrtf(denom));
+}
+
+/// Samples mu = cos theta from Henyey-Greenstein by inverting its CDF, for u
+/// in [0, 1); mean mu is g.
+MCVOL_FUNC float sampleHGCosine(float g, float u)
+{
+  if (fabsf(g) < 1e-3f)
+  {
+    return 1.f - 2.f * u;
+  }
+  const float s = (1.f - g * g) / (1.f - g + 2.f * g * u);
+  const float mu = (1.f + g * g - s * s) / (2.f * g);
+  return clampf(mu, -1.f, 1.f);
+}
+
+/// A unit vector at angle acos(mu) from the unit vector d, azimuth 2 pi v.
+MCVOL_FUNC Vec3f directionAround(Vec3f d, float mu, float v)
+{
+  // Orthonormal basis around d (Duff et al. 2017, branchless).
+  const float sign = d.z >= 0.f ? 1.f : -1.f;
+  const float a = -1.f / (sign + d.z);
+  const float b = d.x * d.y * a;
+  const Vec3f t1(1.f + sign * d.x * d.x * a, sign * b, -sign * d.x);
+  const Vec3f t2(b, sign + d.y * d.y * a, -d.y);
+  const float sinTheta = sqrtf(fmaxf(0.f, 1.f - mu * mu));
+  const float phi = 2.f * kPi * v;
+  return t1 * (sinTheta * cosf(phi)) + t2 * (sinTheta * sinf(phi)) + d * mu;
+}
+
+/// How a shadow ray estimates transmittance.
+enum class ShadowEstimator : int
+{
+  Ratio = 0, ///< ratio tracking: a smooth estimate in [0, 1]
+  Delta = 1  ///< delta tracking: 0 or 1 (the paper's viewer)
+};
+
+/// Shadow-ray work (tests and the benchmark read it).
+struct ShadowCounters
+{
+  uint32_t rays = 0;
+  uint32_t tentative = 0; ///< tentative collisions along shadow rays
+};
+
+/**
+ * Transmittance along o + t d, t in [0, tmax] (index space, t in world
+ * units, as the trackers' rays), through the listed channels combined by the
+ * blend mode (Blend.h: density sums the extinctions, max and mix take the
+ * largest). The macrocell majorants bound the combined extinction per cell
+ * (their sum, or their largest); cells with majorant 0 cost nothing.
+ * Ratio tracking multiplies 1 - sigma / majorant at each tentative
+ * collision, with Russian roulette below 0.1 so that the loop ends; delta
+ * tracking stops at the first real collision. Both are unbiased.
+ */
+template <BlendMode Mode>
+MCVOL_HOT float shadowTransmittance(const SceneView& s, const int* channels, int count, Vec3f o, Vec3f d, float tmax,
+  ShadowEstimator estimator, Rng& rng, ShadowCounters& c)
+{
+  ++c.rays;
+  if (count == 0 || !(tmax > 0.f))
+  {
+    return 1.f;
+  }
+  float T = 1.f;
+  DDA dda;
+  dda.init(s.grid, o, d, 0.f, tmax);
+  const int N = s.grid.numChannels;
+  float tau = sampleOpticalDepth(rng);
+  while (!dda.done)
+  {
+    const float* maj = s.grid.majorants + dda.cellIndex() * N;
+    float m = 0.f;
+    for (int i = 0; i < count; ++i)
+    {
+      const float mi = minf(maj[channels[i]], s.sigmaLimit);
+      if (Mode == BlendMode::Density || Mode == BlendMode::Composite)
+      {
+        m += mi;
+      }
+      else
+      {
+        m = mi > m ? mi : m;
+      }
+    }
+    if (m > 0.f)
+    {
+      float t = dda.t0;
+      while (true)
+      {
+        const float room = (dda.t1 - t) * m;
+        if (!(tau < room))
+        {
+          tau -= room > 0.f ? room : 0.f;
+          break;
+        }
+        t = advance(t, tau / m);
+        tau = sampleOpticalDepth(rng);
+        ++c.tentative;
+        const float sigma = blendedOptics<Mode>(s, channels, count, o + d * t).sigma;
+        if (estimator == ShadowEstimator::Delta)
+        {
+          if (rng.next() * m < sigma)
+          {
+            return 0.f;
+          }
+          continue;
+        }
+        T *= 1.f - minf(sigma / m, 1.f);
+        if (T < 0.1f)
+        {
+          if (rng.next() < 0.5f)
+          {
+            return 0.f;
+          }
+          T *= 2.f;
+        }
+      }
+    }
+    dda.next();
+  }
+  return T;
+}
+
+/// 3x3 row-major matrix times vector.
+MCVOL_FUNC Vec3f mul3(const float* m, Vec3f v)
+{
+  return Vec3f(
+    m[0] * v.x + m[1] * v.y + m[2] * v.z, m[3] * v.x + m[4] * v.y + m[5] * v.z, m[6] * v.x + m[7] * v.y + m[8] * v.z);
+}
+
+/// Transposed 3x3 row-major matrix times vector.
+MCVOL_FUNC Vec3f mul3T(const float* m, Vec3f v)
+{
+  return Vec3f(
+    m[0] * v.x + m[3] * v.y + m[6] * v.z, m[1] * v.x + m[4] * v.y + m[7] * v.z, m[2] * v.x + m[5] * v.y + m[8] * v.z);
+}
+
+/// Distance (world units) from index point x to the volume box along the
+/// index direction d (the image of a unit world direction); 0 if outside.
+MCVOL_FUNC float boxExit(const VolumeView& vol, Vec3f x, Vec3f d)
+{
+  float t0 = 0.f, t1 = 3.4e38f;
+  return intersectBox(vol.boxLo, vol.boxHi, x, d, t0, t1) ? t1 : 0.f;
+}
+
+/**
+ * Gradient of the blend's extinction at index point p, in world units
+ * (central differences one voxel apart, mapped by the transpose of the
+ * world-to-index matrix).
+ */
+template <BlendMode Mode>
+MCVOL_HOT Vec3f extinctionGradient(const SceneView& s, const int* channels, int count, Vec3f p, RayCounters& c)
+{
+  ++c.gradients;
+  Vec3f g;
+  for (int a = 0; a < 3; ++a)
+  {
+    Vec3f lo = p, hi = p;
+    lo[a] -= 1.f;
+    hi[a] += 1.f;
+    g[a] =
+      0.5f * (blendedOptics<Mode>(s, channels, count, hi).sigma - blendedOptics<Mode>(s, channels, count, lo).sigma);
+  }
+  return mul3T(s.lighting.toIndex, g);
+}
+
+/**
+ * Scattering function at a scattering vertex: Henyey-Greenstein plus, with
+ * gradient shading, the Blinn-Phong term of paper 004 Section 3 scaled by
+ * the gradient magnitude: |grad| (H . N)^n (N . wl)_+, with N = -grad / |grad|
+ * (pointing out of denser material) and H the half vector of the light
+ * direction wl and the direction back to the viewer -w.
+ */
+MCVOL_HOT float scatterFunction(
+  const LightingView& L, float g, Vec3f w, Vec3f wl, bool gradient, Vec3f grad, float gradLen)
+{
+  float f = hgPhase(dot(w, wl), g);
+  if (gradient && gradLen > 0.f)
+  {
+    const Vec3f n = grad * (-1.f / gradLen);
+    Vec3f h = wl - w;
+    const float hl = length(h);
+    const float nl = dot(n, wl);
+    if (hl > 0.f && nl > 0.f)
+    {
+      h = h * (1.f / hl);
+      const float nh = fmaxf(0.f, dot(n, h));
+      f += gradLen * powf(nh, L.shininess) * nl;
+    }
+  }
+  return f;
+}
+
+/**
+ * One lit Monte Carlo sample (Lerzer and Dachsbacher Eq. 1-2 with the
+ * paper's multi-density tracking): the camera path is tracked as in the
+ * unlit case; a real collision with channel n scatters with probability
+ * albedo_n and otherwise absorbs and emits the blend's colour. At a
+ * scattering vertex the path's throughput takes the blend's colour, each
+ * light is sampled (next-event estimation with a shadow ray) and the ambient
+ * environment through one phase-sampled direction (its phase value over its
+ * pdf is 1); the path then continues in a phase-sampled direction, up to
+ * maxDepth scattering events, with Russian roulette from the third.
+ * `w` is the ray's unit world direction, `d` its index-space image.
+ */
+template <BlendMode Mode>
+MCVOL_HOT Vec4f traceLitSample(const SceneView& s, Tracker tracker, Vec3f o, Vec3f d, Vec3f w, float tmax, Rng& rng,
+  RayCounters& c, ShadowCounters& sc)
+{
+  const LightingView& L = s.lighting;
+  const ShadowEstimator est = L.shadowEstimator == 1 ? ShadowEstimator::Delta : ShadowEstimator::Ratio;
+  Vec4f out;
+  Vec3f radiance;
+  Vec3f throughput(1.f, 1.f, 1.f);
+  for (int depth = 0;; ++depth)
+  {
+    const Hit hit = tracker == Tracker::OneDDA ? track1DDA<Mode>(s, o, d, 0.f, tmax, rng, c)
+                                               : trackNDDA<Mode>(s, o, d, 0.f, tmax, rng, c);
+    if (!hit.found())
+    {
+      break; // escaped: the environment was counted at the vertices
+    }
+    if (depth == 0)
+    {
+      out.a = 1.f;
+    }
+    const Vec3f x = o + d * hit.t;
+    if (!(rng.next() < L.albedo[hit.channel]))
+    {
+      radiance += throughput * hit.rgb; // absorbed: emits
+      break;
+    }
+    ++c.scattering;
+    throughput = throughput * hit.rgb;
+    const float g = L.anisotropy[hit.channel];
+    Vec3f grad;
+    float gradLen = 0.f;
+    if (L.gradientShading)
+    {
+      grad = extinctionGradient<Mode>(s, s.active, s.numActive, x, c);
+      gradLen = length(grad);
+    }
+    for (int l = 0; l < L.numLights; ++l)
+    {
+      Vec3f wl, dl;
+      float dist = 3.4e38f;
+      float falloff = 1.f;
+      if (L.lightType[l] == 0)
+      {
+        wl = L.lightVector[l];
+        dl = mul3(L.toIndex, wl);
+      }
+      else
+      {
+        const Vec3f toLight = mul3(L.toIndex, L.lightVector[l]) + L.indexOffset - x; // index space
+        const Vec3f worldVec = mul3(L.toWorld, toLight);
+        dist = length(worldVec);
+        if (!(dist > 0.f))
+        {
+          continue;
+        }
+        wl = worldVec * (1.f / dist);
+        dl = toLight * (1.f / dist);
+        falloff = 1.f / (dist * dist);
+      }
+      const float f = scatterFunction(L, g, w, wl, L.gradientShading, grad, gradLen);
+      if (!(f > 0.f))
+      {
+        continue;
+      }
+      float T = 1.f;
+      if (L.shadows)
+      {
+        ++c.shadowRays;
+        T = shadowTransmittance<Mode>(
+          s, s.active, s.numActive, x, dl, minf(boxExit(s.volume, x, dl), dist), est, rng, sc);
+      }
+      radiance += throughput * L.lightRadiance[l] * (f * T * falloff);
+    }
+    if (L.ambient.x > 0.f || L.ambient.y > 0.f || L.ambient.z > 0.f)
+    {
+      const Vec3f wa = directionAround(w, sampleHGCosine(g, rng.next()), rng.next());
+      float T = 1.f;
+      if (L.shadows)
+      {
+        ++c.shadowRays;
+        const Vec3f da = mul3(L.toIndex, wa);
+        T = shadowTransmittance<Mode>(s, s.active, s.numActive, x, da, boxExit(s.volume, x, da), est, rng, sc);
+      }
+      radiance += throughput * L.ambient * T;
+    }
+    if (depth + 1 >= L.maxDepth)
+    {
+      break;
+    }
+    if (depth >= 2)
+    {
+      const float q = clampf(fmaxf(throughput.x, fmaxf(throughput.y, throughput.z)), 0.05f, 1.f);
+      if (!(rng.next() < q))
+      {
+        break;
+      }
+      throughput = throughput * (1.f / q);
+    }
+    w = directionAround(w, sampleHGCosine(g, rng.next()), rng.next());
+    d = mul3(L.toIndex, w);
+    o = x;
+    tmax = boxExit(s.volume, o, d);
+  }
+  out.r = radiance.x;
+  out.g = radiance.y;
+  out.b = radiance.z;
+  return out;
+}
+} // namespace mcvol
