@@ -80,8 +80,11 @@ def write_dataset(name, out_dir, dims, channels):
     writer = vtkXMLImageDataWriter()
     writer.SetInputData(image)
     writer.SetFileName(filename)
-    writer.SetDataModeToAppended()
-    writer.EncodeAppendedDataOff()
+    # Binary (base64 inside each DataArray), not appended: with appended data,
+    # raw or base64, VTK 9.2's reader fails under the expat security updates of
+    # Debian bookworm (2.5.0-1+deb12u2 and later: "not well-formed (invalid
+    # token)" or "junk after document element" at <AppendedData>).
+    writer.SetDataModeToBinary()
     writer.SetCompressorTypeToLZMA()
     writer.SetCompressionLevel(5)
     if not writer.Write():
