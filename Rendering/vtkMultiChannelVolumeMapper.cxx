@@ -148,6 +148,8 @@ struct vtkMultiChannelVolumeMapper::vtkInternals
   // Accumulation state.
   bool HaveKey = false;
   bool ResetRequested = false;
+  // Samples per pixel of the batch being traced (0: SamplesPerPixel).
+  int BatchSamples = 0;
   AccumulationKey Key;
   std::vector<float> Depth;
   std::vector<float> LastDepth;
@@ -256,7 +258,7 @@ bool vtkMultiChannelVolumeMapper::TraceImage(const mcvol::Scene& scene, const mc
     return false;
   }
   mcvol::RenderSettings settings;
-  settings.samplesPerPixel = this->SamplesPerPixel;
+  settings.samplesPerPixel = this->Internals->BatchSamples > 0 ? this->Internals->BatchSamples : this->SamplesPerPixel;
   settings.seed = this->Seed;
   settings.tracker = this->TrackingMethod == N_DDA ? mcvol::Tracker::NDDA : mcvol::Tracker::OneDDA;
   settings.jitterPixels = this->PixelJitter;
@@ -417,6 +419,22 @@ double vtkMultiChannelVolumeMapper::GetMixWeight(int channel)
 int vtkMultiChannelVolumeMapper::GetTotalSamples()
 {
   return static_cast<int>(this->Internals->Accum.samples());
+}
+
+//------------------------------------------------------------------------------
+bool vtkMultiChannelVolumeMapper::IsConverged()
+{
+  const vtkInternals& in = *this->Internals;
+  const long long total = static_cast<long long>(in.Accum.samples());
+  if (!in.HaveKey || in.ResetRequested || total <= 0)
+  {
+    return false;
+  }
+  if (!this->Progressive)
+  {
+    return true;
+  }
+  return this->MaximumTotalSamples > 0 && total >= this->MaximumTotalSamples;
 }
 
 //------------------------------------------------------------------------------
@@ -1182,9 +1200,33 @@ void vtkMultiChannelVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
   }
 
   // ---- Trace --------------------------------------------------------------
+  // Progressive refinement adds a batch up to MaximumTotalSamples; without it
+  // the image is traced once per change. The ray-marching subclass decides
+  // for itself (it traces once per change).
+  const long long traced = static_cast<long long>(in.Accum.samples());
+  int batch = this->SamplesPerPixel;
+  if (this->UsesRenderBackend() && traced > 0)
+  {
+    if (!this->Progressive)
+    {
+      batch = 0;
+    }
+    else if (this->MaximumTotalSamples > 0)
+    {
+      batch = static_cast<int>(std::min<long long>(batch, std::max<long long>(0, this->MaximumTotalSamples - traced)));
+    }
+  }
+  else if (this->UsesRenderBackend() && this->MaximumTotalSamples > 0)
+  {
+    batch = std::min(batch, this->MaximumTotalSamples);
+  }
+  if (batch > 0)
   {
     std::string error;
-    if (!this->TraceImage(in.Scene, camera, in.LastDepth.data(), in.Renderer.get(), in.Accum, error))
+    in.BatchSamples = batch;
+    const bool ok = this->TraceImage(in.Scene, camera, in.LastDepth.data(), in.Renderer.get(), in.Accum, error);
+    in.BatchSamples = 0;
+    if (!ok)
     {
       vtkErrorMacro("Rendering failed: " << error);
       in.HaveKey = false;
@@ -1259,6 +1301,8 @@ void vtkMultiChannelVolumeMapper::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "ChannelBlendMode: " << this->GetChannelBlendModeAsString() << "\n";
   os << indent << "TrackingMethod: " << this->GetTrackingMethodAsString() << "\n";
   os << indent << "SamplesPerPixel: " << this->SamplesPerPixel << "\n";
+  os << indent << "Progressive: " << this->Progressive << "\n";
+  os << indent << "MaximumTotalSamples: " << this->MaximumTotalSamples << "\n";
   os << indent << "Seed: " << this->Seed << "\n";
   os << indent << "PixelJitter: " << this->PixelJitter << "\n";
   os << indent << "MacrocellSize: " << this->MacrocellSize << "\n";

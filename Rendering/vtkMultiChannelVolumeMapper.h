@@ -150,6 +150,37 @@ public:
 
   ///@{
   /**
+   * Progressive refinement (default on): every Render() with nothing changed
+   * adds SamplesPerPixel samples to the running mean. Off, the image is
+   * traced once per change, with SamplesPerPixel samples, and redrawn as it
+   * is otherwise (the same seed gives the same image).
+   */
+  vtkSetMacro(Progressive, bool);
+  vtkGetMacro(Progressive, bool);
+  vtkBooleanMacro(Progressive, bool);
+  ///@}
+
+  ///@{
+  /**
+   * Largest number of samples per pixel the running mean accumulates
+   * (default 0: no limit). Once reached, Render() redraws the image without
+   * tracing; IsConverged() says so. The last batch is cut so that the total
+   * is exactly this number.
+   */
+  vtkSetClampMacro(MaximumTotalSamples, int, 0, VTK_INT_MAX);
+  vtkGetMacro(MaximumTotalSamples, int);
+  ///@}
+
+  /**
+   * True when another Render() would not trace: MaximumTotalSamples is
+   * reached, or progressive refinement is off and the image is traced, and
+   * nothing that resets the image has changed since the last Render() (a
+   * change is only noticed at the next Render()).
+   */
+  bool IsConverged();
+
+  ///@{
+  /**
    * Seed of the random sequences (default 0). The same seed, scene and
    * backend give the same image.
    */
@@ -390,6 +421,8 @@ protected:
   bool GradientShading = false;
   double Shininess = 32.0;
   int MacrocellSize = 8;
+  bool Progressive = true;
+  int MaximumTotalSamples = 0;
   int Backend = BACKEND_AUTO;
   int NumberOfChannels = 0;
   int LastTransferFunctionUpdates = 0;

@@ -1,0 +1,348 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "vtkMultiChannelVolumeRepresentation.h"
+
+#include "vtkColorTransferFunction.h"
+#include "vtkDataArray.h"
+#include "vtkDiscretizableColorTransferFunction.h"
+#include "vtkImageData.h"
+#include "vtkMultiChannelVolumeMapper.h"
+#include "vtkObjectFactory.h"
+#include "vtkPVLODVolume.h"
+#include "vtkPiecewiseFunction.h"
+#include "vtkPointData.h"
+#include "vtkScalarsToColors.h"
+#include "vtkVolumeProperty.h"
+
+#include <sstream>
+
+vtkStandardNewMacro(vtkMultiChannelVolumeRepresentation);
+
+//------------------------------------------------------------------------------
+vtkMultiChannelVolumeRepresentation::vtkMultiChannelVolumeRepresentation()
+{
+  // Replace the image volume representation's mapper; everything else (data
+  // delivery, outline, ordered compositing) is the superclass's.
+  this->VolumeMapper = vtkSmartPointer<vtkMultiChannelVolumeMapper>::New();
+}
+
+//------------------------------------------------------------------------------
+vtkMultiChannelVolumeRepresentation::~vtkMultiChannelVolumeRepresentation() = default;
+
+//------------------------------------------------------------------------------
+vtkMultiChannelVolumeMapper* vtkMultiChannelVolumeRepresentation::GetMultiChannelMapper()
+{
+  return vtkMultiChannelVolumeMapper::SafeDownCast(this->VolumeMapper);
+}
+
+//------------------------------------------------------------------------------
+void vtkMultiChannelVolumeRepresentation::SetChannelSource(int source)
+{
+  source = source == COMPONENTS ? COMPONENTS : ARRAYS;
+  if (this->ChannelSource != source)
+  {
+    this->ChannelSource = source;
+    this->Modified();
+  }
+}
+
+//------------------------------------------------------------------------------
+void vtkMultiChannelVolumeRepresentation::AddChannelArray(const char* name)
+{
+  if (name && *name)
+  {
+    this->ChannelArrays.emplace_back(name);
+    this->Modified();
+  }
+}
+
+//------------------------------------------------------------------------------
+void vtkMultiChannelVolumeRepresentation::RemoveAllChannelArrays()
+{
+  if (!this->ChannelArrays.empty())
+  {
+    this->ChannelArrays.clear();
+    this->Modified();
+  }
+}
+
+//------------------------------------------------------------------------------
+void vtkMultiChannelVolumeRepresentation::SetChannelComponentsArray(const char* name)
+{
+  const std::string value = name ? name : "";
+  if (this->ChannelComponentsArray != value)
+  {
+    this->ChannelComponentsArray = value;
+    this->Modified();
+  }
+}
+
+//------------------------------------------------------------------------------
+void vtkMultiChannelVolumeRepresentation::AddChannelLookupTable(vtkScalarsToColors* lut)
+{
+  this->ChannelLookupTables.emplace_back(lut);
+  this->Modified();
+}
+
+//------------------------------------------------------------------------------
+void vtkMultiChannelVolumeRepresentation::RemoveAllChannelLookupTables()
+{
+  if (!this->ChannelLookupTables.empty())
+  {
+    this->ChannelLookupTables.clear();
+    this->Modified();
+  }
+}
+
+//------------------------------------------------------------------------------
+void vtkMultiChannelVolumeRepresentation::SetChannelBlendMode(int mode)
+{
+  this->GetMultiChannelMapper()->SetChannelBlendMode(mode);
+}
+
+void vtkMultiChannelVolumeRepresentation::SetNumberOfMixWeights(int n)
+{
+  this->MixWeights.assign(static_cast<size_t>(std::max(0, n)), 1.0);
+}
+
+void vtkMultiChannelVolumeRepresentation::SetMixWeight(int channel, double weight)
+{
+  if (channel >= 0)
+  {
+    if (static_cast<size_t>(channel) >= this->MixWeights.size())
+    {
+      this->MixWeights.resize(static_cast<size_t>(channel) + 1, 1.0);
+    }
+    this->MixWeights[channel] = weight;
+  }
+}
+
+void vtkMultiChannelVolumeRepresentation::SetTrackingMethod(int method)
+{
+  this->GetMultiChannelMapper()->SetTrackingMethod(method);
+}
+
+void vtkMultiChannelVolumeRepresentation::SetSamplesPerRender(int spp)
+{
+  this->GetMultiChannelMapper()->SetSamplesPerPixel(spp);
+}
+
+void vtkMultiChannelVolumeRepresentation::SetProgressiveRefinement(bool on)
+{
+  this->GetMultiChannelMapper()->SetProgressive(on);
+}
+
+void vtkMultiChannelVolumeRepresentation::SetMaximumTotalSamples(int total)
+{
+  this->GetMultiChannelMapper()->SetMaximumTotalSamples(total);
+}
+
+void vtkMultiChannelVolumeRepresentation::SetMacrocellSize(int size)
+{
+  this->GetMultiChannelMapper()->SetMacrocellSize(size);
+}
+
+void vtkMultiChannelVolumeRepresentation::SetBackend(int backend)
+{
+  this->GetMultiChannelMapper()->SetBackend(backend);
+}
+
+void vtkMultiChannelVolumeRepresentation::SetSeed(int seed)
+{
+  this->GetMultiChannelMapper()->SetSeed(static_cast<unsigned int>(seed));
+}
+
+void vtkMultiChannelVolumeRepresentation::SetPixelJitter(bool on)
+{
+  this->GetMultiChannelMapper()->SetPixelJitter(on);
+}
+
+void vtkMultiChannelVolumeRepresentation::SetShadowMode(int mode)
+{
+  this->GetMultiChannelMapper()->SetShadowMode(mode);
+}
+
+void vtkMultiChannelVolumeRepresentation::SetAmbientRadiance(double r, double g, double b)
+{
+  this->GetMultiChannelMapper()->SetAmbientRadiance(r, g, b);
+}
+
+void vtkMultiChannelVolumeRepresentation::SetMaxScatteringDepth(int depth)
+{
+  this->GetMultiChannelMapper()->SetMaxScatteringDepth(depth);
+}
+
+void vtkMultiChannelVolumeRepresentation::SetGradientShading(bool on)
+{
+  this->GetMultiChannelMapper()->SetGradientShading(on);
+}
+
+void vtkMultiChannelVolumeRepresentation::SetShininess(double shininess)
+{
+  this->GetMultiChannelMapper()->SetShininess(shininess);
+}
+
+void vtkMultiChannelVolumeRepresentation::SetNumberOfChannelAlbedos(int n)
+{
+  this->Albedos.assign(static_cast<size_t>(std::max(0, n)), 1.0);
+}
+
+void vtkMultiChannelVolumeRepresentation::SetChannelAlbedo(int channel, double albedo)
+{
+  if (channel >= 0)
+  {
+    if (static_cast<size_t>(channel) >= this->Albedos.size())
+    {
+      this->Albedos.resize(static_cast<size_t>(channel) + 1, 1.0);
+    }
+    this->Albedos[channel] = albedo;
+  }
+}
+
+void vtkMultiChannelVolumeRepresentation::SetNumberOfChannelAnisotropies(int n)
+{
+  this->Anisotropies.assign(static_cast<size_t>(std::max(0, n)), 0.0);
+}
+
+void vtkMultiChannelVolumeRepresentation::SetChannelAnisotropy(int channel, double g)
+{
+  if (channel >= 0)
+  {
+    if (static_cast<size_t>(channel) >= this->Anisotropies.size())
+    {
+      this->Anisotropies.resize(static_cast<size_t>(channel) + 1, 0.0);
+    }
+    this->Anisotropies[channel] = g;
+  }
+}
+
+//------------------------------------------------------------------------------
+int vtkMultiChannelVolumeRepresentation::GetTotalSamples()
+{
+  return this->GetMultiChannelMapper()->GetTotalSamples();
+}
+
+int vtkMultiChannelVolumeRepresentation::GetConverged()
+{
+  return this->GetMultiChannelMapper()->IsConverged() ? 1 : 0;
+}
+
+int vtkMultiChannelVolumeRepresentation::GetNumberOfChannels()
+{
+  return this->GetMultiChannelMapper()->GetNumberOfChannels();
+}
+
+const char* vtkMultiChannelVolumeRepresentation::GetBackendReport()
+{
+  this->BackendReport = this->GetMultiChannelMapper()->GetBackendReport();
+  return this->BackendReport.c_str();
+}
+
+//------------------------------------------------------------------------------
+void vtkMultiChannelVolumeRepresentation::UpdateMapperParameters()
+{
+  vtkMultiChannelVolumeMapper* mapper = this->GetMultiChannelMapper();
+  vtkImageData* image = vtkImageData::SafeDownCast(this->Cache);
+  this->Actor->SetMapper(mapper);
+
+  // ---- Channels -------------------------------------------------------------
+  int numChannels = 0;
+  std::ostringstream status;
+  if (this->ChannelSource == COMPONENTS)
+  {
+    mapper->RemoveAllChannelArrays();
+    const char* current = mapper->GetArrayName();
+    if (mapper->GetScalarMode() != VTK_SCALAR_MODE_USE_POINT_FIELD_DATA ||
+      mapper->GetArrayAccessMode() != VTK_GET_ARRAY_BY_NAME || !current ||
+      this->ChannelComponentsArray != current)
+    {
+      mapper->SetScalarMode(VTK_SCALAR_MODE_USE_POINT_FIELD_DATA);
+      mapper->SelectScalarArray(this->ChannelComponentsArray.c_str());
+    }
+    vtkDataArray* array = (image && !this->ChannelComponentsArray.empty())
+      ? image->GetPointData()->GetArray(this->ChannelComponentsArray.c_str())
+      : nullptr;
+    numChannels = array ? array->GetNumberOfComponents()
+                        : static_cast<int>(this->ChannelLookupTables.size());
+    if (this->ChannelComponentsArray.empty())
+    {
+      status << "no channel array selected";
+    }
+    else if (image && !array)
+    {
+      status << "no point array named '" << this->ChannelComponentsArray << "'";
+    }
+  }
+  else
+  {
+    bool same = mapper->GetNumberOfChannelArrays() == static_cast<int>(this->ChannelArrays.size());
+    for (size_t i = 0; same && i < this->ChannelArrays.size(); ++i)
+    {
+      same = this->ChannelArrays[i] == mapper->GetChannelArray(static_cast<int>(i));
+    }
+    if (!same)
+    {
+      mapper->RemoveAllChannelArrays();
+      for (const std::string& name : this->ChannelArrays)
+      {
+        mapper->AddChannelArray(name.c_str());
+      }
+    }
+    numChannels = static_cast<int>(this->ChannelArrays.size());
+    if (numChannels == 0)
+    {
+      status << "no channels selected";
+    }
+  }
+  if (numChannels > vtkMultiChannelVolumeMapper::MAX_CHANNELS)
+  {
+    status << numChannels << " channels; at most " << int(vtkMultiChannelVolumeMapper::MAX_CHANNELS)
+           << " are supported";
+    numChannels = 0;
+  }
+
+  // ---- Transfer functions and per-channel parameters ---------------------------
+  const double unitDistance = this->Property->GetScalarOpacityUnitDistance(0);
+  for (int c = 0; c < numChannels; ++c)
+  {
+    vtkScalarsToColors* lut =
+      static_cast<size_t>(c) < this->ChannelLookupTables.size() ? this->ChannelLookupTables[c].Get() : nullptr;
+    auto* color = vtkColorTransferFunction::SafeDownCast(lut);
+    auto* discretizable = vtkDiscretizableColorTransferFunction::SafeDownCast(lut);
+    vtkPiecewiseFunction* opacity = discretizable ? discretizable->GetScalarOpacityFunction() : nullptr;
+    if (!color || !opacity)
+    {
+      if (status.tellp() == 0)
+      {
+        status << "channel " << c << " has no " << (color ? "opacity" : "colour") << " transfer function";
+      }
+      continue;
+    }
+    mapper->SetChannelColor(c, color);
+    mapper->SetChannelScalarOpacity(c, opacity);
+    mapper->SetChannelScalarOpacityUnitDistance(c, unitDistance);
+    mapper->SetMixWeight(c, static_cast<size_t>(c) < this->MixWeights.size() ? this->MixWeights[c] : 1.0);
+    mapper->SetChannelAlbedo(c, static_cast<size_t>(c) < this->Albedos.size() ? this->Albedos[c] : 1.0);
+    mapper->SetChannelAnisotropy(
+      c, static_cast<size_t>(c) < this->Anisotropies.size() ? this->Anisotropies[c] : 0.0);
+  }
+
+  this->ChannelStatus = status.str();
+  // Volume mappers do not like inputs they cannot draw (as the superclass).
+  this->Actor->SetVisibility(this->ChannelStatus.empty() && numChannels > 0);
+}
+
+//------------------------------------------------------------------------------
+void vtkMultiChannelVolumeRepresentation::PrintSelf(ostream& os, vtkIndent indent)
+{
+  this->Superclass::PrintSelf(os, indent);
+  os << indent << "ChannelSource: " << (this->ChannelSource == COMPONENTS ? "components" : "arrays") << "\n";
+  os << indent << "ChannelArrays:";
+  for (const std::string& name : this->ChannelArrays)
+  {
+    os << " " << name;
+  }
+  os << "\n";
+  os << indent << "ChannelComponentsArray: " << this->ChannelComponentsArray << "\n";
+  os << indent << "ChannelLookupTables: " << this->ChannelLookupTables.size() << "\n";
+  os << indent << "ChannelStatus: " << this->ChannelStatus << "\n";
+}

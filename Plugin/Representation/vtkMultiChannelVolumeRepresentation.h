@@ -1,0 +1,131 @@
+// SPDX-License-Identifier: BSD-3-Clause
+/**
+ * @class   vtkMultiChannelVolumeRepresentation
+ * @brief   ParaView volume representation drawn by vtkMultiChannelVolumeMapper.
+ *
+ * The representation behind "Multi-Channel Volume (Monte Carlo)". It is
+ * ParaView's image volume representation (data delivery, outline for ranks
+ * without data, ordered compositing of the pieces in parallel) with its
+ * mapper replaced by vtkMultiChannelVolumeMapper and N channels instead of
+ * one coloured array.
+ *
+ * Channels come from a list of point arrays (ChannelSource ARRAYS, the
+ * default) or from the components of one point array (COMPONENTS). Channel
+ * i is coloured by the i-th lookup table added with AddChannelLookupTable
+ * and made opaque by that lookup table's scalar opacity function (ParaView's
+ * PVLookupTable proxies carry one); vtkSMMultiChannelVolumeRepresentationProxy
+ * fills that list on the client from ParaView's per-array transfer functions.
+ *
+ * Every setter only forwards to the mapper: the mapper starts its running
+ * mean over when a value really changes and not otherwise, so rendering again
+ * with nothing changed refines the image.
+ */
+#ifndef vtkMultiChannelVolumeRepresentation_h
+#define vtkMultiChannelVolumeRepresentation_h
+
+#include "mcvolParaViewRepresentationModule.h" // For export macro
+#include "vtkImageVolumeRepresentation.h"
+#include "vtkSmartPointer.h" // For vtkSmartPointer
+
+#include <string> // For std::string
+#include <vector> // For std::vector
+
+class vtkMultiChannelVolumeMapper;
+class vtkScalarsToColors;
+
+class MCVOLPARAVIEWREPRESENTATION_EXPORT vtkMultiChannelVolumeRepresentation
+  : public vtkImageVolumeRepresentation
+{
+public:
+  static vtkMultiChannelVolumeRepresentation* New();
+  vtkTypeMacro(vtkMultiChannelVolumeRepresentation, vtkImageVolumeRepresentation);
+  void PrintSelf(ostream& os, vtkIndent indent) override;
+
+  enum ChannelSources
+  {
+    ARRAYS = 0,
+    COMPONENTS = 1
+  };
+
+  ///@{
+  /**
+   * Where the channels come from: the arrays listed with AddChannelArray
+   * (ARRAYS) or the components of ChannelComponentsArray (COMPONENTS).
+   */
+  void SetChannelSource(int source);
+  vtkGetMacro(ChannelSource, int);
+  void AddChannelArray(const char* name);
+  void RemoveAllChannelArrays();
+  void SetChannelComponentsArray(const char* name);
+  ///@}
+
+  ///@{
+  /**
+   * Channel i's colour transfer function, whose scalar opacity function (a
+   * vtkDiscretizableColorTransferFunction's) is the channel's opacity.
+   */
+  void AddChannelLookupTable(vtkScalarsToColors* lut);
+  void RemoveAllChannelLookupTables();
+  ///@}
+
+  ///@{
+  /**
+   * Forwarded to vtkMultiChannelVolumeMapper.
+   */
+  void SetChannelBlendMode(int mode);
+  void SetNumberOfMixWeights(int n);
+  void SetMixWeight(int channel, double weight);
+  void SetTrackingMethod(int method);
+  void SetSamplesPerRender(int spp);
+  void SetProgressiveRefinement(bool on);
+  void SetMaximumTotalSamples(int total);
+  void SetMacrocellSize(int size);
+  void SetBackend(int backend);
+  void SetSeed(int seed);
+  void SetPixelJitter(bool on);
+  void SetShadowMode(int mode);
+  void SetAmbientRadiance(double r, double g, double b);
+  void SetMaxScatteringDepth(int depth);
+  void SetGradientShading(bool on);
+  void SetShininess(double shininess);
+  void SetNumberOfChannelAlbedos(int n);
+  void SetChannelAlbedo(int channel, double albedo);
+  void SetNumberOfChannelAnisotropies(int n);
+  void SetChannelAnisotropy(int channel, double g);
+  ///@}
+
+  ///@{
+  /**
+   * Read back by the client (information properties).
+   */
+  int GetTotalSamples();
+  int GetConverged();
+  int GetNumberOfChannels();
+  const char* GetBackendReport();
+  const char* GetChannelStatus() { return this->ChannelStatus.c_str(); }
+  ///@}
+
+  vtkMultiChannelVolumeMapper* GetMultiChannelMapper();
+
+protected:
+  vtkMultiChannelVolumeRepresentation();
+  ~vtkMultiChannelVolumeRepresentation() override;
+
+  void UpdateMapperParameters() override;
+
+  int ChannelSource = ARRAYS;
+  std::vector<std::string> ChannelArrays;
+  std::string ChannelComponentsArray;
+  std::vector<vtkSmartPointer<vtkScalarsToColors>> ChannelLookupTables;
+  std::vector<double> MixWeights;
+  std::vector<double> Albedos;
+  std::vector<double> Anisotropies;
+  std::string ChannelStatus;
+  std::string BackendReport;
+
+private:
+  vtkMultiChannelVolumeRepresentation(const vtkMultiChannelVolumeRepresentation&) = delete;
+  void operator=(const vtkMultiChannelVolumeRepresentation&) = delete;
+};
+
+#endif

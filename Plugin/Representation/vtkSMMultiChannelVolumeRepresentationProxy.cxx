@@ -1,0 +1,222 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "vtkSMMultiChannelVolumeRepresentationProxy.h"
+
+#include "vtkDataObject.h"
+#include "vtkObjectFactory.h"
+#include "vtkPVArrayInformation.h"
+#include "vtkPVDataInformation.h"
+#include "vtkSMOutputPort.h"
+#include "vtkSMProperty.h"
+#include "vtkSMPropertyHelper.h"
+#include "vtkSMProxyProperty.h"
+#include "vtkSMSessionProxyManager.h"
+#include "vtkSMTransferFunctionManager.h"
+#include "vtkSMTransferFunctionProxy.h"
+
+#include <cstring>
+
+vtkStandardNewMacro(vtkSMMultiChannelVolumeRepresentationProxy);
+
+namespace
+{
+// Distinct sequential presets for channels whose functions are new.
+const char* const kChannelPresets[] = { "Reds", "Greens", "Blues", "Oranges", "Purples", "Greys" };
+constexpr int kNumChannelPresets = sizeof(kChannelPresets) / sizeof(kChannelPresets[0]);
+
+bool IsChannelProperty(const char* name)
+{
+  return name &&
+    (!strcmp(name, "ChannelArrays") || !strcmp(name, "ChannelComponentsArray") ||
+      !strcmp(name, "ChannelSource"));
+}
+}
+
+//------------------------------------------------------------------------------
+vtkSMMultiChannelVolumeRepresentationProxy::vtkSMMultiChannelVolumeRepresentationProxy() = default;
+vtkSMMultiChannelVolumeRepresentationProxy::~vtkSMMultiChannelVolumeRepresentationProxy() = default;
+
+//------------------------------------------------------------------------------
+std::string vtkSMMultiChannelVolumeRepresentationProxy::ChannelFunctionName(const char* array, int component)
+{
+  return std::string(array ? array : "") + ":" + std::to_string(component);
+}
+
+//------------------------------------------------------------------------------
+std::vector<std::string> vtkSMMultiChannelVolumeRepresentationProxy::GetChannelFunctionNames()
+{
+  std::vector<std::string> names;
+  if (!this->GetProperty("ChannelSource") ||
+    vtkSMPropertyHelper(this, "ChannelSource").GetNumberOfElements() < 1)
+  {
+    return names;
+  }
+  const int source = vtkSMPropertyHelper(this, "ChannelSource").GetAsInt();
+  if (source == 1)
+  {
+    vtkSMPropertyHelper arrayHelper(this, "ChannelComponentsArray");
+    const char* array = arrayHelper.GetNumberOfElements() > 0 ? arrayHelper.GetAsString() : nullptr;
+    vtkSMOutputPort* port = vtkSMPropertyHelper(this, "Input", true).GetAsOutputPort();
+    vtkPVArrayInformation* info = (array && *array && port)
+      ? port->GetDataInformation()->GetArrayInformation(array, vtkDataObject::POINT)
+      : nullptr;
+    const int components = info ? info->GetNumberOfComponents() : 0;
+    for (int k = 0; k < components; ++k)
+    {
+      names.push_back(ChannelFunctionName(array, k));
+    }
+  }
+  else
+  {
+    vtkSMPropertyHelper arrays(this, "ChannelArrays");
+    for (unsigned int i = 0; i < arrays.GetNumberOfElements(); ++i)
+    {
+      const char* name = arrays.GetAsString(i);
+      if (name && *name)
+      {
+        names.emplace_back(name);
+      }
+    }
+  }
+  return names;
+}
+
+//------------------------------------------------------------------------------
+int vtkSMMultiChannelVolumeRepresentationProxy::UpdateChannelLookupTables()
+{
+  vtkSMSessionProxyManager* pxm = this->GetSessionProxyManager();
+  if (!pxm || !this->GetProperty("ChannelLookupTables") || this->InUpdate)
+  {
+    return 0;
+  }
+  this->InUpdate = true;
+  const std::vector<std::string> names = this->GetChannelFunctionNames();
+  const int source = vtkSMPropertyHelper(this, "ChannelSource").GetAsInt();
+  vtkSMPropertyHelper componentsHelper(this, "ChannelComponentsArray");
+  const char* componentsArray =
+    componentsHelper.GetNumberOfElements() > 0 ? componentsHelper.GetAsString() : nullptr;
+  vtkSMOutputPort* port = vtkSMPropertyHelper(this, "Input", true).GetAsOutputPort();
+
+  vtkNew<vtkSMTransferFunctionManager> manager;
+  std::vector<vtkSMProxy*> luts;
+  for (size_t c = 0; c < names.size(); ++c)
+  {
+    const std::string& name = names[c];
+    const bool existed = pxm->GetProxy("lookup_tables", (name + ".PVLookupTable").c_str()) != nullptr;
+    vtkSMProxy* lut = manager->GetColorTransferFunction(name.c_str(), pxm);
+    vtkSMProxy* pwf = manager->GetOpacityTransferFunction(name.c_str(), pxm);
+    if (!lut)
+    {
+      continue;
+    }
+    if (pwf && !vtkSMPropertyHelper(lut, "ScalarOpacityFunction", true).GetAsProxy())
+    {
+      vtkSMPropertyHelper(lut, "ScalarOpacityFunction").Set(pwf);
+      lut->UpdateVTKObjects();
+    }
+    if (!existed)
+    {
+      // A new channel: its own preset, fitted to the channel's data range.
+      vtkSMTransferFunctionProxy::ApplyPreset(lut, kChannelPresets[c % kNumChannelPresets], false);
+      double range[2] = { 0.0, 1.0 };
+      bool haveRange = false;
+      if (port)
+      {
+        const bool components = source == 1;
+        vtkPVArrayInformation* info = port->GetDataInformation()->GetArrayInformation(
+          components ? componentsArray : name.c_str(), vtkDataObject::POINT);
+        if (info)
+        {
+          info->GetComponentRange(components ? static_cast<int>(c) : 0, range);
+          haveRange = range[0] <= range[1];
+        }
+      }
+      if (haveRange)
+      {
+        vtkSMTransferFunctionProxy::RescaleTransferFunction(lut, range, false);
+        if (pwf)
+        {
+          vtkSMTransferFunctionProxy::RescaleTransferFunction(pwf, range, false);
+        }
+      }
+    }
+    luts.push_back(lut);
+  }
+  vtkSMProxyProperty* prop = vtkSMProxyProperty::SafeDownCast(this->GetProperty("ChannelLookupTables"));
+  prop->SetProxies(static_cast<unsigned int>(luts.size()), luts.data());
+  if (this->ObjectsCreated)
+  {
+    this->UpdateProperty("ChannelLookupTables");
+  }
+  this->InUpdate = false;
+  return static_cast<int>(luts.size());
+}
+
+//------------------------------------------------------------------------------
+void vtkSMMultiChannelVolumeRepresentationProxy::ShowActiveChannel()
+{
+  vtkSMProperty* active = this->GetProperty("ActiveChannel");
+  if (!active || this->InUpdate || vtkSMPropertyHelper(active).GetNumberOfElements() < 1)
+  {
+    return;
+  }
+  const int channel = vtkSMPropertyHelper(this, "ActiveChannel").GetAsInt();
+  vtkSMPropertyHelper luts(this, "ChannelLookupTables");
+  if (channel < 0 || static_cast<unsigned int>(channel) >= luts.GetNumberOfElements())
+  {
+    return;
+  }
+  vtkSMProxy* lut = luts.GetAsProxy(static_cast<unsigned int>(channel));
+  vtkSMProxy* pwf = lut ? vtkSMPropertyHelper(lut, "ScalarOpacityFunction", true).GetAsProxy() : nullptr;
+  this->InUpdate = true;
+  if (lut && this->GetProperty("LookupTable"))
+  {
+    vtkSMPropertyHelper(this, "LookupTable").Set(lut);
+  }
+  if (pwf && this->GetProperty("ScalarOpacityFunction"))
+  {
+    vtkSMPropertyHelper(this, "ScalarOpacityFunction").Set(pwf);
+  }
+  if (this->ObjectsCreated)
+  {
+    this->UpdateVTKObjects();
+  }
+  this->InUpdate = false;
+}
+
+//------------------------------------------------------------------------------
+void vtkSMMultiChannelVolumeRepresentationProxy::SetPropertyModifiedFlag(const char* name, int flag)
+{
+  this->Superclass::SetPropertyModifiedFlag(name, flag);
+  // Nothing to do while the definition is read (ObjectsCreated is 0 until
+  // the proxy exists on the processes) or while a state file is loaded.
+  if (this->LoadingState || this->InUpdate || !flag || !this->ObjectsCreated)
+  {
+    return;
+  }
+  if (IsChannelProperty(name))
+  {
+    this->UpdateChannelLookupTables();
+  }
+  else if (name && !strcmp(name, "ActiveChannel"))
+  {
+    this->ShowActiveChannel();
+  }
+}
+
+//------------------------------------------------------------------------------
+int vtkSMMultiChannelVolumeRepresentationProxy::LoadXMLState(
+  vtkPVXMLElement* element, vtkSMProxyLocator* locator)
+{
+  // The saved ChannelLookupTables are the truth; do not derive them again
+  // while the saved channel properties are read.
+  this->LoadingState = true;
+  const int result = this->Superclass::LoadXMLState(element, locator);
+  this->LoadingState = false;
+  return result;
+}
+
+//------------------------------------------------------------------------------
+void vtkSMMultiChannelVolumeRepresentationProxy::PrintSelf(ostream& os, vtkIndent indent)
+{
+  this->Superclass::PrintSelf(os, indent);
+}

@@ -1,0 +1,81 @@
+// SPDX-License-Identifier: BSD-3-Clause
+/**
+ * @class   vtkSMMultiChannelVolumeRepresentationProxy
+ * @brief   Client-side proxy of the multi-channel volume representation.
+ *
+ * Gives every channel a transfer function from ParaView's transfer function
+ * manager, so that channels are edited like any coloured array: with the
+ * colour map editor, GetColorTransferFunction/GetOpacityTransferFunction in
+ * Python, presets, and saved in state files.
+ *
+ * - Channels from arrays: channel "density" uses the transfer functions of
+ *   the array "density" (the ones colouring by "density" shows).
+ * - Channels from the components of one array: component k of "stains" uses
+ *   the transfer functions named "stains:k" (ChannelFunctionName()).
+ *
+ * Whenever the channel list changes, ChannelLookupTables is set to these
+ * lookup tables (each carries its opacity function). A transfer function the
+ * manager creates here is fitted to the channel's data range and given a
+ * preset of its own (Reds, Greens, Blues, ...), so channels are told apart
+ * from the start. State files keep the list as saved.
+ *
+ * ActiveChannel (-1: none) puts channel k's functions in the
+ * representation's LookupTable and ScalarOpacityFunction, which is what
+ * ParaView's colour map editor edits.
+ */
+#ifndef vtkSMMultiChannelVolumeRepresentationProxy_h
+#define vtkSMMultiChannelVolumeRepresentationProxy_h
+
+#include "mcvolParaViewRepresentationModule.h" // For export macro
+#include "vtkSMRepresentationProxy.h"
+
+#include <string> // For std::string
+#include <vector> // For std::vector
+
+class MCVOLPARAVIEWREPRESENTATION_EXPORT vtkSMMultiChannelVolumeRepresentationProxy
+  : public vtkSMRepresentationProxy
+{
+public:
+  static vtkSMMultiChannelVolumeRepresentationProxy* New();
+  vtkTypeMacro(vtkSMMultiChannelVolumeRepresentationProxy, vtkSMRepresentationProxy);
+  void PrintSelf(ostream& os, vtkIndent indent) override;
+
+  /**
+   * Name of the transfer functions of component `component` of `array` when
+   * channels are the components of one array ("array:component").
+   */
+  static std::string ChannelFunctionName(const char* array, int component);
+
+  /**
+   * The transfer-function names of the channels, in order, as the current
+   * property values select them (component channels need the input's data
+   * information for the number of components).
+   */
+  std::vector<std::string> GetChannelFunctionNames();
+
+  /**
+   * Sets ChannelLookupTables from the transfer function manager for the
+   * current channels. Called whenever a channel property changes; call it
+   * after changing channels with the property modified events blocked.
+   * Returns the number of channels.
+   */
+  int UpdateChannelLookupTables();
+
+  int LoadXMLState(vtkPVXMLElement* element, vtkSMProxyLocator* locator) override;
+
+protected:
+  vtkSMMultiChannelVolumeRepresentationProxy();
+  ~vtkSMMultiChannelVolumeRepresentationProxy() override;
+
+  void SetPropertyModifiedFlag(const char* name, int flag) override;
+  void ShowActiveChannel();
+
+  bool InUpdate = false;
+  bool LoadingState = false;
+
+private:
+  vtkSMMultiChannelVolumeRepresentationProxy(const vtkSMMultiChannelVolumeRepresentationProxy&) = delete;
+  void operator=(const vtkSMMultiChannelVolumeRepresentationProxy&) = delete;
+};
+
+#endif

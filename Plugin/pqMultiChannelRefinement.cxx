@@ -1,0 +1,99 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "pqMultiChannelRefinement.h"
+
+#include "pqApplicationCore.h"
+#include "pqRenderView.h"
+#include "pqRepresentation.h"
+#include "pqServerManagerModel.h"
+#include "vtkSMPropertyHelper.h"
+#include "vtkSMProxy.h"
+
+#include <QApplication>
+
+#include <cstring>
+
+namespace
+{
+const char* const kRepresentationType = "Multi-Channel Volume (Monte Carlo)";
+}
+
+//------------------------------------------------------------------------------
+pqMultiChannelRefinement::pqMultiChannelRefinement(QObject* parentObject)
+  : Superclass(parentObject)
+{
+  // Interval 0: fires whenever the event loop is idle, after pending events.
+  this->Timer.setInterval(0);
+  this->Timer.setSingleShot(false);
+  QObject::connect(&this->Timer, &QTimer::timeout, this, &pqMultiChannelRefinement::refine);
+}
+
+//------------------------------------------------------------------------------
+pqMultiChannelRefinement::~pqMultiChannelRefinement() = default;
+
+//------------------------------------------------------------------------------
+void pqMultiChannelRefinement::startup()
+{
+  this->Timer.start();
+}
+
+//------------------------------------------------------------------------------
+void pqMultiChannelRefinement::shutdown()
+{
+  this->Timer.stop();
+}
+
+//------------------------------------------------------------------------------
+void pqMultiChannelRefinement::refine()
+{
+  pqApplicationCore* core = pqApplicationCore::instance();
+  if (!core || QApplication::mouseButtons() != Qt::NoButton || QApplication::activeModalWidget())
+  {
+    // Interaction renders by itself; a modal dialog wants the CPU.
+    return;
+  }
+  bool rendered = false;
+  const QList<pqRenderView*> views = core->getServerManagerModel()->findItems<pqRenderView*>();
+  for (pqRenderView* view : views)
+  {
+    bool needsRender = false;
+    for (pqRepresentation* repr : view->getRepresentations())
+    {
+      vtkSMProxy* proxy = repr ? repr->getProxy() : nullptr;
+      if (!proxy || !repr->isVisible() || !proxy->GetProperty("Representation"))
+      {
+        continue;
+      }
+      const char* type = vtkSMPropertyHelper(proxy, "Representation").GetAsString();
+      // The representation's properties are exposed by the composite
+      // representation proxy ParaView shows (UniformGridRepresentation).
+      vtkSMProxy* sub = proxy;
+      if (!type || strcmp(type, kRepresentationType) != 0 || !sub->GetProperty("Converged") ||
+        vtkSMPropertyHelper(sub, "ProgressiveRefinement").GetAsInt() == 0)
+      {
+        continue;
+      }
+      sub->UpdatePropertyInformation();
+      const int converged = vtkSMPropertyHelper(sub, "Converged").GetAsInt();
+      const int samples = vtkSMPropertyHelper(sub, "TotalSamples").GetAsInt();
+      const char* status = vtkSMPropertyHelper(sub, "ChannelStatus").GetAsString();
+      auto last = this->LastSamples.find(sub);
+      const bool stalled = last != this->LastSamples.end() && last.value() == samples;
+      if (!converged && (!status || !*status) && !stalled)
+      {
+        needsRender = true;
+        this->LastSamples[sub] = samples;
+      }
+      else if (!stalled || converged)
+      {
+        this->LastSamples.remove(sub);
+      }
+    }
+    if (needsRender)
+    {
+      view->forceRender();
+      rendered = true;
+    }
+  }
+  // Nothing to do: look again a little later rather than spin.
+  this->Timer.setInterval(rendered ? 0 : 100);
+}

@@ -1,0 +1,48 @@
+// SPDX-License-Identifier: BSD-3-Clause
+/**
+ * @class   pqMultiChannelRefinement
+ * @brief   Refines multi-channel Monte Carlo volumes while the GUI is idle.
+ *
+ * Started with the plugin in the ParaView GUI. Whenever the event loop has
+ * nothing else to do, it renders again every render view that shows a
+ * visible "Multi-Channel Volume (Monte Carlo)" representation with
+ * progressive refinement on whose image is not finished (the server-side
+ * representation reports Converged once Maximum Total Samples is reached).
+ * Each render adds Samples Per Render samples; user events are served
+ * between renders, and any change (camera, property, transfer function)
+ * starts the mapper's image over, so refinement simply resumes from there.
+ */
+#ifndef pqMultiChannelRefinement_h
+#define pqMultiChannelRefinement_h
+
+#include <QMap>
+#include <QObject>
+#include <QPointer>
+#include <QTimer>
+
+class pqView;
+
+class pqMultiChannelRefinement : public QObject
+{
+  Q_OBJECT
+  typedef QObject Superclass;
+
+public:
+  pqMultiChannelRefinement(QObject* parent = nullptr);
+  ~pqMultiChannelRefinement() override;
+
+  void startup();
+  void shutdown();
+
+private Q_SLOTS:
+  void refine();
+
+private:
+  Q_DISABLE_COPY(pqMultiChannelRefinement)
+  QTimer Timer;
+  // Samples seen per representation proxy after the last render this class
+  // asked for: no progress means there is nothing to refine (an error).
+  QMap<void*, int> LastSamples;
+};
+
+#endif
