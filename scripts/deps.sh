@@ -13,6 +13,13 @@ MCVOL_PACKAGES=(
   xvfb xauth googletest python3-numpy python3-matplotlib python3-skimage
   # ParaView's VTK links VTK::glew and VTK::tiff through these -dev packages' targets
   libglew-dev libtiff-dev
+  # The ParaView plugin: find_package(ParaView COMPONENTS RemotingViews) looks up
+  # these third-party packages of ParaView's VTK; openmpi-bin runs the
+  # `mpiexec -n 2 pvbatch` test; xmlpatterns is called by paraview_add_plugin.
+  libopenmpi-dev openmpi-bin libhdf5-dev libnetcdf-dev libboost-dev
+  libdouble-conversion-dev liblz4-dev libutfcpp-dev libexpat1-dev liblzma-dev
+  libxml2-dev libfreetype-dev libjpeg-dev libpng-dev libeigen3-dev
+  qtxmlpatterns5-dev-tools
 )
 
 mcvol_missing=()

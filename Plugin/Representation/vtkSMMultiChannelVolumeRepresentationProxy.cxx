@@ -167,18 +167,21 @@ void vtkSMMultiChannelVolumeRepresentationProxy::ShowActiveChannel()
   }
   vtkSMProxy* lut = luts.GetAsProxy(static_cast<unsigned int>(channel));
   vtkSMProxy* pwf = lut ? vtkSMPropertyHelper(lut, "ScalarOpacityFunction", true).GetAsProxy() : nullptr;
+  // Set them on the composite representation ParaView shows (its shared
+  // properties are linked from the other subproxies to this one, not back).
+  vtkSMProxy* target = this->GetParentProxy() ? this->GetParentProxy() : this;
   this->InUpdate = true;
-  if (lut && this->GetProperty("LookupTable"))
+  if (lut && target->GetProperty("LookupTable"))
   {
-    vtkSMPropertyHelper(this, "LookupTable").Set(lut);
+    vtkSMPropertyHelper(target, "LookupTable").Set(lut);
   }
-  if (pwf && this->GetProperty("ScalarOpacityFunction"))
+  if (pwf && target->GetProperty("ScalarOpacityFunction"))
   {
-    vtkSMPropertyHelper(this, "ScalarOpacityFunction").Set(pwf);
+    vtkSMPropertyHelper(target, "ScalarOpacityFunction").Set(pwf);
   }
-  if (this->ObjectsCreated)
+  if (target->GetObjectsCreated())
   {
-    this->UpdateVTKObjects();
+    target->UpdateVTKObjects();
   }
   this->InUpdate = false;
 }

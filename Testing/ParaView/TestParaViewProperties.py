@@ -1,0 +1,143 @@
+"""pvpython: every property of the representation reaches the mapper: the
+image changes when the property changes what is drawn, and stays the same,
+pixel for pixel, when it does not (same seed, same samples)."""
+import numpy as np
+from paraview import simple
+
+import mcvolParaViewTesting as T
+
+checks = T.Checks()
+T.load_plugin()
+
+figure3 = simple.XMLImageDataReader(FileName=[T.DATA + "/figure3.vti"])
+names = ["red", "green", "blue"]
+split = T.split_channels(figure3, "channels", names)
+view = T.make_view((160, 160))
+# A light, so that the lighting properties have something to change once
+# Shade is on; with Shade off the volume is emission-absorption only.
+rep = T.show(split, view)
+rep.ChannelArrays = names
+T.set_channel_functions(names)
+
+
+def image():
+    T.render_converged(view, rep)
+    return T.capture(view)
+
+
+def differs(a, b):
+    return np.abs(a.astype(int) - b.astype(int)).mean()
+
+
+reference = image()
+checks.check((reference.sum(axis=2) > 30).mean() > 0.05, "the reference image shows the volume")
+
+
+def expect(label, change, should_change, restore=None):
+    """Applies `change`, renders, compares with the current reference."""
+    global reference
+    change()
+    img = image()
+    d = differs(img, reference)
+    if should_change:
+        # Rendering is deterministic (same seed and samples: the "unchanged"
+        # cases differ by exactly 0), so any difference comes from the change.
+        checks.check(d > 0.0, "%s changes the image (mean |diff| %.3f)" % (label, d))
+    else:
+        checks.check(d == 0.0, "%s leaves the image unchanged (mean |diff| %.3f)" % (label, d))
+    if restore:
+        restore()
+        back = image()
+        checks.check(differs(back, reference) == 0.0, "%s: restoring it restores the image" % label)
+
+
+def setter(name, value):
+    return lambda: setattr(rep, name, value)
+
+
+def current(name):
+    value = getattr(rep, name)
+    if hasattr(value, "__len__") and not isinstance(value, str):
+        return list(value)
+    return value
+
+
+def expect_property(name, value, should_change, label=None):
+    """Sets a property, compares, and sets it back to what it was."""
+    saved = current(name)
+    expect(label or name, setter(name, value), should_change, setter(name, saved))
+
+
+expect_property("Seed", 8, True)
+expect_property("SamplesPerRender", 4, False, "SamplesPerRender (same total)")
+expect_property("MaximumTotalSamples", 64, True)
+expect_property("ChannelBlendMode", "Mix", True)
+expect_property("MixWeights", [1.0, 0.0, 0.0], False, "MixWeights outside Mix")
+rep.ChannelBlendMode = "Mix"
+rep.MixWeights = [1.0, 0.0, 0.0]
+reference = image()
+expect_property("MixWeights", [1.0, 0.2, 0.2], True, "MixWeights in Mix")
+rep.MixWeights = []
+rep.ChannelBlendMode = "Density"
+reference = image()
+expect_property("TrackingMethod", "N DDA", True)
+expect_property("MacrocellSize", 2, True)
+expect_property("Backend", "Auto", T.info(rep, "BackendReport").startswith("CUDA"),
+                "Backend Auto (the CPU here, as before)")
+expect_property("PixelJitter", 0, True)
+expect_property("ScalarOpacityUnitDistance", 3.0 * current("ScalarOpacityUnitDistance"), True)
+expect_property("InterpolationType", "Nearest", True)
+expect_property("ChannelArrays", ["red", "green"], True)
+
+# Transfer functions: editing one channel's opacity or colour changes the image.
+pwf = simple.GetOpacityTransferFunction("green")
+saved = list(pwf.Points)
+expect("the green opacity function", lambda: setattr(pwf, "Points", [0.0, 0.0, 0.5, 0.0, 1.0, 0.9, 0.5, 0.0]), True,
+       lambda: setattr(pwf, "Points", saved))
+lut = simple.GetColorTransferFunction("blue")
+saved = list(lut.RGBPoints)
+expect("the blue colour function", lambda: setattr(lut, "RGBPoints", [0.0, 1, 1, 1, 1.0, 1, 1, 1]), True,
+       lambda: setattr(lut, "RGBPoints", saved))
+# A transfer function of an array that is not a channel changes nothing.
+expect("an unrelated array's transfer function",
+       lambda: setattr(simple.GetOpacityTransferFunction("channels"), "Points", [0, 1, 0.5, 0, 1, 1, 0.5, 0]), False)
+
+# ActiveChannel only selects what the colour map editor edits.
+expect("ActiveChannel", setter("ActiveChannel", 1), False)
+checks.check(rep.LookupTable == simple.GetColorTransferFunction("green")
+             and rep.ScalarOpacityFunction == simple.GetOpacityTransferFunction("green"),
+             "ActiveChannel 1 puts the green channel's functions in LookupTable/ScalarOpacityFunction")
+
+# Lighting: with Shade off nothing of it is simulated, so nothing changes.
+for name, value in [("ShadowMode", "Delta Tracking"), ("AmbientRadiance", [1.0, 0.0, 0.0]),
+                    ("MaxScatteringDepth", 4), ("GradientShading", 1), ("Shininess", 5.0),
+                    ("ChannelAlbedos", [0.2, 0.2, 0.2]), ("ChannelAnisotropies", [0.5, 0.5, 0.5])]:
+    expect_property(name, value, False, "%s with Shade off" % name)
+expect("Shade", setter("Shade", 1), True)
+reference = image()
+for name, value in [("ShadowMode", "None"), ("AmbientRadiance", [1.0, 0.0, 0.0]), ("MaxScatteringDepth", 4),
+                    ("GradientShading", 1), ("ChannelAlbedos", [0.2, 0.2, 0.2]),
+                    ("ChannelAnisotropies", [0.6, 0.6, 0.6])]:
+    expect_property(name, value, True, "%s with Shade on" % name)
+rep.Shade = 0
+reference = image()
+
+# Progressive refinement off: one trace of Samples Per Render per change.
+rep.ProgressiveRefinement = 0
+simple.Render(view)
+first = T.info(rep, "TotalSamples")
+simple.Render(view)
+checks.check(first == 8 and T.info(rep, "TotalSamples") == 8 and T.info(rep, "Converged") == 1,
+             "progressive refinement off: 8 samples per change, not refined further (%d)" % first)
+rep.ProgressiveRefinement = 1
+rep.MaximumTotalSamples = 0
+for _ in range(5):
+    simple.Render(view)
+checks.check(T.info(rep, "TotalSamples") == 40 and T.info(rep, "Converged") == 0,
+             "Maximum Total Samples 0: every render refines (%d after 5 renders)" % T.info(rep, "TotalSamples"))
+# Interaction (a camera change) starts the image over.
+view.CameraPosition = [160.0, 100.0, 190.0]
+simple.Render(view)
+checks.check(T.info(rep, "TotalSamples") == 8, "a camera change starts the refinement over")
+
+checks.finish()
