@@ -94,6 +94,26 @@ void vtkMultiChannelVolumeRepresentation::RemoveAllChannelLookupTables()
 }
 
 //------------------------------------------------------------------------------
+void vtkMultiChannelVolumeRepresentation::SetNumberOfChannelLookupTableIndices(int n)
+{
+  this->ChannelLookupTableIndices.assign(static_cast<size_t>(std::max(0, n)), -1);
+  this->Modified();
+}
+
+void vtkMultiChannelVolumeRepresentation::SetChannelLookupTableIndex(int channel, int index)
+{
+  if (channel >= 0)
+  {
+    if (static_cast<size_t>(channel) >= this->ChannelLookupTableIndices.size())
+    {
+      this->ChannelLookupTableIndices.resize(static_cast<size_t>(channel) + 1, -1);
+    }
+    this->ChannelLookupTableIndices[channel] = index;
+    this->Modified();
+  }
+}
+
+//------------------------------------------------------------------------------
 void vtkMultiChannelVolumeRepresentation::SetChannelBlendMode(int mode)
 {
   this->GetMultiChannelMapper()->SetChannelBlendMode(mode);
@@ -304,8 +324,15 @@ void vtkMultiChannelVolumeRepresentation::UpdateMapperParameters()
   const double unitDistance = this->Property->GetScalarOpacityUnitDistance(0);
   for (int c = 0; c < numChannels; ++c)
   {
-    vtkScalarsToColors* lut =
-      static_cast<size_t>(c) < this->ChannelLookupTables.size() ? this->ChannelLookupTables[c].Get() : nullptr;
+    // ParaView delivers a repeatable proxy property as a set, in the order of
+    // the proxies' global ids and without repeats; the client sends which of
+    // those lookup tables each channel uses.
+    const int index = static_cast<size_t>(c) < this->ChannelLookupTableIndices.size()
+      ? this->ChannelLookupTableIndices[c]
+      : -1;
+    vtkScalarsToColors* lut = (index >= 0 && static_cast<size_t>(index) < this->ChannelLookupTables.size())
+      ? this->ChannelLookupTables[index].Get()
+      : nullptr;
     auto* color = vtkColorTransferFunction::SafeDownCast(lut);
     auto* discretizable = vtkDiscretizableColorTransferFunction::SafeDownCast(lut);
     vtkPiecewiseFunction* opacity = discretizable ? discretizable->GetScalarOpacityFunction() : nullptr;

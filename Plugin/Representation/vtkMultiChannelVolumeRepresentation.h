@@ -70,6 +70,17 @@ public:
 
   ///@{
   /**
+   * Which of the added lookup tables channel i uses (an index into the list
+   * in the order added). ParaView adds a repeatable proxy property's proxies
+   * in the order of their global ids, without repeats, so the client proxy
+   * sends the channel order separately.
+   */
+  void SetNumberOfChannelLookupTableIndices(int n);
+  void SetChannelLookupTableIndex(int channel, int index);
+  ///@}
+
+  ///@{
+  /**
    * Forwarded to vtkMultiChannelVolumeMapper.
    */
   void SetChannelBlendMode(int mode);
@@ -117,6 +128,7 @@ protected:
   std::vector<std::string> ChannelArrays;
   std::string ChannelComponentsArray;
   std::vector<vtkSmartPointer<vtkScalarsToColors>> ChannelLookupTables;
+  std::vector<int> ChannelLookupTableIndices;
   std::vector<double> MixWeights;
   std::vector<double> Albedos;
   std::vector<double> Anisotropies;

@@ -13,6 +13,7 @@
 #include "vtkSMTransferFunctionManager.h"
 #include "vtkSMTransferFunctionProxy.h"
 
+#include <algorithm>
 #include <cstring>
 
 vtkStandardNewMacro(vtkSMMultiChannelVolumeRepresentationProxy);
@@ -143,12 +144,53 @@ int vtkSMMultiChannelVolumeRepresentationProxy::UpdateChannelLookupTables()
   }
   vtkSMProxyProperty* prop = vtkSMProxyProperty::SafeDownCast(this->GetProperty("ChannelLookupTables"));
   prop->SetProxies(static_cast<unsigned int>(luts.size()), luts.data());
+  this->SyncLookupTableIndices();
   if (this->ObjectsCreated)
   {
     this->UpdateProperty("ChannelLookupTables");
+    this->UpdateProperty("ChannelLookupTableIndices");
   }
   this->InUpdate = false;
   return static_cast<int>(luts.size());
+}
+
+//------------------------------------------------------------------------------
+bool vtkSMMultiChannelVolumeRepresentationProxy::SyncLookupTableIndices()
+{
+  vtkSMProxyProperty* luts = vtkSMProxyProperty::SafeDownCast(this->GetProperty("ChannelLookupTables"));
+  vtkSMProperty* indices = this->GetProperty("ChannelLookupTableIndices");
+  if (!luts || !indices)
+  {
+    return false;
+  }
+  // The server receives the distinct proxies sorted by global id.
+  std::vector<vtkTypeUInt32> ids;
+  for (unsigned int i = 0; i < luts->GetNumberOfProxies(); ++i)
+  {
+    vtkSMProxy* lut = luts->GetProxy(i);
+    ids.push_back(lut ? lut->GetGlobalID() : 0);
+  }
+  std::vector<vtkTypeUInt32> sorted(ids);
+  sorted.erase(std::remove(sorted.begin(), sorted.end(), 0u), sorted.end());
+  std::sort(sorted.begin(), sorted.end());
+  sorted.erase(std::unique(sorted.begin(), sorted.end()), sorted.end());
+  std::vector<int> order;
+  for (vtkTypeUInt32 id : ids)
+  {
+    const auto it = std::lower_bound(sorted.begin(), sorted.end(), id);
+    order.push_back(id != 0 && it != sorted.end() && *it == id ? static_cast<int>(it - sorted.begin()) : -1);
+  }
+  vtkSMPropertyHelper helper(indices);
+  bool same = helper.GetNumberOfElements() == order.size();
+  for (size_t i = 0; same && i < order.size(); ++i)
+  {
+    same = helper.GetAsInt(static_cast<unsigned int>(i)) == order[i];
+  }
+  if (!same)
+  {
+    helper.Set(order.data(), static_cast<unsigned int>(order.size()));
+  }
+  return !same;
 }
 
 //------------------------------------------------------------------------------
@@ -192,13 +234,25 @@ void vtkSMMultiChannelVolumeRepresentationProxy::SetPropertyModifiedFlag(const c
   this->Superclass::SetPropertyModifiedFlag(name, flag);
   // Nothing to do while the definition is read (ObjectsCreated is 0 until
   // the proxy exists on the processes) or while a state file is loaded.
-  if (this->LoadingState || this->InUpdate || !flag || !this->ObjectsCreated)
+  vtkSMSessionProxyManager* pxm = this->GetSessionProxyManager();
+  const bool loading = pxm && pxm->GetInLoadXMLState();
+  if (loading || this->InUpdate || !flag || !this->ObjectsCreated)
   {
     return;
   }
   if (IsChannelProperty(name))
   {
     this->UpdateChannelLookupTables();
+  }
+  else if (name && !strcmp(name, "ChannelLookupTables"))
+  {
+    // Set directly (Python): keep the channel order in step.
+    this->InUpdate = true;
+    if (this->SyncLookupTableIndices())
+    {
+      this->UpdateProperty("ChannelLookupTableIndices");
+    }
+    this->InUpdate = false;
   }
   else if (name && !strcmp(name, "ActiveChannel"))
   {
@@ -207,15 +261,12 @@ void vtkSMMultiChannelVolumeRepresentationProxy::SetPropertyModifiedFlag(const c
 }
 
 //------------------------------------------------------------------------------
-int vtkSMMultiChannelVolumeRepresentationProxy::LoadXMLState(
-  vtkPVXMLElement* element, vtkSMProxyLocator* locator)
+void vtkSMMultiChannelVolumeRepresentationProxy::UpdateVTKObjects()
 {
-  // The saved ChannelLookupTables are the truth; do not derive them again
-  // while the saved channel properties are read.
-  this->LoadingState = true;
-  const int result = this->Superclass::LoadXMLState(element, locator);
-  this->LoadingState = false;
-  return result;
+  // Every push carries the channel order of the lookup tables as they are now
+  // (after a state file is loaded the proxies have new global ids).
+  this->SyncLookupTableIndices();
+  this->Superclass::UpdateVTKObjects();
 }
 
 //------------------------------------------------------------------------------

@@ -17,7 +17,13 @@
  * lookup tables (each carries its opacity function). A transfer function the
  * manager creates here is fitted to the channel's data range and given a
  * preset of its own (Reds, Greens, Blues, ...), so channels are told apart
- * from the start. State files keep the list as saved.
+ * from the start. State files keep the list as saved (nothing is derived
+ * while a state is loaded).
+ *
+ * ParaView delivers a repeatable proxy property to the server as a set
+ * ordered by global id, so ChannelLookupTableIndices (not saved in states)
+ * tells the server which lookup table each channel uses; it is recomputed
+ * before every push.
  *
  * ActiveChannel (-1: none) puts channel k's functions in the
  * representation's LookupTable and ScalarOpacityFunction, which is what
@@ -61,7 +67,7 @@ public:
    */
   int UpdateChannelLookupTables();
 
-  int LoadXMLState(vtkPVXMLElement* element, vtkSMProxyLocator* locator) override;
+  void UpdateVTKObjects() override;
 
 protected:
   vtkSMMultiChannelVolumeRepresentationProxy();
@@ -69,9 +75,16 @@ protected:
 
   void SetPropertyModifiedFlag(const char* name, int flag) override;
   void ShowActiveChannel();
+  /**
+   * Sets ChannelLookupTableIndices from ChannelLookupTables: ParaView sends a
+   * repeatable proxy property to the server as a set ordered by global id,
+   * so each channel's position in that set is sent alongside. Returns true
+   * when the value changed.
+   */
+  bool SyncLookupTableIndices();
 
   bool InUpdate = false;
-  bool LoadingState = false;
+
 
 private:
   vtkSMMultiChannelVolumeRepresentationProxy(const vtkSMMultiChannelVolumeRepresentationProxy&) = delete;
