@@ -148,6 +148,8 @@ struct vtkMultiChannelVolumeMapper::vtkInternals
   // Accumulation state.
   bool HaveKey = false;
   bool ResetRequested = false;
+  // The input image of the last render (compared, never dereferenced).
+  const void* LastImage = nullptr;
   // Samples per pixel of the batch being traced (0: SamplesPerPixel).
   int BatchSamples = 0;
   AccumulationKey Key;
@@ -913,7 +915,12 @@ void vtkMultiChannelVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
     }
     // An image Modified() with the same geometry may mean values written in
     // place (users often call image->Modified() rather than the array's).
-    const bool imageValuesChanged = imageMTime != in.ImageMTime && geometry == in.Geometry;
+    // Only for the same image object: a new image holding the same arrays
+    // (ParaView delivers a fresh shallow copy for every parallel render)
+    // changed nothing the arrays' times would not show.
+    const bool sameImage = in.LastImage == image;
+    const bool imageValuesChanged = sameImage && imageMTime != in.ImageMTime && geometry == in.Geometry;
+    in.LastImage = image;
     const bool dataChanged = volumeChanged || dataMTime != in.DataMTime || imageValuesChanged;
     in.ImageMTime = imageMTime;
     in.Geometry = geometry;
@@ -980,6 +987,29 @@ void vtkMultiChannelVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
       ChannelTFState& s = tfState[c];
       s.Range[0] = in.Ranges[c][0];
       s.Range[1] = in.Ranges[c][1];
+      if (this->TransferFunctionRangeMode == FUNCTION_RANGE)
+      {
+        // The functions' own range (the same on every rank of a parallel
+        // render); values beyond it take the end values, as VTK's clamped
+        // functions do.
+        double cr[2], orr[2];
+        if (s.Gray)
+        {
+          static_cast<vtkPiecewiseFunction*>(s.Color)->GetRange(cr);
+        }
+        else
+        {
+          static_cast<vtkColorTransferFunction*>(s.Color)->GetRange(cr);
+        }
+        s.Opacity->GetRange(orr);
+        const double lo = std::min(cr[0], orr[0]);
+        const double hi = std::max(cr[1], orr[1]);
+        if (std::isfinite(lo) && std::isfinite(hi) && lo < hi)
+        {
+          s.Range[0] = lo;
+          s.Range[1] = hi;
+        }
+      }
       if (s == in.TF[c])
       {
         continue;
@@ -1175,7 +1205,9 @@ void vtkMultiChannelVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
   // ---- Accumulation reset -------------------------------------------------
   key.MapperMTime = this->GetMTime();
   key.PropertyMTime = property ? property->GetMTime() : 0;
-  key.DataMTime = std::max(dataMTime, imageMTime);
+  // The arrays' times (marked above when values were written in place);
+  // geometry reaches the key through WorldToIndex.
+  key.DataMTime = dataMTime;
   key.LightsMTime = lightsMTime;
   key.Width = width;
   key.Height = height;
@@ -1302,6 +1334,8 @@ void vtkMultiChannelVolumeMapper::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "TrackingMethod: " << this->GetTrackingMethodAsString() << "\n";
   os << indent << "SamplesPerPixel: " << this->SamplesPerPixel << "\n";
   os << indent << "Progressive: " << this->Progressive << "\n";
+  os << indent << "TransferFunctionRangeMode: "
+     << (this->TransferFunctionRangeMode == FUNCTION_RANGE ? "function" : "data") << "\n";
   os << indent << "MaximumTotalSamples: " << this->MaximumTotalSamples << "\n";
   os << indent << "Seed: " << this->Seed << "\n";
   os << indent << "PixelJitter: " << this->PixelJitter << "\n";

@@ -171,6 +171,24 @@ public:
   vtkGetMacro(MaximumTotalSamples, int);
   ///@}
 
+  enum TransferFunctionRangeModes
+  {
+    DATA_RANGE = 0,
+    FUNCTION_RANGE = 1
+  };
+  ///@{
+  /**
+   * Range over which each channel's transfer functions are tabulated:
+   * DATA_RANGE (default) the channel's finite data range; FUNCTION_RANGE
+   * the union of the colour and opacity functions' own ranges (values
+   * beyond it take the end values, as VTK's clamped functions do). Use
+   * FUNCTION_RANGE when the same functions must give the same table on data
+   * split over several processes (the ParaView plugin does).
+   */
+  vtkSetClampMacro(TransferFunctionRangeMode, int, DATA_RANGE, FUNCTION_RANGE);
+  vtkGetMacro(TransferFunctionRangeMode, int);
+  ///@}
+
   /**
    * True when another Render() would not trace: MaximumTotalSamples is
    * reached, or progressive refinement is off and the image is traced, and
@@ -422,6 +440,7 @@ protected:
   double Shininess = 32.0;
   int MacrocellSize = 8;
   bool Progressive = true;
+  int TransferFunctionRangeMode = DATA_RANGE;
   int MaximumTotalSamples = 0;
   int Backend = BACKEND_AUTO;
   int NumberOfChannels = 0;

@@ -6,6 +6,7 @@
 #include "vtkDiscretizableColorTransferFunction.h"
 #include "vtkImageData.h"
 #include "vtkMultiChannelVolumeMapper.h"
+#include "vtkMultiProcessController.h"
 #include "vtkObjectFactory.h"
 #include "vtkPVLODVolume.h"
 #include "vtkPiecewiseFunction.h"
@@ -22,7 +23,11 @@ vtkMultiChannelVolumeRepresentation::vtkMultiChannelVolumeRepresentation()
 {
   // Replace the image volume representation's mapper; everything else (data
   // delivery, outline, ordered compositing) is the superclass's.
-  this->VolumeMapper = vtkSmartPointer<vtkMultiChannelVolumeMapper>::New();
+  auto mapper = vtkSmartPointer<vtkMultiChannelVolumeMapper>::New();
+  // ParaView's transfer functions span the whole dataset's range, the same
+  // on every rank; a piece's own data range is not (tables would differ).
+  mapper->SetTransferFunctionRangeMode(vtkMultiChannelVolumeMapper::FUNCTION_RANGE);
+  this->VolumeMapper = mapper;
 }
 
 //------------------------------------------------------------------------------
@@ -168,7 +173,8 @@ void vtkMultiChannelVolumeRepresentation::SetBackend(int backend)
 
 void vtkMultiChannelVolumeRepresentation::SetSeed(int seed)
 {
-  this->GetMultiChannelMapper()->SetSeed(static_cast<unsigned int>(seed));
+  this->Seed = static_cast<unsigned int>(seed);
+  this->Modified();
 }
 
 void vtkMultiChannelVolumeRepresentation::SetPixelJitter(bool on)
@@ -263,6 +269,16 @@ void vtkMultiChannelVolumeRepresentation::UpdateMapperParameters()
   vtkMultiChannelVolumeMapper* mapper = this->GetMultiChannelMapper();
   vtkImageData* image = vtkImageData::SafeDownCast(this->Cache);
   this->Actor->SetMapper(mapper);
+
+  // Each rank's piece gets its own random sequences. With the same seed on
+  // every rank, a pixel's paths through the front and the back piece would
+  // use the same numbers; their opacities and colours would be correlated
+  // and the composite "front over back" biased dark (measured: silhouette
+  // pixels up to 18% darker at 1024 samples).
+  vtkMultiProcessController* controller = vtkMultiProcessController::GetGlobalController();
+  const unsigned int rank =
+    controller ? static_cast<unsigned int>(controller->GetLocalProcessId()) : 0u;
+  mapper->SetSeed(this->Seed + 0x9E3779B9u * rank);
 
   // ---- Channels -------------------------------------------------------------
   int numChannels = 0;

@@ -125,6 +125,7 @@ protected:
   void UpdateMapperParameters() override;
 
   int ChannelSource = ARRAYS;
+  unsigned int Seed = 0;
   std::vector<std::string> ChannelArrays;
   std::string ChannelComponentsArray;
   std::vector<vtkSmartPointer<vtkScalarsToColors>> ChannelLookupTables;
