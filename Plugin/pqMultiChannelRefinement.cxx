@@ -48,7 +48,9 @@ void pqMultiChannelRefinement::refine()
   pqApplicationCore* core = pqApplicationCore::instance();
   if (!core || QApplication::mouseButtons() != Qt::NoButton || QApplication::activeModalWidget())
   {
-    // Interaction renders by itself; a modal dialog wants the CPU.
+    // Interaction renders by itself; a modal dialog wants the CPU. Look
+    // again later (an interval of 0 would spin while the dialog is open).
+    this->Timer.setInterval(100);
     return;
   }
   bool rendered = false;

@@ -100,6 +100,7 @@ struct AccumulationKey
   vtkMTimeType PropertyMTime = 0;
   vtkMTimeType DataMTime = 0;
   vtkMTimeType LightsMTime = 0; ///< the renderer's lights (lighting only)
+  unsigned long long TablesVersion = 0; ///< transfer-function tables
   int Width = 0;
   int Height = 0;
   double InvViewProj[16] = {};
@@ -108,7 +109,8 @@ struct AccumulationKey
 
   bool operator==(const AccumulationKey& o) const
   {
-    return this->MapperMTime == o.MapperMTime && this->PropertyMTime == o.PropertyMTime &&
+    return this->MapperMTime == o.MapperMTime && this->TablesVersion == o.TablesVersion &&
+      this->PropertyMTime == o.PropertyMTime &&
       this->DataMTime == o.DataMTime && this->LightsMTime == o.LightsMTime && this->Width == o.Width &&
       this->Height == o.Height &&
       std::equal(std::begin(this->InvViewProj), std::end(this->InvViewProj), std::begin(o.InvViewProj)) &&
@@ -144,6 +146,12 @@ struct vtkMultiChannelVolumeMapper::vtkInternals
   std::array<double, 15> Geometry{};                 // origin, spacing, direction of ImageMTime
   std::array<std::array<double, 2>, kMaxChannels> Ranges{};
   std::array<ChannelTFState, kMaxChannels> TF{};
+  // The tables last given to the Scene, and a counter bumped whenever one
+  // really changes: a function whose time moves but whose values do not
+  // (ParaView's lookup tables are touched on every render while they colour
+  // something) neither rebuilds the grids nor restarts the image.
+  std::array<mcvol::TransferFunctionDesc, kMaxChannels> Tables{};
+  unsigned long long TablesVersion = 0;
 
   // Accumulation state.
   bool HaveKey = false;
@@ -180,6 +188,12 @@ struct vtkMultiChannelVolumeMapper::vtkInternals
     {
       tf = ChannelTFState();
     }
+    for (auto& table : this->Tables)
+    {
+      table = mcvol::TransferFunctionDesc();
+      table.rgb.clear();
+    }
+    ++this->TablesVersion;
   }
 };
 
@@ -1047,8 +1061,16 @@ void vtkMultiChannelVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
           v = std::isfinite(v) ? std::min(1.f, std::max(0.f, v)) : 0.f;
         }
       }
-      in.Scene.setTransferFunction(c, desc);
       in.TF[c] = s;
+      const mcvol::TransferFunctionDesc& last = in.Tables[c];
+      if (last.rgb == desc.rgb && last.opacity == desc.opacity && last.scalarMin == desc.scalarMin &&
+        last.scalarMax == desc.scalarMax && last.unitDistance == desc.unitDistance)
+      {
+        continue;
+      }
+      in.Scene.setTransferFunction(c, desc);
+      in.Tables[c] = std::move(desc);
+      ++in.TablesVersion;
       ++updates;
     }
     this->LastTransferFunctionUpdates = updates;
@@ -1203,8 +1225,13 @@ void vtkMultiChannelVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
   }
 
   // ---- Accumulation reset -------------------------------------------------
-  key.MapperMTime = this->GetMTime();
-  key.PropertyMTime = property ? property->GetMTime() : 0;
+  // The mapper's own parameters; the transfer functions count through the
+  // tables they produce (TablesVersion), not through their times.
+  key.MapperMTime = this->Superclass::GetMTime();
+  key.TablesVersion = in.TablesVersion;
+  // The property's own settings (shading, interpolation, which functions it
+  // holds); the values of its functions count through TablesVersion.
+  key.PropertyMTime = property ? property->vtkObject::GetMTime() : 0;
   // The arrays' times (marked above when values were written in place);
   // geometry reaches the key through WorldToIndex.
   key.DataMTime = dataMTime;

@@ -328,6 +328,21 @@ void vtkMultiChannelVolumeRepresentation::UpdateMapperParameters()
     {
       status << "no channels selected";
     }
+    else
+    {
+      // The mapper reads the listed arrays and ignores the scalars, but
+      // vtkPVLODVolume only renders a volume mapper whose scalars it finds:
+      // point it at the first channel (data without active scalars, such
+      // as a file of separate arrays, would otherwise draw nothing).
+      const char* current = mapper->GetArrayName();
+      if (mapper->GetScalarMode() != VTK_SCALAR_MODE_USE_POINT_FIELD_DATA ||
+        mapper->GetArrayAccessMode() != VTK_GET_ARRAY_BY_NAME || !current ||
+        this->ChannelArrays[0] != current)
+      {
+        mapper->SetScalarMode(VTK_SCALAR_MODE_USE_POINT_FIELD_DATA);
+        mapper->SelectScalarArray(this->ChannelArrays[0].c_str());
+      }
+    }
   }
   if (numChannels > vtkMultiChannelVolumeMapper::MAX_CHANNELS)
   {

@@ -92,4 +92,54 @@ image = T.capture(view)
 checks.check(T.info(wrep, "ChannelStatus") == "", "12 channels: no channel problem reported")
 checks.check((image.sum(axis=2) > 30).mean() > 0.05, "12 channels: the volume is drawn")
 
+# Data whose channels are separate arrays and which has no active scalars
+# (as a file of separate arrays often is): ParaView's volume prop only draws
+# a mapper whose scalars it finds, so the representation points the mapper
+# at the first channel. Before that fix this drew nothing in the GUI.
+import os
+import tempfile
+from vtkmodules.vtkCommonDataModel import vtkImageData
+from vtkmodules.vtkIOXML import vtkXMLImageDataReader, vtkXMLImageDataWriter
+from vtkmodules.vtkCommonCore import vtkFloatArray
+
+reader = vtkXMLImageDataReader()
+reader.SetFileName(T.DATA + "/figure3.vti")
+reader.Update()
+src = reader.GetOutput()
+plain = vtkImageData()
+plain.SetDimensions(src.GetDimensions())
+both = src.GetPointData().GetArray("channels")
+for k, name in enumerate(names):
+    arr = vtkFloatArray()
+    arr.SetName(name)
+    arr.SetNumberOfTuples(both.GetNumberOfTuples())
+    arr.CopyComponent(0, both, k)
+    plain.GetPointData().AddArray(arr)
+checks.check(plain.GetPointData().GetScalars() is None, "the test data has no active scalars")
+handle, path = tempfile.mkstemp(suffix=".vti")
+os.close(handle)
+writer = vtkXMLImageDataWriter()
+writer.SetInputData(plain)
+writer.SetFileName(path)
+writer.SetDataModeToBinary()
+writer.Write()
+simple.Hide(weather, view)
+separate = simple.XMLImageDataReader(FileName=[path])
+srep = T.show(separate, view)
+srep.ChannelArrays = names
+view.CameraPosition = [150.0, 110.0, 190.0]
+view.CameraFocalPoint = [31.5, 31.5, 31.5]
+view.CameraViewUp = [0.0, 1.0, 0.0]
+T.render_converged(view, srep)
+image = T.capture(view)
+os.remove(path)
+# The same channels through the Extract Component pipeline, same camera.
+simple.Hide(separate, view)
+simple.Show(split, view)
+T.render_converged(view, rep)
+reference = T.capture(view)
+diff = np.abs(image.astype(int) - reference.astype(int))
+checks.check(T.info(srep, "TotalSamples") == 32 and diff.max() <= 2,
+             "separate arrays without active scalars render (max |diff| to the split arrays %d)" % diff.max())
+
 checks.finish()

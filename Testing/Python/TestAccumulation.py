@@ -85,6 +85,12 @@ render_and_expect(3, "plain re-render")
 opacities[1].AddPoint(0.5, 0.3)
 render_and_expect(1, "channel 1 opacity changed", tf_updates=1)
 render_and_expect(2, "re-render after the opacity change", tf_updates=0)
+# Touched without a value change (ParaView's lookup tables are, on every
+# render while they colour something): the tables are the same, so the
+# image keeps refining.
+opacities[0].Modified()
+prop.GetRGBTransferFunction(1).Modified()
+render_and_expect(3, "transfer functions touched, values unchanged", tf_updates=0)
 
 camera.Azimuth(10)
 render_and_expect(1, "camera moved")
