@@ -4,12 +4,14 @@
 #include "pqApplicationCore.h"
 #include "pqRenderView.h"
 #include "pqRepresentation.h"
+#include "pqServer.h"
 #include "pqServerManagerModel.h"
 #include "vtkSMPropertyHelper.h"
 #include "vtkSMProxy.h"
 
 #include <QApplication>
 
+#include <algorithm>
 #include <cstring>
 
 namespace
@@ -43,6 +45,22 @@ void pqMultiChannelRefinement::shutdown()
 }
 
 //------------------------------------------------------------------------------
+void pqMultiChannelRefinement::viewRendered()
+{
+  void* view = this->sender();
+  if (this->Pending.value(view, false))
+  {
+    this->OwnRenders[view] = this->OwnRenders.value(view, 0) + 1;
+  }
+  else
+  {
+    // A render we did not ask for: the image may have started over.
+    this->OwnRenders[view] = 0;
+  }
+  this->Pending[view] = false;
+}
+
+//------------------------------------------------------------------------------
 void pqMultiChannelRefinement::refine()
 {
   pqApplicationCore* core = pqApplicationCore::instance();
@@ -58,6 +76,14 @@ void pqMultiChannelRefinement::refine()
   for (pqRenderView* view : views)
   {
     bool needsRender = false;
+    const bool remote = view->getServer() && view->getServer()->isRemote();
+    if (remote && !this->Pending.contains(view))
+    {
+      // Count renders: ours are flagged in Pending before they start.
+      QObject::connect(view, &pqView::endRender, this, &pqMultiChannelRefinement::viewRendered,
+        Qt::UniqueConnection);
+      this->Pending[view] = false;
+    }
     for (pqRepresentation* repr : view->getRepresentations())
     {
       vtkSMProxy* proxy = repr ? repr->getProxy() : nullptr;
@@ -72,6 +98,17 @@ void pqMultiChannelRefinement::refine()
       if (!type || strcmp(type, kRepresentationType) != 0 || !sub->GetProperty("Converged") ||
         vtkSMPropertyHelper(sub, "ProgressiveRefinement").GetAsInt() == 0)
       {
+        continue;
+      }
+      if (remote)
+      {
+        const int spp = std::max(1, vtkSMPropertyHelper(sub, "SamplesPerRender").GetAsInt());
+        const int maximum = vtkSMPropertyHelper(sub, "MaximumTotalSamples").GetAsInt();
+        const int wanted = maximum > 0 ? (maximum + spp - 1) / spp - 1 : 1 << 30;
+        if (this->OwnRenders.value(view, 0) < wanted)
+        {
+          needsRender = true;
+        }
         continue;
       }
       sub->UpdatePropertyInformation();
@@ -92,6 +129,10 @@ void pqMultiChannelRefinement::refine()
     }
     if (needsRender)
     {
+      if (remote)
+      {
+        this->Pending[view] = true;
+      }
       view->forceRender();
       rendered = true;
     }

@@ -11,6 +11,13 @@
  * Each render adds Samples Per Render samples; user events are served
  * between renders, and any change (camera, property, transfer function)
  * starts the mapper's image over, so refinement simply resumes from there.
+ *
+ * Connected to a pvserver the client holds no data and cannot read the
+ * server's sample count (the representation reports -1), so the plugin
+ * counts instead: after any render it did not ask for (interaction, a
+ * property change) it renders ceil(Maximum Total Samples / Samples Per
+ * Render) - 1 more times, the number that reaches the maximum from a fresh
+ * image.
  */
 #ifndef pqMultiChannelRefinement_h
 #define pqMultiChannelRefinement_h
@@ -36,6 +43,7 @@ public:
 
 private Q_SLOTS:
   void refine();
+  void viewRendered();
 
 private:
   Q_DISABLE_COPY(pqMultiChannelRefinement)
@@ -43,6 +51,10 @@ private:
   // Samples seen per representation proxy after the last render this class
   // asked for: no progress means there is nothing to refine (an error).
   QMap<void*, int> LastSamples;
+  // Remote sessions: renders this class asked for since the last render it
+  // did not ask for, per view; and whether a render of ours is under way.
+  QMap<void*, int> OwnRenders;
+  QMap<void*, bool> Pending;
 };
 
 #endif

@@ -6,4 +6,8 @@ set -euo pipefail
 top="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 bash "$top/scripts/build.sh"
 cd "$top/build"
-xvfb-run -a -s "-screen 0 1280x1024x24" ctest --output-on-failure -j"$(nproc)"
+# -noreset: Xvfb otherwise resets whenever its last client disconnects, and
+# a program connecting during the reset (pvserver or an MPI rank started
+# right after another test's program exits) fails with "bad X server
+# connection".
+xvfb-run -a -s "-noreset -screen 0 1280x1024x24" ctest --output-on-failure -j"$(nproc)"

@@ -9,21 +9,17 @@ Statistic. Both sides are 1024-spp Monte Carlo estimates of the same image
 with independent seeds (7 and 9 for the serial and parallel renders; 8 for a
 second serial render). If the parallel image is unbiased, the mean squared
 difference parallel-serial has the same expectation as serial(8)-serial(7),
-so their ratio is near 1. It is computed over the interior pixels (more than
-2 pixels from the background): the test requires a ratio below 1.5 and, for
-power, that a 10% error in extinction (the serial scene rendered with the
-opacity unit distance scaled by 0.9) gives a ratio above 2. The seeds are
-fixed, so the result is reproducible.
+so their ratio is near 1. The test requires a ratio below 1.2 over the whole
+image and, for power, that a 10% error in extinction (the serial scene
+rendered with the opacity unit distance scaled by 0.9) gives a ratio above
+1.5 against the same serial image. The seeds are fixed, so the result is
+reproducible. The ratio is also printed for the silhouette band (drawn
+pixels within 2 pixels of the background), where rendering differences
+would show first.
 
-Measured (2-core CI-like machine, ParaView 5.11, llvmpipe): interior ratio
-1.23, biased ratio 2.23; the 8-bit RGBA compositing of two pieces adds a
-little quantisation noise. In the silhouette band ParaView's composited image
-differs more (mean squared difference 24 against 7 between two serial
-renders, some edge pixels up to 18% darker). The mapper itself composes
-pieces exactly: Testing/Python/TestPieceCompositing.py renders the two
-halves with the VTK mapper, composites them front over back in float and
-finds the whole-volume image within the Monte Carlo error. The band is
-printed here, and documented in the user guide, not asserted.
+FXAA is off in these views (mcvolParaViewTesting.make_view): ParaView 5.11
+turns it on by default, and it filters the composited image differently
+from the serial one, which showed as differences along silhouettes.
 """
 import argparse
 import os
@@ -84,8 +80,8 @@ def main():
           "the data is split into %d pieces in parallel (%d) and 1 serially (%d)" % (args.ranks, pieces, serial_pieces))
     drawn = (serial.sum(axis=2) > 30).mean()
     check(drawn > 0.05, "the serial image shows the volume (%.1f%% of pixels)" % (100 * drawn))
-    # Interior: drawn pixels more than 2 pixels away from the background. The
-    # silhouette band is reported, not asserted (see the docstring).
+    # Interior: drawn pixels more than 2 pixels away from the background;
+    # the band: drawn pixels within 2 pixels of it (reported).
     background = serial.sum(axis=2) < 3
     padded = np.pad(background, 2, constant_values=True)
     near = np.zeros_like(background)
@@ -98,14 +94,16 @@ def main():
     def msd(a, mask):
         return ((a - serial) ** 2).mean(axis=2)[mask].mean()
 
-    noise, par, bias = msd(serial2, interior), msd(parallel, interior), msd(biased, interior)
+    everything = np.ones_like(background)
+    noise, par, bias = msd(serial2, everything), msd(parallel, everything), msd(biased, everything)
     ratio, bias_ratio = par / noise, bias / noise
-    print("interior (%d pixels), mean squared difference to serial(7): serial(8) %.3f, parallel %.3f, biased %.3f"
-          % (interior.sum(), noise, par, bias))
-    print("silhouette band (%d pixels), same: serial(8) %.3f, parallel %.3f (reported, not asserted)"
-          % (band.sum(), msd(serial2, band), msd(parallel, band)))
-    check(ratio < 1.5, "interior: parallel equals serial within the Monte Carlo error (ratio %.3f < 1.5)" % ratio)
-    check(bias_ratio > 2.0, "interior: the test sees a 10%% extinction error (ratio %.3f > 2)" % bias_ratio)
+    print("whole image, mean squared difference to serial(7): serial(8) %.3f, parallel %.3f, biased %.3f"
+          % (noise, par, bias))
+    for name, mask in [("interior", interior), ("silhouette band", band)]:
+        print("%s (%d pixels): serial(8) %.3f, parallel %.3f, ratio %.3f"
+              % (name, mask.sum(), msd(serial2, mask), msd(parallel, mask), msd(parallel, mask) / msd(serial2, mask)))
+    check(ratio < 1.2, "parallel equals serial within the Monte Carlo error (ratio %.3f < 1.2)" % ratio)
+    check(bias_ratio > 1.5, "the test sees a 10%% extinction error (ratio %.3f > 1.5)" % bias_ratio)
     mean_diff = np.abs(parallel.mean(axis=(0, 1)) - serial.mean(axis=(0, 1))).max()
     check(mean_diff < 0.5, "the whole image's mean colour agrees within 0.5/255 (%.3f)" % mean_diff)
     if failures:

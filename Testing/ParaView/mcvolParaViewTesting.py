@@ -74,6 +74,10 @@ def make_view(size=(200, 200)):
     view = simple.CreateView("RenderView")
     view.ViewSize = list(size)
     view.OrientationAxesVisibility = 0
+    # FXAA (on by default in ParaView 5.11) smooths silhouette pixels, and
+    # does so differently in builtin, client-server and parallel rendering
+    # (where it runs on the composited image): compare unfiltered images.
+    view.UseFXAA = 0
     view.Background = [0.0, 0.0, 0.0]
     if hasattr(view, "UseColorPaletteForBackground"):
         view.UseColorPaletteForBackground = 0
