@@ -246,7 +246,12 @@ int vtkMultiChannelVolumeRepresentation::GetTotalSamples()
 {
   // -1: this process holds no data and renders none (the client of a
   // pvserver); the render server's image is not known here.
-  return this->Cache ? this->GetMultiChannelMapper()->GetTotalSamples() : -1;
+  if (!this->Cache)
+  {
+    return -1;
+  }
+  // Nothing is drawn while the channels are incomplete (ChannelStatus).
+  return this->ChannelStatus.empty() ? this->GetMultiChannelMapper()->GetTotalSamples() : 0;
 }
 
 int vtkMultiChannelVolumeRepresentation::GetConverged()

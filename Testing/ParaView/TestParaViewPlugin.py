@@ -142,4 +142,44 @@ diff = np.abs(image.astype(int) - reference.astype(int))
 checks.check(T.info(srep, "TotalSamples") == 32 and diff.max() <= 2,
              "separate arrays without active scalars render (max |diff| to the split arrays %d)" % diff.max())
 
+# Bad input: a clear status, nothing drawn, no crash.
+def status_after_render(r):
+    simple.Render(view)
+    return T.info(r, "ChannelStatus"), T.info(r, "TotalSamples")
+
+
+simple.Hide(split, view)
+bad = T.show(split, view)
+bad.ChannelArrays = []
+st, total = status_after_render(bad)
+checks.check(st == "no channels selected" and total == 0, "no channels: '%s', %d samples" % (st, total))
+bad.ChannelSource = "Components of One Array"
+bad.ChannelComponentsArray = "no_such_array"
+st, total = status_after_render(bad)
+checks.check("no point array named 'no_such_array'" in st and total == 0, "a missing array: '%s'" % st)
+simple.Hide(split, view)
+
+import numpy
+from vtkmodules.util.numpy_support import numpy_to_vtk
+
+many = vtkImageData()
+many.SetDimensions(6, 6, 6)
+values = numpy_to_vtk(numpy.random.default_rng(1).random((216, 33)).astype(numpy.float32), deep=True)
+values.SetName("many")
+many.GetPointData().AddArray(values)
+handle, path = tempfile.mkstemp(suffix=".vti")
+os.close(handle)
+writer = vtkXMLImageDataWriter()
+writer.SetInputData(many)
+writer.SetFileName(path)
+writer.SetDataModeToBinary()
+writer.Write()
+many_reader = simple.XMLImageDataReader(FileName=[path])
+mrep = T.show(many_reader, view)
+mrep.ChannelSource = "Components of One Array"
+mrep.ChannelComponentsArray = "many"
+st, total = status_after_render(mrep)
+os.remove(path)
+checks.check("33 channels; at most 32" in st and total == 0, "33 channels: '%s'" % st)
+
 checks.finish()
