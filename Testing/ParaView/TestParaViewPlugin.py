@@ -97,9 +97,8 @@ checks.check((image.sum(axis=2) > 30).mean() > 0.05, "12 channels: the volume is
 # a mapper whose scalars it finds, so the representation points the mapper
 # at the first channel. Before that fix this drew nothing in the GUI.
 import os
-import tempfile
 from vtkmodules.vtkCommonDataModel import vtkImageData
-from vtkmodules.vtkIOXML import vtkXMLImageDataReader, vtkXMLImageDataWriter
+from vtkmodules.vtkIOXML import vtkXMLImageDataReader
 from vtkmodules.vtkCommonCore import vtkFloatArray
 
 reader = vtkXMLImageDataReader()
@@ -116,13 +115,7 @@ for k, name in enumerate(names):
     arr.CopyComponent(0, both, k)
     plain.GetPointData().AddArray(arr)
 checks.check(plain.GetPointData().GetScalars() is None, "the test data has no active scalars")
-handle, path = tempfile.mkstemp(suffix=".vti")
-os.close(handle)
-writer = vtkXMLImageDataWriter()
-writer.SetInputData(plain)
-writer.SetFileName(path)
-writer.SetDataModeToBinary()
-writer.Write()
+path = T.write_vti(plain)
 simple.Hide(weather, view)
 separate = simple.XMLImageDataReader(FileName=[path])
 srep = T.show(separate, view)
@@ -167,13 +160,7 @@ many.SetDimensions(6, 6, 6)
 values = numpy_to_vtk(numpy.random.default_rng(1).random((216, 33)).astype(numpy.float32), deep=True)
 values.SetName("many")
 many.GetPointData().AddArray(values)
-handle, path = tempfile.mkstemp(suffix=".vti")
-os.close(handle)
-writer = vtkXMLImageDataWriter()
-writer.SetInputData(many)
-writer.SetFileName(path)
-writer.SetDataModeToBinary()
-writer.Write()
+path = T.write_vti(many)
 many_reader = simple.XMLImageDataReader(FileName=[path])
 mrep = T.show(many_reader, view)
 mrep.ChannelSource = "Components of One Array"

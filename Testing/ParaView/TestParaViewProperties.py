@@ -9,15 +9,9 @@ import mcvolParaViewTesting as T
 checks = T.Checks()
 T.load_plugin()
 
-figure3 = simple.XMLImageDataReader(FileName=[T.DATA + "/figure3.vti"])
-names = ["red", "green", "blue"]
-split = T.split_channels(figure3, "channels", names)
-view = T.make_view((160, 160))
-# A light, so that the lighting properties have something to change once
-# Shade is on; with Shade off the volume is emission-absorption only.
-rep = T.show(split, view)
-rep.ChannelArrays = names
-T.set_channel_functions(names)
+# With Shade on the view's light lights the volume; with Shade off the
+# volume is emission-absorption only.
+split, view, rep, names = T.figure3_split_scene()
 
 
 def image():

@@ -12,13 +12,7 @@ import mcvolParaViewTesting as T
 checks = T.Checks()
 T.load_plugin()
 
-figure3 = simple.XMLImageDataReader(FileName=[T.DATA + "/figure3.vti"])
-names = ["red", "green", "blue"]
-split = T.split_channels(figure3, "channels", names)
-view = T.make_view((160, 160))
-rep = T.show(split, view)
-rep.ChannelArrays = names
-T.set_channel_functions(names)
+split, view, rep, names = T.figure3_split_scene()
 simple.GetOpacityTransferFunction("green").Points = [0.0, 0.0, 0.5, 0.0, 0.6, 0.2, 0.5, 0.0, 1.0, 0.8, 0.5, 0.0]
 simple.GetColorTransferFunction("blue").RGBPoints = [0.0, 0.0, 0.0, 1.0, 1.0, 0.0, 1.0, 1.0]
 

@@ -70,6 +70,35 @@ def set_channel_functions(names, colors=COLORS, opacity=0.35, value_range=(0.0, 
         pwf.Points = [lo, 0.0, 0.5, 0.0, 0.25 * lo + 0.75 * hi, opacity, 0.5, 0.0, hi, opacity, 0.5, 0.0]
 
 
+def figure3_split_scene(size=(160, 160)):
+    """figure3 with its three components split into the point arrays red,
+    green and blue, shown as channels with constant-colour functions.
+    Returns (source, view, representation, names)."""
+    figure3 = simple.XMLImageDataReader(FileName=[DATA + "/figure3.vti"])
+    names = ["red", "green", "blue"]
+    split = split_channels(figure3, "channels", names)
+    view = make_view(size)
+    rep = show(split, view)
+    rep.ChannelArrays = names
+    set_channel_functions(names)
+    return split, view, rep, names
+
+
+def write_vti(image):
+    """Writes a vtkImageData to a temporary .vti (inline binary) and returns
+    its path; the caller removes it."""
+    from vtkmodules.vtkIOXML import vtkXMLImageDataWriter
+
+    handle, path = tempfile.mkstemp(suffix=".vti")
+    os.close(handle)
+    writer = vtkXMLImageDataWriter()
+    writer.SetInputData(image)
+    writer.SetFileName(path)
+    writer.SetDataModeToBinary()
+    writer.Write()
+    return path
+
+
 def make_view(size=(200, 200)):
     view = simple.CreateView("RenderView")
     view.ViewSize = list(size)
