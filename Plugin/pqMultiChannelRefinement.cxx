@@ -91,19 +91,18 @@ void pqMultiChannelRefinement::refine()
       {
         continue;
       }
-      const char* type = vtkSMPropertyHelper(proxy, "Representation").GetAsString();
       // The representation's properties are exposed by the composite
       // representation proxy ParaView shows (UniformGridRepresentation).
-      vtkSMProxy* sub = proxy;
-      if (!type || strcmp(type, kRepresentationType) != 0 || !sub->GetProperty("Converged") ||
-        vtkSMPropertyHelper(sub, "ProgressiveRefinement").GetAsInt() == 0)
+      const char* type = vtkSMPropertyHelper(proxy, "Representation").GetAsString();
+      if (!type || strcmp(type, kRepresentationType) != 0 || !proxy->GetProperty("Converged") ||
+        vtkSMPropertyHelper(proxy, "ProgressiveRefinement").GetAsInt() == 0)
       {
         continue;
       }
       if (remote)
       {
-        const int spp = std::max(1, vtkSMPropertyHelper(sub, "SamplesPerRender").GetAsInt());
-        const int maximum = vtkSMPropertyHelper(sub, "MaximumTotalSamples").GetAsInt();
+        const int spp = std::max(1, vtkSMPropertyHelper(proxy, "SamplesPerRender").GetAsInt());
+        const int maximum = vtkSMPropertyHelper(proxy, "MaximumTotalSamples").GetAsInt();
         const int wanted = maximum > 0 ? (maximum + spp - 1) / spp - 1 : 1 << 30;
         if (this->OwnRenders.value(view, 0) < wanted)
         {
@@ -111,20 +110,20 @@ void pqMultiChannelRefinement::refine()
         }
         continue;
       }
-      sub->UpdatePropertyInformation();
-      const int converged = vtkSMPropertyHelper(sub, "Converged").GetAsInt();
-      const int samples = vtkSMPropertyHelper(sub, "TotalSamples").GetAsInt();
-      const char* status = vtkSMPropertyHelper(sub, "ChannelStatus").GetAsString();
-      auto last = this->LastSamples.find(sub);
+      proxy->UpdatePropertyInformation();
+      const int converged = vtkSMPropertyHelper(proxy, "Converged").GetAsInt();
+      const int samples = vtkSMPropertyHelper(proxy, "TotalSamples").GetAsInt();
+      const char* status = vtkSMPropertyHelper(proxy, "ChannelStatus").GetAsString();
+      auto last = this->LastSamples.find(proxy);
       const bool stalled = last != this->LastSamples.end() && last.value() == samples;
       if (!converged && (!status || !*status) && !stalled)
       {
         needsRender = true;
-        this->LastSamples[sub] = samples;
+        this->LastSamples[proxy] = samples;
       }
       else if (!stalled || converged)
       {
-        this->LastSamples.remove(sub);
+        this->LastSamples.remove(proxy);
       }
     }
     if (needsRender)

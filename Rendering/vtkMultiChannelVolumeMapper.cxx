@@ -1264,9 +1264,9 @@ void vtkMultiChannelVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
   // for itself (it traces once per change).
   const long long traced = static_cast<long long>(in.Accum.samples());
   int batch = this->SamplesPerPixel;
-  if (this->UsesRenderBackend() && traced > 0)
+  if (this->UsesRenderBackend())
   {
-    if (!this->Progressive)
+    if (!this->Progressive && traced > 0)
     {
       batch = 0;
     }
@@ -1274,10 +1274,6 @@ void vtkMultiChannelVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
     {
       batch = static_cast<int>(std::min<long long>(batch, std::max<long long>(0, this->MaximumTotalSamples - traced)));
     }
-  }
-  else if (this->UsesRenderBackend() && this->MaximumTotalSamples > 0)
-  {
-    batch = std::min(batch, this->MaximumTotalSamples);
   }
   if (batch > 0)
   {

@@ -18,6 +18,44 @@
 
 vtkStandardNewMacro(vtkMultiChannelVolumeRepresentation);
 
+namespace
+{
+// Per-channel lists set by repeatable properties with use_index: entries not
+// set take `fill`.
+template <typename T>
+void SetEntry(std::vector<T>& list, int index, T value, T fill)
+{
+  if (index < 0)
+  {
+    return;
+  }
+  if (static_cast<size_t>(index) >= list.size())
+  {
+    list.resize(static_cast<size_t>(index) + 1, fill);
+  }
+  list[index] = value;
+}
+
+template <typename T>
+T EntryOr(const std::vector<T>& list, int index, T fallback)
+{
+  return static_cast<size_t>(index) < list.size() ? list[index] : fallback;
+}
+
+// Points the mapper at a point array by name, touching it only on a change
+// (every touch would restart the image).
+void SelectPointArray(vtkMultiChannelVolumeMapper* mapper, const std::string& name)
+{
+  const char* current = mapper->GetArrayName();
+  if (mapper->GetScalarMode() != VTK_SCALAR_MODE_USE_POINT_FIELD_DATA ||
+    mapper->GetArrayAccessMode() != VTK_GET_ARRAY_BY_NAME || !current || name != current)
+  {
+    mapper->SetScalarMode(VTK_SCALAR_MODE_USE_POINT_FIELD_DATA);
+    mapper->SelectScalarArray(name.c_str());
+  }
+}
+}
+
 //------------------------------------------------------------------------------
 vtkMultiChannelVolumeRepresentation::vtkMultiChannelVolumeRepresentation()
 {
@@ -107,15 +145,8 @@ void vtkMultiChannelVolumeRepresentation::SetNumberOfChannelLookupTableIndices(i
 
 void vtkMultiChannelVolumeRepresentation::SetChannelLookupTableIndex(int channel, int index)
 {
-  if (channel >= 0)
-  {
-    if (static_cast<size_t>(channel) >= this->ChannelLookupTableIndices.size())
-    {
-      this->ChannelLookupTableIndices.resize(static_cast<size_t>(channel) + 1, -1);
-    }
-    this->ChannelLookupTableIndices[channel] = index;
-    this->Modified();
-  }
+  SetEntry(this->ChannelLookupTableIndices, channel, index, -1);
+  this->Modified();
 }
 
 //------------------------------------------------------------------------------
@@ -131,14 +162,7 @@ void vtkMultiChannelVolumeRepresentation::SetNumberOfMixWeights(int n)
 
 void vtkMultiChannelVolumeRepresentation::SetMixWeight(int channel, double weight)
 {
-  if (channel >= 0)
-  {
-    if (static_cast<size_t>(channel) >= this->MixWeights.size())
-    {
-      this->MixWeights.resize(static_cast<size_t>(channel) + 1, 1.0);
-    }
-    this->MixWeights[channel] = weight;
-  }
+  SetEntry(this->MixWeights, channel, weight, 1.0);
 }
 
 void vtkMultiChannelVolumeRepresentation::SetTrackingMethod(int method)
@@ -214,14 +238,7 @@ void vtkMultiChannelVolumeRepresentation::SetNumberOfChannelAlbedos(int n)
 
 void vtkMultiChannelVolumeRepresentation::SetChannelAlbedo(int channel, double albedo)
 {
-  if (channel >= 0)
-  {
-    if (static_cast<size_t>(channel) >= this->Albedos.size())
-    {
-      this->Albedos.resize(static_cast<size_t>(channel) + 1, 1.0);
-    }
-    this->Albedos[channel] = albedo;
-  }
+  SetEntry(this->Albedos, channel, albedo, 1.0);
 }
 
 void vtkMultiChannelVolumeRepresentation::SetNumberOfChannelAnisotropies(int n)
@@ -231,14 +248,7 @@ void vtkMultiChannelVolumeRepresentation::SetNumberOfChannelAnisotropies(int n)
 
 void vtkMultiChannelVolumeRepresentation::SetChannelAnisotropy(int channel, double g)
 {
-  if (channel >= 0)
-  {
-    if (static_cast<size_t>(channel) >= this->Anisotropies.size())
-    {
-      this->Anisotropies.resize(static_cast<size_t>(channel) + 1, 0.0);
-    }
-    this->Anisotropies[channel] = g;
-  }
+  SetEntry(this->Anisotropies, channel, g, 0.0);
 }
 
 //------------------------------------------------------------------------------
@@ -297,14 +307,7 @@ void vtkMultiChannelVolumeRepresentation::UpdateMapperParameters()
   if (this->ChannelSource == COMPONENTS)
   {
     mapper->RemoveAllChannelArrays();
-    const char* current = mapper->GetArrayName();
-    if (mapper->GetScalarMode() != VTK_SCALAR_MODE_USE_POINT_FIELD_DATA ||
-      mapper->GetArrayAccessMode() != VTK_GET_ARRAY_BY_NAME || !current ||
-      this->ChannelComponentsArray != current)
-    {
-      mapper->SetScalarMode(VTK_SCALAR_MODE_USE_POINT_FIELD_DATA);
-      mapper->SelectScalarArray(this->ChannelComponentsArray.c_str());
-    }
+    SelectPointArray(mapper, this->ChannelComponentsArray);
     vtkDataArray* array = (image && !this->ChannelComponentsArray.empty())
       ? image->GetPointData()->GetArray(this->ChannelComponentsArray.c_str())
       : nullptr;
@@ -345,14 +348,7 @@ void vtkMultiChannelVolumeRepresentation::UpdateMapperParameters()
       // vtkPVLODVolume only renders a volume mapper whose scalars it finds:
       // point it at the first channel (data without active scalars, such
       // as a file of separate arrays, would otherwise draw nothing).
-      const char* current = mapper->GetArrayName();
-      if (mapper->GetScalarMode() != VTK_SCALAR_MODE_USE_POINT_FIELD_DATA ||
-        mapper->GetArrayAccessMode() != VTK_GET_ARRAY_BY_NAME || !current ||
-        this->ChannelArrays[0] != current)
-      {
-        mapper->SetScalarMode(VTK_SCALAR_MODE_USE_POINT_FIELD_DATA);
-        mapper->SelectScalarArray(this->ChannelArrays[0].c_str());
-      }
+      SelectPointArray(mapper, this->ChannelArrays[0]);
     }
   }
   if (numChannels > vtkMultiChannelVolumeMapper::MAX_CHANNELS)
@@ -369,9 +365,7 @@ void vtkMultiChannelVolumeRepresentation::UpdateMapperParameters()
     // ParaView delivers a repeatable proxy property as a set, in the order of
     // the proxies' global ids and without repeats; the client sends which of
     // those lookup tables each channel uses.
-    const int index = static_cast<size_t>(c) < this->ChannelLookupTableIndices.size()
-      ? this->ChannelLookupTableIndices[c]
-      : -1;
+    const int index = EntryOr(this->ChannelLookupTableIndices, c, -1);
     vtkScalarsToColors* lut = (index >= 0 && static_cast<size_t>(index) < this->ChannelLookupTables.size())
       ? this->ChannelLookupTables[index].Get()
       : nullptr;
@@ -389,10 +383,9 @@ void vtkMultiChannelVolumeRepresentation::UpdateMapperParameters()
     mapper->SetChannelColor(c, color);
     mapper->SetChannelScalarOpacity(c, opacity);
     mapper->SetChannelScalarOpacityUnitDistance(c, unitDistance);
-    mapper->SetMixWeight(c, static_cast<size_t>(c) < this->MixWeights.size() ? this->MixWeights[c] : 1.0);
-    mapper->SetChannelAlbedo(c, static_cast<size_t>(c) < this->Albedos.size() ? this->Albedos[c] : 1.0);
-    mapper->SetChannelAnisotropy(
-      c, static_cast<size_t>(c) < this->Anisotropies.size() ? this->Anisotropies[c] : 0.0);
+    mapper->SetMixWeight(c, EntryOr(this->MixWeights, c, 1.0));
+    mapper->SetChannelAlbedo(c, EntryOr(this->Albedos, c, 1.0));
+    mapper->SetChannelAnisotropy(c, EntryOr(this->Anisotropies, c, 0.0));
   }
 
   this->ChannelStatus = status.str();
