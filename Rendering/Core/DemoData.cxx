@@ -379,25 +379,12 @@ std::array<float, 2> DemoVolume::range(int n) const
   const void* data = this->channels.at(size_t(n)).data();
   for (size_t i = 0; i < voxels; ++i)
   {
-    float x = 0.f;
-    switch (this->type)
-    {
-      case ScalarType::UInt8:
-        x = float(static_cast<const uint8_t*>(data)[i]);
-        break;
-      case ScalarType::Int16:
-        x = float(static_cast<const int16_t*>(data)[i]);
-        break;
-      case ScalarType::UInt16:
-        x = float(static_cast<const uint16_t*>(data)[i]);
-        break;
-      case ScalarType::Float32:
-        x = static_cast<const float*>(data)[i];
-        break;
-      case ScalarType::Float64:
-        x = float(static_cast<const double*>(data)[i]);
-        break;
-    }
+    const float x = visitScalarType(this->type,
+      [&](auto tag)
+      {
+        using T = typename decltype(tag)::type;
+        return float(static_cast<const T*>(data)[i]);
+      });
     if (std::isfinite(x))
     {
       lo = std::min(lo, x);

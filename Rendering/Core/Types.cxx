@@ -58,18 +58,6 @@ const char* toString(Backend b)
 
 int scalarTypeSize(ScalarType t)
 {
-  switch (t)
-  {
-    case ScalarType::UInt8:
-      return 1;
-    case ScalarType::Int16:
-    case ScalarType::UInt16:
-      return 2;
-    case ScalarType::Float32:
-      return 4;
-    case ScalarType::Float64:
-      return 8;
-  }
-  return 0;
+  return visitScalarType(t, [](auto tag) { return int(sizeof(typename decltype(tag)::type)); });
 }
 } // namespace mcvol

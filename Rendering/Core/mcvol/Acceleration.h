@@ -9,8 +9,8 @@ namespace mcvol
 {
 /**
  * Pieces of the macrocell and majorant builds that the host build
- * (Scene.cxx) and the GPU build (CUDARenderer.cu) share, so both produce the
- * same grids.
+ * (SceneMacrocells.cxx, SceneMajorants.cxx) and the GPU build (Rendering/CUDA)
+ * share, so both produce the same grids.
  */
 
 /// Voxels whose values a point of macrocell `cell` can read: the voxels whose

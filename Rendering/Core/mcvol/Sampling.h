@@ -4,6 +4,7 @@
 #include "mcvol/SceneView.h"
 
 #include <cstdint>
+#include <type_traits>
 
 namespace mcvol
 {
@@ -11,20 +12,22 @@ namespace mcvol
 MCVOL_HOT float fetchVoxel(const ChannelView& c, int64_t v)
 {
   const int64_t i = v * c.stride;
-  switch (c.type)
-  {
-    case ScalarType::UInt8:
-      return float(static_cast<const uint8_t*>(c.data)[i]);
-    case ScalarType::Int16:
-      return float(static_cast<const int16_t*>(c.data)[i]);
-    case ScalarType::UInt16:
-      return float(static_cast<const uint16_t*>(c.data)[i]);
-    case ScalarType::Float32:
-      return static_cast<const float*>(c.data)[i];
-    case ScalarType::Float64:
-      return float(static_cast<const double*>(c.data)[i] - c.offset);
-  }
-  return 0.f;
+  return visitScalarType(c.type,
+    [&](auto tag) -> float
+    {
+      using T = typename decltype(tag)::type;
+      const T x = static_cast<const T*>(c.data)[i];
+      if constexpr (std::is_same_v<T, double>)
+      {
+        // In double, before the rounding to float, so data far from zero
+        // keeps its resolution (ChannelSource::offset).
+        return float(x - c.offset);
+      }
+      else
+      {
+        return float(x);
+      }
+    });
 }
 
 /// Index of the voxel nearest to p, clamped to the grid.

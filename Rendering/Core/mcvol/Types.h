@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 
+#include "mcvol/Macros.h"
+
 #include <cstdint>
 
 namespace mcvol
@@ -46,6 +48,42 @@ enum class Backend : int
   CPU = 1,
   CUDA = 2
 };
+
+/// A type carried as a value, so that a generic lambda can learn it:
+/// `[&](auto tag) { using T = typename decltype(tag)::type; ... }`.
+template <class T>
+struct TypeTag
+{
+  using type = T;
+};
+
+/**
+ * The one switch over ScalarType: calls `f(TypeTag<T>{})` with the C++ type
+ * that stores a voxel of type `t` (uint8_t, int16_t, uint16_t, float,
+ * double) and returns what `f` returns. Every per-type loop (range builds on
+ * the host and the device, voxel fetches, uploads) goes through here, so a
+ * new scalar type is added in one place. Usable in per-ray code. A value
+ * outside the enum visits float; Scene::setVolume rejects such channels, so
+ * none reaches the per-ray code.
+ */
+template <class F>
+MCVOL_HOT decltype(auto) visitScalarType(ScalarType t, F&& f)
+{
+  switch (t)
+  {
+    case ScalarType::UInt8:
+      return f(TypeTag<uint8_t>{});
+    case ScalarType::Int16:
+      return f(TypeTag<int16_t>{});
+    case ScalarType::UInt16:
+      return f(TypeTag<uint16_t>{});
+    case ScalarType::Float64:
+      return f(TypeTag<double>{});
+    case ScalarType::Float32:
+    default:
+      return f(TypeTag<float>{});
+  }
+}
 
 const char* toString(ScalarType t);
 const char* toString(BlendMode m);

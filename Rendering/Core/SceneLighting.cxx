@@ -1,0 +1,71 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Scene: checking the lights and scattering parameters into the LightingView.
+#include "mcvol/Scene.h"
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace mcvol
+{
+void Scene::setLighting(const LightingDesc& d)
+{
+  LightingView& L = this->View.lighting;
+  if (d.lights.size() > size_t(kMaxLights))
+  {
+    throw std::invalid_argument("mcvol: at most " + std::to_string(kMaxLights) + " lights are supported");
+  }
+  auto finite3 = [](const double* v) { return std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2]); };
+  bool anyLight = false;
+  for (size_t l = 0; l < d.lights.size(); ++l)
+  {
+    const LightDesc& ld = d.lights[l];
+    const double len =
+      std::sqrt(ld.vector[0] * ld.vector[0] + ld.vector[1] * ld.vector[1] + ld.vector[2] * ld.vector[2]);
+    if (!finite3(ld.vector) || !finite3(ld.color) || !std::isfinite(ld.intensity) || ld.intensity < 0 ||
+      ld.color[0] < 0 || ld.color[1] < 0 || ld.color[2] < 0 || (!ld.point && !(len > 0)))
+    {
+      throw std::invalid_argument("mcvol: light " + std::to_string(l) +
+        " needs a finite non-zero direction (or a position), a colour >= 0 and an intensity >= 0");
+    }
+    L.lightType[l] = ld.point ? 1 : 0;
+    const double inv = ld.point ? 1.0 : 1.0 / len;
+    L.lightVector[l] = Vec3f(float(ld.vector[0] * inv), float(ld.vector[1] * inv), float(ld.vector[2] * inv));
+    L.lightRadiance[l] =
+      Vec3f(float(ld.color[0] * ld.intensity), float(ld.color[1] * ld.intensity), float(ld.color[2] * ld.intensity));
+    anyLight = anyLight || ld.intensity > 0;
+  }
+  if (!finite3(d.ambient) || d.ambient[0] < 0 || d.ambient[1] < 0 || d.ambient[2] < 0)
+  {
+    throw std::invalid_argument("mcvol: the ambient radiance must be finite and >= 0");
+  }
+  if (d.maxDepth < 1 || d.maxDepth > 1024)
+  {
+    throw std::invalid_argument("mcvol: the maximum scattering depth must be in [1, 1024]");
+  }
+  if (!(d.shininess >= 0.f) || !std::isfinite(d.shininess))
+  {
+    throw std::invalid_argument("mcvol: the shininess must be a finite number >= 0");
+  }
+  for (int n = 0; n < kMaxChannels; ++n)
+  {
+    const float a = size_t(n) < d.albedo.size() ? d.albedo[size_t(n)] : 0.5f;
+    const float g = size_t(n) < d.anisotropy.size() ? d.anisotropy[size_t(n)] : 0.f;
+    if (!(a >= 0.f && a <= 1.f) || !(g > -1.f && g < 1.f))
+    {
+      throw std::invalid_argument(
+        "mcvol: channel " + std::to_string(n) + " needs an albedo in [0, 1] and an anisotropy in (-1, 1)");
+    }
+    L.albedo[n] = a;
+    L.anisotropy[n] = g;
+  }
+  L.numLights = int(d.lights.size());
+  L.ambient = Vec3f(float(d.ambient[0]), float(d.ambient[1]), float(d.ambient[2]));
+  L.shadows = d.shadows;
+  L.shadowEstimator = d.deltaShadows ? 1 : 0;
+  L.maxDepth = d.maxDepth;
+  L.gradientShading = d.gradientShading;
+  L.shininess = d.shininess;
+  L.enabled = anyLight || d.ambient[0] > 0 || d.ambient[1] > 0 || d.ambient[2] > 0;
+}
+} // namespace mcvol

@@ -1,0 +1,80 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Scene: binding the channels' voxels (setVolume, dataModified).
+#include "mcvol/Scene.h"
+
+#include "SceneInternal.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace mcvol
+{
+using detail::channelText;
+
+void Scene::setVolume(const int dims[3], int numChannels, const ChannelSource* channels)
+{
+  for (int a = 0; a < 3; ++a)
+  {
+    if (dims[a] < 1)
+    {
+      throw std::invalid_argument("mcvol: the volume has an empty extent (dimension " + std::to_string(a) + " is " +
+        std::to_string(dims[a]) + ")");
+    }
+  }
+  if (numChannels < 1 || numChannels > kMaxChannels)
+  {
+    throw std::invalid_argument("mcvol: " + std::to_string(numChannels) + " channels given; 1 to " +
+      std::to_string(kMaxChannels) + " are supported");
+  }
+  for (int n = 0; n < numChannels; ++n)
+  {
+    if (!channels[n].data)
+    {
+      throw std::invalid_argument("mcvol: " + channelText(n) + " has no data");
+    }
+    if (channels[n].stride < 1)
+    {
+      throw std::invalid_argument("mcvol: " + channelText(n) + " has a stride below 1");
+    }
+    if (!std::isfinite(channels[n].offset) || (channels[n].offset != 0.0 && channels[n].type != ScalarType::Float64))
+    {
+      throw std::invalid_argument("mcvol: " + channelText(n) +
+        " has an offset; only finite offsets of float64 channels "
+        "are supported");
+    }
+    // visitScalarType() reads a value outside the enum as float32, which
+    // could read past the end of a narrower array; reject it here, once.
+    if (int(channels[n].type) < int(ScalarType::UInt8) || int(channels[n].type) > int(ScalarType::Float64))
+    {
+      throw std::invalid_argument(
+        "mcvol: " + channelText(n) + " has an unknown scalar type (" + std::to_string(int(channels[n].type)) + ")");
+    }
+  }
+  const bool sameShape = numChannels == this->NumChannels && dims[0] == this->Dims[0] && dims[1] == this->Dims[1] &&
+    dims[2] == this->Dims[2];
+  std::copy(dims, dims + 3, this->Dims);
+  if (!sameShape)
+  {
+    this->HasTF.fill(false);
+  }
+  for (int n = 0; n < numChannels; ++n)
+  {
+    if (channels[n].offset != this->Channels[size_t(n)].offset)
+    {
+      this->HasTF[size_t(n)] = false; // its table was placed relative to the old offset
+    }
+  }
+  this->NumChannels = numChannels;
+  std::copy(channels, channels + numChannels, this->Channels.begin());
+  this->MacrocellsDirty = true;
+  ++this->ContentVersion;
+}
+
+void Scene::dataModified()
+{
+  this->MacrocellsDirty = true;
+  ++this->ContentVersion;
+}
+} // namespace mcvol
