@@ -1,0 +1,196 @@
+// SPDX-License-Identifier: BSD-3-Clause
+//
+// Internal to the CUDA backend: the renderer's state (CUDARenderer::Internal)
+// and the helpers every part of it uses. Host code only; each .cu file keeps
+// its kernels next to their launchers, so no relocatable device code is
+// needed.
+#pragma once
+
+#include "mcvol/CUDARenderer.h"
+
+#include "mcvol/SceneView.h"
+
+#include <cuda_runtime.h>
+
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+#include <type_traits>
+#include <vector>
+
+namespace mcvol
+{
+inline void check(cudaError_t e, const char* what)
+{
+  if (e != cudaSuccess)
+  {
+    // Reset the last-error state (a sticky error, such as an illegal
+    // address, cannot be cleared: the context stays unusable).
+    (void)cudaGetLastError();
+    throw std::runtime_error(std::string("mcvol (CUDA): ") + what + " failed: " + cudaGetErrorString(e));
+  }
+}
+#define MCVOL_CUDA(call) check((call), #call)
+
+/// Owning device array (no copies).
+template <typename T>
+struct DeviceBuffer
+{
+  T* ptr = nullptr;
+  size_t count = 0;
+
+  DeviceBuffer() = default;
+  DeviceBuffer(const DeviceBuffer&) = delete;
+  DeviceBuffer& operator=(const DeviceBuffer&) = delete;
+  ~DeviceBuffer() { this->release(); }
+
+  void resize(size_t n)
+  {
+    if (n == this->count)
+    {
+      return;
+    }
+    this->release();
+    if (n > 0)
+    {
+      MCVOL_CUDA(cudaMalloc(reinterpret_cast<void**>(&this->ptr), n * sizeof(T)));
+      this->count = n;
+    }
+  }
+  void release()
+  {
+    if (this->ptr)
+    {
+      cudaFree(this->ptr);
+    }
+    this->ptr = nullptr;
+    this->count = 0;
+  }
+  size_t bytes() const { return this->count * sizeof(T); }
+};
+
+/// The type a voxel stored as T on the host has in device memory: float64
+/// channels are uploaded as float32 (uploadChannels()), so per-type device
+/// code is never compiled for double.
+template <typename T>
+using DeviceScalar = std::conditional_t<std::is_same<T, double>::value, float, T>;
+
+/// One channel in device memory, with its optional 3D texture.
+struct DeviceChannel
+{
+  DeviceBuffer<uint8_t> bytes; ///< native type (float64 converted to float32 on upload)
+  ScalarType type = ScalarType::Float32;
+  cudaArray_t array = nullptr;
+  cudaTextureObject_t linear = 0;
+  cudaTextureObject_t point = 0;
+  float textureScale = 1.f;
+  size_t arrayBytes = 0;
+  /// Holds NaN or infinite voxels: sampled from global memory even with
+  /// texture sampling on, since hardware filtering drops a non-finite corner
+  /// whose weight rounds to 0, where the core's arithmetic (0 * Inf, NaN)
+  /// makes the sample NaN or infinite.
+  bool nonFinite = false;
+
+  DeviceChannel() = default;
+  DeviceChannel(const DeviceChannel&) = delete;
+  DeviceChannel& operator=(const DeviceChannel&) = delete;
+  ~DeviceChannel() { this->releaseTexture(); }
+
+  void releaseTexture()
+  {
+    if (this->linear)
+    {
+      cudaDestroyTextureObject(this->linear);
+    }
+    if (this->point)
+    {
+      cudaDestroyTextureObject(this->point);
+    }
+    if (this->array)
+    {
+      cudaFreeArray(this->array);
+    }
+    this->linear = this->point = 0;
+    this->array = nullptr;
+    this->arrayBytes = 0;
+  }
+};
+
+/**
+ * Everything the renderer keeps on the device, and the versions it was made
+ * from. The members are defined where their work is done:
+ * - CUDARenderer.cu: sync() (what to refresh at each render), device setup
+ *   and queries;
+ * - CUDAUpload.cu: uploadChannels(), buildTextures();
+ * - CUDAAcceleration.cu: buildRanges(), buildMajorants();
+ * - CUDALaunch.cu: render() and readBack() use Accum, Depth and Counters.
+ */
+struct CUDARenderer::Internal
+{
+  int Device = 0;
+  cudaDeviceProp Props{};
+  CudaSampling Sampling = CudaSampling::Texture;
+  dim3 Block = dim3(8, 8, 1);
+
+  // What the device copies were made from.
+  uint64_t SceneId = 0;
+  uint64_t ContentVersion = ~0ull;
+  uint64_t DataVersion = ~0ull;
+  uint64_t TableVersion = ~0ull;
+  uint64_t ChannelTableVersion[kMaxChannels];
+  int Dims[3] = { 0, 0, 0 };
+  int NumChannels = 0;
+  int TableSize = 0;
+  bool TexturesBuilt = false;
+
+  DeviceChannel Channels[kMaxChannels];
+  DeviceBuffer<float> Tables;    ///< [channel][K][4]
+  DeviceBuffer<float> Sparse;    ///< [channel][levels][K]
+  DeviceBuffer<float2> Ranges;   ///< [cell][channel]
+  DeviceBuffer<float> Majorants; ///< [cell][channel]
+  DeviceBuffer<unsigned> ChannelMax;
+  DeviceBuffer<unsigned> NaNFlags;
+  SceneView View; ///< device pointers; per-render fields filled in render()
+
+  DeviceBuffer<float4> Accum;
+  uint64_t AccumId = 0; ///< Accumulator::id() of the image in Accum (0: none)
+  uint32_t AccumSamples = 0;
+  DeviceBuffer<float> Depth;
+  std::vector<float> LastDepth;
+  bool HaveDepth = false;
+  DeviceBuffer<unsigned long long> Counters;
+  cudaEvent_t Start = nullptr;
+  cudaEvent_t Stop = nullptr;
+
+  CudaUpdateCounters Updates;
+
+  Internal() = default;
+  Internal(const Internal&) = delete;
+  Internal& operator=(const Internal&) = delete;
+  ~Internal()
+  {
+    cudaSetDevice(this->Device);
+    if (this->Start)
+    {
+      cudaEventDestroy(this->Start);
+    }
+    if (this->Stop)
+    {
+      cudaEventDestroy(this->Stop);
+    }
+  }
+
+  void uploadChannels(const Scene& scene);
+  void buildTextures();
+  void buildRanges(int macrocell);
+  void buildMajorants(const Scene& scene, const bool* which);
+  void sync(const Scene& scene);
+  double elapsedMs()
+  {
+    float ms = 0.f;
+    MCVOL_CUDA(cudaEventSynchronize(this->Stop));
+    MCVOL_CUDA(cudaEventElapsedTime(&ms, this->Start, this->Stop));
+    return double(ms);
+  }
+};
+} // namespace mcvol

@@ -1,0 +1,263 @@
+// SPDX-License-Identifier: BSD-3-Clause
+//
+// One render on the GPU: the per-render scene view, the device accumulation
+// image and depth buffer, the render kernel launch, the work counters and the
+// read-back. The kernel is a launcher: the per-pixel work is renderPixel<Mode>()
+// from the core (Integrator.h -> Tracking.h -> DDA.h, Sampling.h), the same
+// functions the OpenMP backend runs, compiled for the device through
+// MCVOL_HOST_DEVICE.
+#include "CUDAInternal.h"
+
+#include "mcvol/RenderSetup.h"
+
+#include <cstring>
+#include <stdexcept>
+
+namespace mcvol
+{
+namespace
+{
+// Warp sums with shuffles (any architecture from sm_70), 64-bit so that high
+// sample counts cannot wrap.
+__device__ MCVOL_FORCE_INLINE unsigned long long warpSumU64(unsigned long long v)
+{
+  for (int o = 16; o > 0; o >>= 1)
+  {
+    v += __shfl_xor_sync(0xffffffffu, v, o);
+  }
+  return v;
+}
+
+/// One thread per pixel: renderPixel() from the core, folded into the
+/// running mean in `accum`. Count adds the work counters (warp sums, one
+/// atomic per warp and counter).
+template <BlendMode Mode, bool Count, bool Lit>
+__global__ void renderKernel(const __grid_constant__ SceneView s, const __grid_constant__ CameraView cam,
+  const __grid_constant__ FrameParams fp, const float* __restrict__ depth, float4* __restrict__ accum,
+  uint32_t previous, unsigned long long* __restrict__ counters)
+{
+  const int x = int(blockIdx.x * blockDim.x + threadIdx.x);
+  const int y = int(blockIdx.y * blockDim.y + threadIdx.y);
+  RayCounters c;
+  if (x < cam.width && y < cam.height)
+  {
+    const size_t p = size_t(y) * size_t(cam.width) + size_t(x);
+    const float z = depth ? depth[p] : 1.f;
+    const Vec4f sum = renderPixel<Mode, Lit>(s, cam, fp, x, y, z, c);
+    const float4 old = accum[p];
+    float v[4] = { old.x, old.y, old.z, old.w };
+    accumulate(v, sum, previous, fp.samplesPerPixel);
+    accum[p] = make_float4(v[0], v[1], v[2], v[3]);
+  }
+  if (Count)
+  {
+    const unsigned long long dda = warpSumU64(c.ddaSteps);
+    const unsigned long long tent = warpSumU64(c.tentative);
+    const unsigned long long real = warpSumU64(c.real);
+    const unsigned long long smp = warpSumU64(c.samples);
+    const unsigned long long sca = Lit ? warpSumU64(c.scattering) : 0ull;
+    const unsigned long long shd = Lit ? warpSumU64(c.shadowRays) : 0ull;
+    const unsigned long long grd = Lit ? warpSumU64(c.gradients) : 0ull;
+    const unsigned lane = (threadIdx.y * blockDim.x + threadIdx.x) & 31u;
+    if (lane == 0)
+    {
+      atomicAdd(counters + 0, dda);
+      atomicAdd(counters + 1, tent);
+      atomicAdd(counters + 2, real);
+      atomicAdd(counters + 3, smp);
+      if (Lit)
+      {
+        atomicAdd(counters + 4, sca);
+        atomicAdd(counters + 5, shd);
+        atomicAdd(counters + 6, grd);
+      }
+    }
+  }
+}
+
+template <BlendMode Mode>
+void launchRender(bool count, bool lit, dim3 grid, dim3 block, const SceneView& s, const CameraView& cam,
+  const FrameParams& fp, const float* depth, float4* accum, uint32_t previous, unsigned long long* counters)
+{
+  // The unlit kernels contain none of the lighting code.
+  if (lit)
+  {
+    if (count)
+    {
+      renderKernel<Mode, true, true><<<grid, block>>>(s, cam, fp, depth, accum, previous, counters);
+    }
+    else
+    {
+      renderKernel<Mode, false, true><<<grid, block>>>(s, cam, fp, depth, accum, previous, counters);
+    }
+  }
+  else if (count)
+  {
+    renderKernel<Mode, true, false><<<grid, block>>>(s, cam, fp, depth, accum, previous, counters);
+  }
+  else
+  {
+    renderKernel<Mode, false, false><<<grid, block>>>(s, cam, fp, depth, accum, previous, counters);
+  }
+}
+} // namespace
+
+void CUDARenderer::render(const Scene& scene, const Camera& camera, const RenderSettings& settings, const float* depth,
+  Accumulator& accum, RenderCounters* counters)
+{
+  Internal& in = *this->In;
+  checkRenderArguments(camera, settings, accum);
+  MCVOL_CUDA(cudaSetDevice(in.Device));
+  in.sync(scene);
+
+  // Per-render view: blend parameters, interpolation and sampling path.
+  SceneView s = in.View;
+  const SceneView& hv = scene.view();
+  s.blend = hv.blend;
+  s.volume.nearest = hv.volume.nearest;
+  const bool textures = in.Sampling == CudaSampling::Texture;
+  if (textures && !in.TexturesBuilt)
+  {
+    in.buildTextures();
+  }
+  for (int n = 0; n < in.NumChannels; ++n)
+  {
+    const DeviceChannel& dc = in.Channels[n];
+    ChannelView& c = s.volume.channels[n];
+    c.data = dc.bytes.ptr;
+    c.stride = 1;
+    c.type = dc.type;
+    c.offset = 0.0;
+    c.texture = textures && !dc.nonFinite && dc.array ? (hv.volume.nearest ? dc.point : dc.linear) : 0;
+    c.textureScale = dc.textureScale;
+  }
+  const CameraView cam = toView(camera);
+  s.sigmaLimit = extinctionLimit(cam);
+  s.lighting = hv.lighting;
+  const bool lit = s.lighting.enabled;
+  if (lit)
+  {
+    if (s.blend.mode == BlendMode::Composite)
+    {
+      throw std::invalid_argument("mcvol: lighting with post-render composite blending is not supported yet");
+    }
+    setLightingFrame(s, camera);
+  }
+
+  // Accumulation buffer: continue the device mean only if it is this
+  // Accumulator's, at its sample count; otherwise start from the host's.
+  const size_t P = size_t(camera.width) * size_t(camera.height);
+  if (accum.pendingOnDevice() && in.AccumId != accum.id())
+  {
+    throw std::logic_error("mcvol: this Accumulator's image was left on the device (RenderSettings::readBack = "
+                           "false) and has since been replaced by another Accumulator's; call readBack() before "
+                           "rendering another Accumulator");
+  }
+  if (in.Accum.count != P)
+  {
+    in.Accum.resize(P);
+    in.AccumId = 0;
+  }
+  if (in.AccumId != accum.id() || in.AccumSamples != accum.samples())
+  {
+    if (accum.samples() == 0)
+    {
+      MCVOL_CUDA(cudaMemsetAsync(in.Accum.ptr, 0, in.Accum.bytes()));
+    }
+    else
+    {
+      MCVOL_CUDA(cudaMemcpy(in.Accum.ptr, accum.rgba(), in.Accum.bytes(), cudaMemcpyHostToDevice));
+    }
+    in.AccumId = accum.id();
+  }
+
+  // Depth: uploaded when it changes (geometry or view), else reused.
+  const float* devDepth = nullptr;
+  if (depth)
+  {
+    if (!in.HaveDepth || in.LastDepth.size() != P || std::memcmp(in.LastDepth.data(), depth, P * sizeof(float)) != 0)
+    {
+      in.Depth.resize(P);
+      MCVOL_CUDA(cudaMemcpy(in.Depth.ptr, depth, P * sizeof(float), cudaMemcpyHostToDevice));
+      in.LastDepth.assign(depth, depth + P);
+      in.HaveDepth = true;
+    }
+    devDepth = in.Depth.ptr;
+  }
+
+  const FrameParams fp = frameParams(settings, accum.samples());
+  const bool count = counters != nullptr;
+  if (count)
+  {
+    MCVOL_CUDA(cudaMemsetAsync(in.Counters.ptr, 0, 7 * sizeof(unsigned long long)));
+  }
+  const dim3 block = in.Block;
+  const dim3 grid((unsigned(camera.width) + block.x - 1) / block.x, (unsigned(camera.height) + block.y - 1) / block.y);
+  const uint32_t previous = accum.samples();
+  {
+    // Launched even with no active channel: the mean must still take the
+    // added (transparent) samples.
+    switch (s.blend.mode)
+    {
+      case BlendMode::Max:
+        launchRender<BlendMode::Max>(
+          count, lit, grid, block, s, cam, fp, devDepth, in.Accum.ptr, previous, in.Counters.ptr);
+        break;
+      case BlendMode::Mix:
+        launchRender<BlendMode::Mix>(
+          count, lit, grid, block, s, cam, fp, devDepth, in.Accum.ptr, previous, in.Counters.ptr);
+        break;
+      case BlendMode::Composite:
+        launchRender<BlendMode::Composite>(
+          count, lit, grid, block, s, cam, fp, devDepth, in.Accum.ptr, previous, in.Counters.ptr);
+        break;
+      case BlendMode::Density:
+      default:
+        launchRender<BlendMode::Density>(
+          count, lit, grid, block, s, cam, fp, devDepth, in.Accum.ptr, previous, in.Counters.ptr);
+        break;
+    }
+    MCVOL_CUDA(cudaGetLastError());
+  }
+  accum.addSamples(uint32_t(settings.samplesPerPixel));
+  in.AccumSamples = accum.samples();
+  accum.setPendingOnDevice(true);
+  if (count)
+  {
+    unsigned long long c[7];
+    MCVOL_CUDA(cudaMemcpy(c, in.Counters.ptr, sizeof(c), cudaMemcpyDeviceToHost));
+    counters->rays += uint64_t(camera.width) * uint64_t(camera.height) * uint64_t(settings.samplesPerPixel);
+    counters->ddaSteps += c[0];
+    counters->tentativeCollisions += c[1];
+    counters->realCollisions += c[2];
+    counters->channelSamples += c[3];
+    counters->scatteringEvents += c[4];
+    counters->shadowRays += c[5];
+    counters->gradientEvaluations += c[6];
+  }
+  if (settings.readBack)
+  {
+    this->readBack(accum);
+  }
+}
+
+void CUDARenderer::readBack(Accumulator& accum)
+{
+  Internal& in = *this->In;
+  const bool mine = in.AccumId == accum.id() && in.AccumSamples == accum.samples() &&
+    in.Accum.count == size_t(accum.width()) * size_t(accum.height());
+  if (!mine)
+  {
+    if (accum.pendingOnDevice())
+    {
+      throw std::logic_error("mcvol: this Accumulator's image is no longer on the device (another Accumulator "
+                             "was rendered since); it cannot be read back");
+    }
+    return; // the host copy is current
+  }
+  MCVOL_CUDA(cudaSetDevice(in.Device));
+  MCVOL_CUDA(cudaMemcpy(accum.rgba(), in.Accum.ptr, in.Accum.bytes(), cudaMemcpyDeviceToHost));
+  accum.setPendingOnDevice(false);
+  ++in.Updates.imageDownloads;
+}
+} // namespace mcvol
