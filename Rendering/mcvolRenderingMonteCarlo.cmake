@@ -32,8 +32,26 @@ set(classes
   vtkMultiChannelVolumeMapper)
 list(TRANSFORM classes PREPEND "${_mcvol_rendering_dir}/")
 
+# The mapper's Render() stages (Rendering/VTK/, one unit a file; see
+# Documentation/architecture.md): private to the module, not wrapped.
+set(_mcvol_stages
+  Accumulation
+  ChannelBinding
+  FrameCompositor
+  RenderBackend
+  TransferFunctionTables
+  View)
+set(_mcvol_stage_sources ${_mcvol_stages})
+list(TRANSFORM _mcvol_stage_sources PREPEND "${_mcvol_rendering_dir}/VTK/")
+set(_mcvol_stage_headers ${_mcvol_stage_sources})
+list(TRANSFORM _mcvol_stage_sources APPEND ".cxx")
+list(TRANSFORM _mcvol_stage_headers APPEND ".h")
+list(APPEND _mcvol_stage_headers "${_mcvol_rendering_dir}/VTK/ScalarTypeMap.h")
+
 vtk_module_add_module(mcvol::RenderingMonteCarlo
-  CLASSES ${classes})
+  CLASSES ${classes}
+  SOURCES ${_mcvol_stage_sources}
+  PRIVATE_HEADERS ${_mcvol_stage_headers})
 # vtk_module_add_module() exports the folder it is called from; the headers
 # are here (the Python wrappers and users compile against them).
 vtk_module_include(mcvol::RenderingMonteCarlo

@@ -15,6 +15,8 @@
 #include "vtkStreamingDemandDrivenPipeline.h"
 #include "vtkType.h"
 
+#include "VTK/ScalarTypeMap.h"
+
 #include "mcvol/DemoData.h"
 #include "mcvol/Types.h"
 
@@ -28,24 +30,6 @@
 
 namespace
 {
-int vtkTypeOf(mcvol::ScalarType t)
-{
-  switch (t)
-  {
-    case mcvol::ScalarType::UInt8:
-      return VTK_UNSIGNED_CHAR;
-    case mcvol::ScalarType::Int16:
-      return VTK_SHORT;
-    case mcvol::ScalarType::UInt16:
-      return VTK_UNSIGNED_SHORT;
-    case mcvol::ScalarType::Float32:
-      return VTK_FLOAT;
-    case mcvol::ScalarType::Float64:
-      return VTK_DOUBLE;
-  }
-  return VTK_FLOAT;
-}
-
 /// Copies planar channels into one interleaved array (T: a type of the
 /// element size; the bytes are moved, not converted).
 template <typename T>
@@ -153,7 +137,7 @@ int vtkMultiChannelDemoSource::RequestInformation(
     // A one-voxel probe gives the type, channel count and spacing cheaply.
     const mcvol::DemoVolume probe = mcvol::makeDemo(name, { 1, 1, 1 }, this->NumberOfChannels);
     numChannels = probe.numChannels();
-    scalarType = vtkTypeOf(probe.type);
+    scalarType = mcvol::adapter::ToVTKScalarType(probe.type);
     std::copy(probe.spacing, probe.spacing + 3, spacing);
   }
   catch (const std::exception& e)
@@ -215,7 +199,7 @@ int vtkMultiChannelDemoSource::RequestData(vtkInformation*, vtkInformationVector
 
   const vtkIdType voxels = static_cast<vtkIdType>(d[0]) * d[1] * d[2];
   const int n = v.numChannels();
-  const int type = vtkTypeOf(v.type);
+  const int type = mcvol::adapter::ToVTKScalarType(v.type);
   const size_t elem = static_cast<size_t>(mcvol::scalarTypeSize(v.type));
   const bool interleaved = this->Interleaved || !this->SeparateArrays;
 

@@ -452,6 +452,18 @@ private:
 
   struct vtkInternals;
   std::unique_ptr<vtkInternals> Internals;
+
+  // The stages of Render(), in order; each works through one unit of
+  // Rendering/VTK/ and reports its own errors (false ends the frame).
+  struct RenderPass;
+  bool BindChannels(RenderPass& pass);
+  bool ResolveTransferFunctions(RenderPass& pass);
+  bool EnsureBackend();
+  bool UpdateScene(RenderPass& pass);
+  bool SetUpView(RenderPass& pass);
+  void UpdateAccumulation(RenderPass& pass);
+  bool TraceBatch(RenderPass& pass);
+  void DrawImage(RenderPass& pass);
 };
 
 #endif

@@ -1,0 +1,72 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#pragma once
+
+#include "vtkType.h" // For vtkMTimeType
+
+#include "mcvol/Renderer.h"
+
+#include <vector>
+
+namespace mcvol
+{
+namespace adapter
+{
+/**
+ * Stage 6 of vtkMultiChannelVolumeMapper::Render: what resets the
+ * progressive image, and how many samples this render adds to it.
+ */
+
+/// Everything whose change invalidates the accumulated image. The depth of
+/// the opaque geometry counts too (compared separately, by value).
+struct AccumulationKey
+{
+  vtkMTimeType MapperMTime = 0;         ///< the mapper's own parameters
+  vtkMTimeType PropertyMTime = 0;       ///< the volume property's own settings
+  vtkMTimeType DataMTime = 0;           ///< the channel arrays' values
+  vtkMTimeType LightsMTime = 0;         ///< the renderer's lights (lighting only)
+  unsigned long long TablesVersion = 0; ///< transfer-function tables
+  int Width = 0;
+  int Height = 0;
+  double InvViewProj[16] = {};
+  double WorldToIndex[12] = {};
+  const Renderer* Backend = nullptr;
+
+  bool operator==(const AccumulationKey& o) const;
+};
+
+/// The key of the image being accumulated, and the depth it was traced
+/// against.
+class Accumulation
+{
+public:
+  /// Restarts `accum` (resized to the key's size) when the key, the depth or
+  /// a requested reset says the image is stale. `depth` is this render's
+  /// depth buffer; afterwards Depth() is the one to trace against.
+  /// True when the image was restarted.
+  bool Update(const AccumulationKey& key, std::vector<float>& depth, Accumulator& accum);
+
+  /// The depth buffer the current image is traced against.
+  const float* Depth() const { return this->LastDepth.data(); }
+
+  /// The next render starts a new image (ResetAccumulation).
+  void RequestReset() { this->ResetRequested = true; }
+  /// The image is unusable (an error, or its backend was released).
+  void Invalidate() { this->HaveKey = false; }
+  /// Whether an image is being accumulated for an up-to-date key.
+  bool IsCurrent() const { return this->HaveKey && !this->ResetRequested; }
+
+private:
+  bool HaveKey = false;
+  bool ResetRequested = false;
+  AccumulationKey Key;
+  std::vector<float> LastDepth;
+};
+
+/// Samples per pixel this render traces: a batch of `samplesPerPixel`, none
+/// more once a non-progressive image exists, and no more than what is left of
+/// `maximumTotalSamples` (0: no limit). A mapper that traces without a
+/// Monte Carlo backend (`usesBackend` false) decides for itself.
+int SamplesThisRender(
+  bool usesBackend, bool progressive, int samplesPerPixel, long long maximumTotalSamples, long long traced);
+} // namespace adapter
+} // namespace mcvol

@@ -1,0 +1,175 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "TransferFunctionTables.h"
+
+#include "vtkColorTransferFunction.h"
+#include "vtkPiecewiseFunction.h"
+#include "vtkVolumeProperty.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <vector>
+
+namespace mcvol
+{
+namespace adapter
+{
+//------------------------------------------------------------------------------
+bool ResolveChannelFunctions(const ChannelFunctionOverrides& overrides, vtkVolumeProperty* property, int numChannels,
+  ChannelFunctionSet& out, std::string& error)
+{
+  out = ChannelFunctionSet{};
+  for (int c = 0; c < numChannels; ++c)
+  {
+    ChannelFunctions& s = out[c];
+    s.Valid = true;
+    if (overrides.Colors[c])
+    {
+      s.Color = overrides.Colors[c];
+    }
+    else if (c < VTK_MAX_VRCOMP && property)
+    {
+      // Ask for the gray function only when that is what the user set: getting
+      // the RGB one would replace it with a default.
+      if (property->GetColorChannels(c) == 1)
+      {
+        s.Color = property->GetGrayTransferFunction(c);
+        s.Gray = true;
+      }
+      else
+      {
+        s.Color = property->GetRGBTransferFunction(c);
+      }
+    }
+    if (overrides.Opacities[c])
+    {
+      s.Opacity = overrides.Opacities[c];
+    }
+    else if (c < VTK_MAX_VRCOMP && property)
+    {
+      s.Opacity = property->GetScalarOpacity(c);
+    }
+    if (!s.Color || !s.Opacity)
+    {
+      std::ostringstream msg;
+      msg << "Channel " << c << " has no " << (!s.Color ? "colour" : "scalar opacity")
+          << " transfer function: channels >= " << VTK_MAX_VRCOMP
+          << " need SetChannelColor and SetChannelScalarOpacity on the "
+             "mapper.";
+      error = msg.str();
+      return false;
+    }
+    s.ColorMTime = s.Color->GetMTime();
+    s.OpacityMTime = s.Opacity->GetMTime();
+    s.UnitDistance = overrides.UnitDistances[c];
+    if (!(s.UnitDistance > 0.0))
+    {
+      s.UnitDistance = (c < VTK_MAX_VRCOMP && property) ? property->GetScalarOpacityUnitDistance(c) : 1.0;
+    }
+    if (!(s.UnitDistance > 0.0) || !std::isfinite(s.UnitDistance))
+    {
+      std::ostringstream msg;
+      msg << "Channel " << c << " has opacity unit distance " << s.UnitDistance << "; it must be finite and > 0.";
+      error = msg.str();
+      return false;
+    }
+  }
+  return true;
+}
+
+//------------------------------------------------------------------------------
+void TransferFunctionTables::Forget()
+{
+  for (auto& tf : this->Functions)
+  {
+    tf = ChannelFunctions();
+  }
+  for (auto& table : this->Tables)
+  {
+    table = TransferFunctionDesc();
+    table.rgb.clear();
+  }
+  ++this->TablesVersion;
+}
+
+//------------------------------------------------------------------------------
+bool TransferFunctionTables::UpdateChannel(
+  Scene& scene, int c, ChannelFunctions& s, double lo, double hi, bool functionRange)
+{
+  s.Range[0] = lo;
+  s.Range[1] = hi;
+  if (functionRange)
+  {
+    // Values beyond the functions' range take the end values, as VTK's
+    // clamped functions do.
+    double cr[2], orr[2];
+    if (s.Gray)
+    {
+      static_cast<vtkPiecewiseFunction*>(s.Color)->GetRange(cr);
+    }
+    else
+    {
+      static_cast<vtkColorTransferFunction*>(s.Color)->GetRange(cr);
+    }
+    s.Opacity->GetRange(orr);
+    const double flo = std::min(cr[0], orr[0]);
+    const double fhi = std::max(cr[1], orr[1]);
+    if (std::isfinite(flo) && std::isfinite(fhi) && flo < fhi)
+    {
+      s.Range[0] = flo;
+      s.Range[1] = fhi;
+    }
+  }
+  if (s == this->Functions[c])
+  {
+    return false;
+  }
+  TransferFunctionDesc desc;
+  desc.scalarMin = static_cast<float>(s.Range[0]);
+  desc.scalarMax = static_cast<float>(s.Range[1]);
+  desc.unitDistance = static_cast<float>(s.UnitDistance);
+  desc.rgb.resize(3 * kTableSize);
+  desc.opacity.resize(kTableSize);
+  if (s.Gray)
+  {
+    std::vector<float> gray(kTableSize);
+    static_cast<vtkPiecewiseFunction*>(s.Color)->GetTable(s.Range[0], s.Range[1], kTableSize, gray.data());
+    for (int i = 0; i < kTableSize; ++i)
+    {
+      desc.rgb[3 * i] = desc.rgb[3 * i + 1] = desc.rgb[3 * i + 2] = gray[i];
+    }
+  }
+  else
+  {
+    std::vector<double> colors(3 * kTableSize);
+    static_cast<vtkColorTransferFunction*>(s.Color)->GetTable(s.Range[0], s.Range[1], kTableSize, colors.data());
+    for (int i = 0; i < 3 * kTableSize; ++i)
+    {
+      desc.rgb[i] = static_cast<float>(colors[i]);
+    }
+  }
+  s.Opacity->GetTable(s.Range[0], s.Range[1], kTableSize, desc.opacity.data());
+  for (int i = 0; i < kTableSize; ++i)
+  {
+    // Functions may hold values outside [0, 1]; the core expects [0, 1].
+    desc.opacity[i] = std::min(1.f, std::max(0.f, desc.opacity[i]));
+    for (int k = 0; k < 3; ++k)
+    {
+      float& v = desc.rgb[3 * i + k];
+      v = std::isfinite(v) ? std::min(1.f, std::max(0.f, v)) : 0.f;
+    }
+  }
+  this->Functions[c] = s;
+  const TransferFunctionDesc& last = this->Tables[c];
+  if (last.rgb == desc.rgb && last.opacity == desc.opacity && last.scalarMin == desc.scalarMin &&
+    last.scalarMax == desc.scalarMax && last.unitDistance == desc.unitDistance)
+  {
+    return false;
+  }
+  scene.setTransferFunction(c, desc);
+  this->Tables[c] = std::move(desc);
+  ++this->TablesVersion;
+  return true;
+}
+} // namespace adapter
+} // namespace mcvol

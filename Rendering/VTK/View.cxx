@@ -1,0 +1,156 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "View.h"
+
+#include "vtkCamera.h"
+#include "vtkImageData.h"
+#include "vtkLight.h"
+#include "vtkLightCollection.h"
+#include "vtkMatrix3x3.h"
+#include "vtkMatrix4x4.h"
+#include "vtkNew.h"
+#include "vtkOpenGLRenderWindow.h"
+#include "vtkRenderer.h"
+#include "vtkVolume.h"
+#include "vtkVolumeProperty.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+namespace mcvol
+{
+namespace adapter
+{
+//------------------------------------------------------------------------------
+Viewport GetViewport(vtkRenderer* ren)
+{
+  Viewport v;
+  ren->GetTiledSizeAndOrigin(&v.Width, &v.Height, &v.X0, &v.Y0);
+  return v;
+}
+
+//------------------------------------------------------------------------------
+bool ComputeCamera(vtkRenderer* ren, vtkVolume* vol, vtkImageData* image, const int extent[6], const Viewport& viewport,
+  Camera& camera, std::string& error)
+{
+  camera.width = viewport.Width;
+  camera.height = viewport.Height;
+  vtkCamera* cam = ren->GetActiveCamera();
+  // World to normalised device coordinates, as vtkOpenGLCamera computes it.
+  vtkMatrix4x4* worldToNDC = cam->GetCompositeProjectionTransformMatrix(ren->GetTiledAspectRatio(), -1, 1);
+  vtkNew<vtkMatrix4x4> ndcToWorld;
+  if (worldToNDC->Determinant() == 0.0)
+  {
+    error = "The camera's projection is singular.";
+    return false;
+  }
+  vtkMatrix4x4::Invert(worldToNDC, ndcToWorld);
+
+  // World -> volume model coordinates (the prop's matrix) -> physical image
+  // coordinates -> continuous index, with voxel 0 at the extent's start.
+  vtkMatrix4x4* propMatrix = vol->GetMatrix();
+  if (propMatrix->Determinant() == 0.0)
+  {
+    error = "The volume's matrix is singular (a zero scale?).";
+    return false;
+  }
+  const double* spacing = image->GetSpacing();
+  if (!(spacing[0] != 0.0 && spacing[1] != 0.0 && spacing[2] != 0.0 && std::isfinite(spacing[0]) &&
+        std::isfinite(spacing[1]) && std::isfinite(spacing[2])) ||
+    image->GetDirectionMatrix()->Determinant() == 0.0)
+  {
+    std::ostringstream msg;
+    msg << "The image's spacing (" << spacing[0] << ", " << spacing[1] << ", " << spacing[2]
+        << ") or direction matrix is degenerate: every axis needs a non-zero, "
+           "finite spacing and the directions must be independent.";
+    error = msg.str();
+    return false;
+  }
+  vtkNew<vtkMatrix4x4> worldToModel;
+  vtkMatrix4x4::Invert(propMatrix, worldToModel);
+  vtkNew<vtkMatrix4x4> worldToIndex;
+  vtkMatrix4x4::Multiply4x4(image->GetPhysicalToIndexMatrix(), worldToModel, worldToIndex);
+  for (int r = 0; r < 3; ++r)
+  {
+    for (int k = 0; k < 4; ++k)
+    {
+      double v = worldToIndex->GetElement(r, k);
+      if (k == 3)
+      {
+        v -= extent[2 * r];
+      }
+      camera.worldToIndex[4 * r + k] = v;
+    }
+  }
+  for (int r = 0; r < 4; ++r)
+  {
+    for (int k = 0; k < 4; ++k)
+    {
+      camera.invViewProj[4 * r + k] = ndcToWorld->GetElement(r, k);
+    }
+  }
+  return true;
+}
+
+//------------------------------------------------------------------------------
+bool ReadDepth(vtkOpenGLRenderWindow* window, const Viewport& viewport, std::vector<float>& depth)
+{
+  depth.resize(static_cast<size_t>(viewport.Width) * static_cast<size_t>(viewport.Height));
+  if (window->GetZbufferData(viewport.X0, viewport.Y0, viewport.X0 + viewport.Width - 1,
+        viewport.Y0 + viewport.Height - 1, depth.data()) != VTK_OK)
+  {
+    std::fill(depth.begin(), depth.end(), 1.f);
+    return false;
+  }
+  return true;
+}
+
+//------------------------------------------------------------------------------
+LightingDesc CollectLighting(vtkRenderer* ren, vtkVolumeProperty* property, const LightingSettings& settings,
+  int numChannels, vtkMTimeType& lightsMTime)
+{
+  LightingDesc lighting;
+  lightsMTime = 0;
+  if (!property || !property->GetShade())
+  {
+    return lighting;
+  }
+  vtkLightCollection* lights = ren->GetLights();
+  lightsMTime = lights->GetMTime();
+  vtkCollectionSimpleIterator it;
+  lights->InitTraversal(it);
+  while (vtkLight* light = lights->GetNextLight(it))
+  {
+    lightsMTime = std::max(lightsMTime, light->GetMTime());
+    if (!light->GetSwitch() || lighting.lights.size() >= size_t(kMaxLights))
+    {
+      continue;
+    }
+    LightDesc ld;
+    double pos[3], focal[3];
+    light->GetTransformedPosition(pos);
+    light->GetTransformedFocalPoint(focal);
+    ld.point = light->GetPositional() != 0;
+    for (int a = 0; a < 3; ++a)
+    {
+      ld.vector[a] = ld.point ? pos[a] : pos[a] - focal[a];
+      ld.color[a] = light->GetDiffuseColor()[a];
+    }
+    ld.intensity = light->GetIntensity();
+    lighting.lights.push_back(ld);
+  }
+  std::copy(settings.AmbientRadiance, settings.AmbientRadiance + 3, lighting.ambient);
+  for (int c = 0; c < numChannels; ++c)
+  {
+    lighting.albedo.push_back(static_cast<float>(settings.Albedo[c]));
+    lighting.anisotropy.push_back(static_cast<float>(settings.Anisotropy[c]));
+  }
+  lighting.shadows = settings.Shadows;
+  lighting.deltaShadows = settings.DeltaShadows;
+  lighting.maxDepth = settings.MaxScatteringDepth;
+  lighting.gradientShading = settings.GradientShading;
+  lighting.shininess = static_cast<float>(settings.Shininess);
+  return lighting;
+}
+} // namespace adapter
+} // namespace mcvol

@@ -1,0 +1,70 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#pragma once
+
+#include "vtkType.h" // For vtkMTimeType
+
+#include "mcvol/Renderer.h"
+#include "mcvol/Scene.h"
+
+#include <array>
+#include <string>
+#include <vector>
+
+class vtkImageData;
+class vtkOpenGLRenderWindow;
+class vtkRenderer;
+class vtkVolume;
+class vtkVolumeProperty;
+
+namespace mcvol
+{
+namespace adapter
+{
+/**
+ * Stage 5 of vtkMultiChannelVolumeMapper::Render: what the renderer's view
+ * gives the core: the rays (camera, prop and image matrices), the depth of
+ * the opaque geometry already drawn, and the lights.
+ */
+
+/// The tile of the render window the renderer draws into.
+struct Viewport
+{
+  int Width = 0;
+  int Height = 0;
+  int X0 = 0;
+  int Y0 = 0;
+};
+
+Viewport GetViewport(vtkRenderer* ren);
+
+/// Rays from the active camera into the image's continuous index space
+/// (voxel 0 at the extent's start). False, with `error`, for a singular
+/// camera, prop matrix, spacing or direction.
+bool ComputeCamera(vtkRenderer* ren, vtkVolume* vol, vtkImageData* image, const int extent[6], const Viewport& viewport,
+  Camera& camera, std::string& error);
+
+/// The depth buffer over the viewport (window depth in [0, 1]); false when it
+/// could not be read, and `depth` is then all 1 (nothing occludes).
+bool ReadDepth(vtkOpenGLRenderWindow* window, const Viewport& viewport, std::vector<float>& depth);
+
+/// The mapper's lighting settings (the renderer's lights come on top).
+struct LightingSettings
+{
+  const double* AmbientRadiance = nullptr; ///< 3 values
+  const double* Albedo = nullptr;          ///< per channel
+  const double* Anisotropy = nullptr;      ///< per channel
+  bool Shadows = true;
+  bool DeltaShadows = false;
+  int MaxScatteringDepth = 1;
+  bool GradientShading = false;
+  double Shininess = 32.0;
+};
+
+/// Lighting only with ShadeOn (VTK's volume convention): the renderer's
+/// switched-on lights, in world space, and the mapper's settings. Without
+/// ShadeOn the result asks for no lighting at all. `lightsMTime` is the
+/// lights' time for the accumulation key (0 without ShadeOn).
+LightingDesc CollectLighting(vtkRenderer* ren, vtkVolumeProperty* property, const LightingSettings& settings,
+  int numChannels, vtkMTimeType& lightsMTime);
+} // namespace adapter
+} // namespace mcvol
