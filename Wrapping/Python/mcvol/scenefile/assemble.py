@@ -1,0 +1,422 @@
+# SPDX-License-Identifier: BSD-3-Clause
+"""Parsed scene (parse.py) -> a VTK pipeline ready to render: the input
+image, its channels with their transfer functions, the mapper and its
+settings, the renderer with its lights and camera, and an offscreen window.
+
+VTK is imported inside the functions, as each needs it.
+"""
+
+import math
+import os
+
+from .errors import RenderError, SceneError
+from .schema import MAX_CHANNELS, join_key
+
+# Types the mapper reads in place (VTK type names as GetDataTypeAsString gives them).
+SUPPORTED_TYPES = ("unsigned char", "short", "unsigned short", "float", "double")
+VTK_MAX_VRCOMP = 4
+
+
+def load_input(spec, errors, need_arrays=True):
+    """Returns (vtkImageData, demo source or None)."""
+    if "demo" in spec:
+        from mcvol import vtkMultiChannelDemoSource
+
+        src = errors.watch(vtkMultiChannelDemoSource())
+        src.SetDataset(spec["demo"])
+        src.SetDimensions(*spec["dimensions"])
+        src.SetNumberOfChannels(spec["channels"])
+        # The per-channel named arrays only when a channel asks for one: they
+        # double the memory of a large demo (4 x 512^3 float is 2 GB).
+        src.SetSeparateArrays(need_arrays)
+        src.Update()
+        if errors.messages:
+            raise SceneError("input", "cannot generate the demo: %s" % errors.messages[-1])
+        return src.GetOutput(), src
+    ext = spec["ext"]
+    if ext == ".vti":
+        from vtkmodules.vtkIOXML import vtkXMLImageDataReader
+
+        reader = vtkXMLImageDataReader()
+    elif ext in (".mha", ".mhd"):
+        from vtkmodules.vtkIOImage import vtkMetaImageReader
+
+        reader = vtkMetaImageReader()
+    else:
+        from vtkmodules.vtkIOImage import vtkNrrdReader
+
+        reader = vtkNrrdReader()
+    errors.watch(reader)
+    reader.SetFileName(spec["file"])
+    if not reader.CanReadFile(spec["file"]):
+        raise SceneError("input", "cannot read '%s' as %s" % (spec["file"], ext))
+    reader.Update()
+    image = reader.GetOutput()
+    if errors.messages or image is None or image.GetNumberOfPoints() == 0:
+        detail = (": " + errors.messages[-1]) if errors.messages else ""
+        raise SceneError("input", "cannot read image data from '%s'%s" % (spec["file"], detail))
+    return image, None
+
+
+def resolve_channels(scene, image, demo):
+    """Finds each channel's array, component and data range."""
+    pd = image.GetPointData()
+    scalars = pd.GetScalars()
+    entries = scene.get("channels")
+    if entries is None:
+        if demo is None:
+            raise SceneError("channels", "required for a file input (only demo inputs have suggested transfer functions)")
+        if scalars is None:
+            raise SceneError("input", "the demo has no point scalars")
+        entries = [{"path": "channels[%d]" % i, "normalized": False} for i in range(scalars.GetNumberOfComponents())]
+        if len(entries) > MAX_CHANNELS:
+            raise SceneError("input", "the demo has more than %d channels" % MAX_CHANNELS)
+    resolved = []
+    for i, e in enumerate(entries):
+        path = e["path"]
+        if "array" in e:
+            array = pd.GetArray(e["array"])
+            if array is None:
+                names = [pd.GetArrayName(k) for k in range(pd.GetNumberOfArrays())]
+                raise SceneError(
+                    join_key(path, "array"),
+                    "no point array named '%s' (the input has: %s)" % (e["array"], ", ".join(n for n in names if n) or "none"),
+                )
+            where = "array '%s'" % e["array"]
+            key = join_key(path, "array")
+        else:
+            array = scalars
+            if array is None:
+                raise SceneError(path, "the input has no point scalars: give \"array\"")
+            where = "the point scalars '%s'" % (array.GetName() or "")
+            key = path
+        ncomp = array.GetNumberOfComponents()
+        comp = e.get("component")
+        if isinstance(comp, str):
+            names = [array.GetComponentName(k) for k in range(ncomp)]
+            if comp not in names:
+                raise SceneError(
+                    join_key(path, "component"),
+                    "no component named '%s' in %s (names: %s)" % (comp, where, ", ".join(n for n in names if n) or "none"),
+                )
+            comp = names.index(comp)
+        elif comp is None:
+            if "array" in e:
+                if ncomp != 1:
+                    raise SceneError(path, "%s has %d components: give \"component\"" % (where, ncomp))
+                comp = 0
+            else:
+                comp = i
+                if comp >= ncomp:
+                    raise SceneError(
+                        path, "no component %d in %s (%d components): give \"component\" or \"array\"" % (i, where, ncomp)
+                    )
+        elif comp >= ncomp:
+            raise SceneError(
+                join_key(path, "component"), "component %d out of range: %s has %d component(s)" % (comp, where, ncomp)
+            )
+        if array.GetDataTypeAsString() not in SUPPORTED_TYPES:
+            raise SceneError(
+                key,
+                "%s has type %s, which the mapper does not read (%s)"
+                % (where, array.GetDataTypeAsString(), ", ".join(SUPPORTED_TYPES)),
+            )
+        rng = [0.0, 0.0]
+        array.GetFiniteRange(rng, comp)
+        if not (math.isfinite(rng[0]) and math.isfinite(rng[1])) or rng[0] > rng[1]:
+            rng = [0.0, 0.0]
+        # The demo channel this is (for suggested transfer functions).
+        demo_channel = None
+        if demo is not None:
+            if array is scalars or array.GetName() == "channels":
+                demo_channel = comp
+            else:
+                for k in range(demo.GetNumberOfOutputChannels()):
+                    if demo.GetChannelName(k) == array.GetName():
+                        demo_channel = k
+        resolved.append(dict(e, array_obj=array, comp=comp, data_range=rng, demo_channel=demo_channel))
+    return resolved
+
+
+def build_transfer_functions(channels, demo):
+    from vtkmodules.vtkCommonDataModel import vtkPiecewiseFunction
+    from vtkmodules.vtkRenderingCore import vtkColorTransferFunction
+
+    out = []
+    for ch in channels:
+        path = ch["path"]
+        color = vtkColorTransferFunction()
+        opacity = vtkPiecewiseFunction()
+        unit = None
+        dc = ch["demo_channel"]
+        if ("color" not in ch or "opacity" not in ch or "unit_distance" not in ch) and dc is not None:
+            demo.GetSuggestedTransferFunction(dc, color, opacity, None)
+            unit = demo.GetSuggestedUnitDistance(dc)
+        for key in ("color", "opacity"):
+            if key not in ch and dc is None:
+                raise SceneError(path, "missing key '%s' (required unless the channel is a demo channel)" % key)
+        lo, hi = ch.get("range", ch["data_range"])
+        if not hi > lo:
+            hi = lo + 1.0  # constant channel: keep the points apart
+
+        def place(x, normalized):
+            return lo + x * (hi - lo) if normalized else x
+
+        if "color" in ch:
+            c = ch["color"]
+            color.RemoveAllPoints()
+            pts = c["points"]
+            if c["normalized"] is None:  # a plain point list
+                xs = [place(p[0], ch["normalized"]) for p in pts]
+            elif c["normalized"]:  # a preset: its span onto the range
+                x0 = min(p[0] for p in pts)
+                x1 = max(p[0] for p in pts)
+                xs = [lo + ((p[0] - x0) / (x1 - x0) if x1 > x0 else 0.0) * (hi - lo) for p in pts]
+            else:
+                xs = [p[0] for p in pts]
+            for x, p in zip(xs, pts):
+                color.AddRGBPoint(x, min(max(p[1], 0.0), 1.0), min(max(p[2], 0.0), 1.0), min(max(p[3], 0.0), 1.0))
+            space = c.get("color_space")
+            if space in ("Diverging",):
+                color.SetColorSpaceToDiverging()
+            elif space in ("Lab", "CIELAB"):
+                color.SetColorSpaceToLab()
+            elif space == "Lab/CIEDE2000":
+                color.SetColorSpaceToLabCIEDE2000()
+            elif space == "HSV":
+                color.SetColorSpaceToHSV()
+            elif space == "Step":
+                color.SetColorSpaceToStep()
+            else:
+                color.SetColorSpaceToRGB()
+        if "opacity" in ch:
+            opacity.RemoveAllPoints()
+            for p in ch["opacity"]:
+                opacity.AddPoint(place(p[0], ch["normalized"]), p[1])
+        if "unit_distance" in ch:
+            unit = ch["unit_distance"]
+        if unit is None or not unit > 0:
+            unit = 1.0
+        out.append((color, opacity, unit))
+    return out
+
+
+def arrange_channels(image, channels, mapper):
+    """Points the mapper at the channels; returns the image to render."""
+    pd = image.GetPointData()
+    scalars = pd.GetScalars()
+    comps = [c["comp"] for c in channels]
+    if scalars is not None and all(c["array_obj"] is scalars for c in channels) and comps == list(
+        range(scalars.GetNumberOfComponents())
+    ):
+        return image  # the scalars' components, in order: read in place
+    if all(c["array_obj"].GetNumberOfComponents() == 1 and c["array_obj"].GetName() for c in channels):
+        for c in channels:
+            mapper.AddChannelArray(c["array_obj"].GetName())
+        return image
+    # Components picked from multi-component arrays: copy them out.
+    from vtkmodules.vtkCommonDataModel import vtkImageData
+
+    copy = vtkImageData()
+    copy.ShallowCopy(image)
+    for i, c in enumerate(channels):
+        src = c["array_obj"]
+        if src.GetNumberOfComponents() == 1 and src.GetName():
+            mapper.AddChannelArray(src.GetName())
+            continue
+        a = src.NewInstance()
+        a.SetNumberOfComponents(1)
+        a.SetNumberOfTuples(src.GetNumberOfTuples())
+        a.CopyComponent(0, src, c["comp"])
+        a.SetName("mcvol-render channel %d" % i)
+        copy.GetPointData().AddArray(a)
+        mapper.AddChannelArray(a.GetName())
+    return copy
+
+
+def setup_camera(renderer, cam):
+    camera = renderer.GetActiveCamera()
+    if "parallel" in cam:
+        camera.SetParallelProjection(cam["parallel"])
+    if "view_angle" in cam:
+        camera.SetViewAngle(cam["view_angle"])
+    if "position" in cam or "focal_point" in cam:
+        renderer.ResetCamera()  # a focal point at the volume's centre when none is given
+        if "focal_point" in cam:
+            camera.SetFocalPoint(*cam["focal_point"])
+        if "position" in cam:
+            camera.SetPosition(*cam["position"])
+        camera.SetViewUp(*cam.get("view_up", [0.0, 1.0, 0.0]))
+        camera.OrthogonalizeViewUp()
+        azimuth, elevation = cam.get("azimuth", 0.0), cam.get("elevation", 0.0)
+    else:
+        if "view_up" in cam:
+            # VTK's default view direction (-z), or from the front (+y) when
+            # the up vector is about z.
+            up = cam["view_up"]
+            norm = math.sqrt(sum(c * c for c in up))
+            camera.SetFocalPoint(0.0, 0.0, 0.0)
+            camera.SetPosition(*((0.0, -1.0, 0.0) if abs(up[2]) > 0.9 * norm else (0.0, 0.0, 1.0)))
+            camera.SetViewUp(*up)
+            camera.OrthogonalizeViewUp()
+        renderer.ResetCamera()
+        azimuth, elevation = cam.get("azimuth", 30.0), cam.get("elevation", 20.0)
+    camera.Azimuth(azimuth)
+    camera.Elevation(elevation)
+    camera.OrthogonalizeViewUp()
+    if "parallel_scale" in cam:
+        camera.SetParallelScale(cam["parallel_scale"])
+    if "zoom" in cam:
+        camera.Zoom(cam["zoom"])
+    renderer.ResetCameraClippingRange()
+
+
+def samples_per_render(total, wanted):
+    """The largest divisor of `total` not above `wanted`, so that the total is
+    reached exactly (changing SamplesPerPixel would restart the mean)."""
+    for n in range(min(total, wanted), 0, -1):
+        if total % n == 0:
+            return n
+    return 1
+
+
+
+class Pipeline:
+    """What assemble() built; render.py accumulates it and reads it back.
+
+    `total` is the samples per pixel to accumulate, `per_render` those of one
+    window.Render(); `reference` is true for the ray-marching reference.
+    `image` and `demo` are held so that the input outlives the render.
+    """
+
+    def __init__(self, image, demo, channels, mapper, volume, renderer, window, reference, total, per_render):
+        self.image = image
+        self.demo = demo
+        self.channels = channels
+        self.mapper = mapper
+        self.volume = volume
+        self.renderer = renderer
+        self.window = window
+        self.reference = reference
+        self.total = total
+        self.per_render = per_render
+
+
+def setup_mapper(mapper, prop, scene, channels, tfs, render_image, reference):
+    """Transfer functions and per-channel settings, blend mode, sampling.
+    Returns (total, per_render) samples per pixel."""
+    for i, (color, opacity, unit) in enumerate(tfs):
+        if i < VTK_MAX_VRCOMP:
+            prop.SetColor(i, color)
+            prop.SetScalarOpacity(i, opacity)
+            prop.SetScalarOpacityUnitDistance(i, unit)
+        else:
+            mapper.SetChannelColor(i, color)
+            mapper.SetChannelScalarOpacity(i, opacity)
+            mapper.SetChannelScalarOpacityUnitDistance(i, unit)
+        if "mix_weight" in channels[i]:
+            mapper.SetMixWeight(i, channels[i]["mix_weight"])
+        if "albedo" in channels[i]:
+            mapper.SetChannelAlbedo(i, channels[i]["albedo"])
+        if "anisotropy" in channels[i]:
+            mapper.SetChannelAnisotropy(i, channels[i]["anisotropy"])
+    {
+        "density": mapper.SetChannelBlendModeToDensity,
+        "max": mapper.SetChannelBlendModeToMax,
+        "mix": mapper.SetChannelBlendModeToMix,
+        "composite": mapper.SetChannelBlendModeToComposite,
+    }[scene["blend"]]()
+    mapper.SetTrackingMethod(mapper.N_DDA if scene["tracking"] == "n-dda" else mapper.ONE_DDA)
+    if not reference:  # the reference always marches on the CPU
+        {"auto": mapper.SetBackendToAuto, "cpu": mapper.SetBackendToCPU, "cuda": mapper.SetBackendToCUDA}[
+            scene["backend"]
+        ]()
+    mapper.SetSeed(scene["seed"])
+    mapper.SetMacrocellSize(scene["macrocell_size"])
+    mapper.SetPixelJitter(scene["pixel_jitter"])
+    total = scene["samples_per_pixel"]
+    per_render = samples_per_render(total, scene["samples_per_render"])
+    mapper.SetSamplesPerPixel(per_render)
+    if reference:
+        # One deterministic image: the ray march through pixel centres.
+        total = per_render = 1
+        step = scene["step"]
+        if scene["step_voxels"] is not None:
+            spacing = [abs(x) for x in render_image.GetSpacing()]
+            step = scene["step_voxels"] * min(spacing)
+        mapper.SetStepSize(step)
+        mapper.SetCompositingModel(
+            mapper.OPACITY_COMPOSITING if scene["compositing"] == "opacity" else mapper.EXTINCTION_COMPOSITING
+        )
+    return total, per_render
+
+
+def setup_lighting(renderer, prop, mapper, lighting):
+    # The lighting object turns shading on; its lights replace VTK's
+    # headlight (none listed: the headlight).
+    from vtkmodules.vtkRenderingCore import vtkLight
+
+    prop.ShadeOn()
+    mapper.SetAmbientRadiance(*lighting["ambient"])
+    mapper.SetShadowMode({"none": mapper.NO_SHADOWS, "ratio": mapper.RATIO_TRACKING_SHADOWS,
+                          "delta": mapper.DELTA_TRACKING_SHADOWS}[lighting["shadows"]])
+    mapper.SetMaxScatteringDepth(lighting["max_scattering_depth"])
+    mapper.SetGradientShading(lighting["gradient_shading"])
+    mapper.SetShininess(lighting["shininess"])
+    if lighting["lights"]:
+        renderer.AutomaticLightCreationOff()
+        for l in lighting["lights"]:
+            light = vtkLight()
+            light.SetLightTypeToSceneLight()
+            light.SetColor(*l["color"])
+            light.SetIntensity(l["intensity"])
+            if l["type"] == "point":
+                light.PositionalOn()
+                light.SetConeAngle(180.0)
+                light.SetPosition(*l["vector"])
+            else:
+                light.SetFocalPoint(0.0, 0.0, 0.0)
+                light.SetPosition(*l["vector"])
+            renderer.AddLight(light)
+
+
+def assemble(scene, errors, prog):
+    """Builds the pipeline of a parsed scene. `prog` names the program in the
+    hint given when there is no X display."""
+    import vtkmodules.vtkRenderingOpenGL2  # noqa: F401  (OpenGL render window)
+    import vtkmodules.vtkRenderingVolumeOpenGL2  # noqa: F401
+    from vtkmodules.vtkRenderingCore import vtkRenderer, vtkRenderWindow, vtkVolume, vtkVolumeProperty
+
+    from mcvol import vtkMultiChannelRayMarchMapper, vtkMultiChannelVolumeMapper
+
+    need_arrays = any("array" in ch for ch in scene.get("channels", []))
+    image, demo = load_input(scene["input"], errors, need_arrays)
+    channels = resolve_channels(scene, image, demo)
+    tfs = build_transfer_functions(channels, demo)
+
+    reference = scene["renderer"] == "raymarch"
+    mapper = errors.watch(vtkMultiChannelRayMarchMapper() if reference else vtkMultiChannelVolumeMapper())
+    render_image = arrange_channels(image, channels, mapper)
+    mapper.SetInputData(render_image)
+    prop = vtkVolumeProperty()
+    prop.IndependentComponentsOn()
+    total, per_render = setup_mapper(mapper, prop, scene, channels, tfs, render_image, reference)
+
+    volume = vtkVolume()
+    volume.SetMapper(mapper)
+    volume.SetProperty(prop)
+    renderer = vtkRenderer()
+    renderer.SetBackground(*scene["background"])
+    renderer.AddVolume(volume)
+    lighting = scene.get("lighting")
+    if lighting is not None:
+        setup_lighting(renderer, prop, mapper, lighting)
+    window = vtkRenderWindow()
+    if window.GetClassName() == "vtkXOpenGLRenderWindow" and not os.environ.get("DISPLAY"):
+        raise RenderError("no X display: run under an X server (for example `xvfb-run -a %s ...`)" % prog)
+    window.SetOffScreenRendering(1)
+    window.SetMultiSamples(0)
+    window.SetSize(*scene["image_size"])
+    window.AddRenderer(renderer)
+    setup_camera(renderer, scene["camera"])
+    return Pipeline(image, demo, channels, mapper, volume, renderer, window, reference, total, per_render)

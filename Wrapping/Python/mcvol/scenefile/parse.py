@@ -1,0 +1,271 @@
+# SPDX-License-Identifier: BSD-3-Clause
+"""Scene file (its JSON, already loaded) -> plain data: dicts and lists, no VTK.
+
+Only syntax and types are checked here; what needs the data (array names,
+component counts, data ranges) is checked when the scene is assembled
+(assemble.py), so that a scene can be validated without reading its input.
+"""
+
+import json
+import os
+
+from .errors import SceneError
+from .schema import (
+    BACKENDS,
+    BLEND_MODES,
+    CAMERA_KEYS,
+    CHANNEL_KEYS,
+    COMPOSITING,
+    DEMO_NAMES,
+    LIGHT_KEYS,
+    LIGHTING_KEYS,
+    MAX_CHANNELS,
+    RENDERERS,
+    SHADOWS,
+    TOP_KEYS,
+    TRACKING,
+    check_keys,
+    get_bool,
+    get_number,
+    get_points,
+    get_string,
+    get_vector,
+    join_key,
+    type_name,
+)
+
+
+def parse_input(v, scene_dir):
+    if isinstance(v, str):
+        filename = v if os.path.isabs(v) else os.path.join(scene_dir, v)
+        ext = os.path.splitext(v)[1].lower()
+        if ext not in (".vti", ".mha", ".mhd", ".nrrd", ".nhdr"):
+            raise SceneError("input", "unsupported file type '%s' (expected .vti, .mha, .mhd, .nrrd or .nhdr)" % ext)
+        if not os.path.isfile(filename):
+            raise SceneError("input", "file not found: %s" % filename)
+        return {"file": filename, "ext": ext}
+    if isinstance(v, dict):
+        check_keys(v, "input", {"demo", "dimensions", "channels"}, required=("demo",))
+        demo = {"demo": get_string(v["demo"], "input.demo", DEMO_NAMES), "dimensions": [0, 0, 0], "channels": 0}
+        if "dimensions" in v:
+            demo["dimensions"] = get_vector(
+                v["dimensions"], "input.dimensions", 3, "[x, y, z] voxel counts", lo=1, hi=8192, integer=True
+            )
+        if "channels" in v:
+            demo["channels"] = get_number(v["channels"], "input.channels", lo=1, hi=MAX_CHANNELS, integer=True)
+        return demo
+    raise SceneError(
+        "input", 'expected a file name or {"demo": name, ...}, got %s' % type_name(v)
+    )
+
+
+def parse_color(v, path, scene_dir, presets):
+    """A list of [x, r, g, b] points, or a preset reference."""
+    if isinstance(v, list):
+        return {"points": get_points(v, path, 4, "[x, r, g, b] points"), "normalized": None}
+    if isinstance(v, dict):
+        if "preset_file" in v:
+            check_keys(v, path, {"preset_file", "name", "normalized"})
+            fn = get_string(v["preset_file"], join_key(path, "preset_file"))
+            fn = fn if os.path.isabs(fn) else os.path.join(scene_dir, fn)
+            name = get_string(v["name"], join_key(path, "name")) if "name" in v else None
+            preset = presets.find(name, join_key(path, "preset_file"), filename=fn)
+            where = join_key(path, "preset_file")
+        else:
+            check_keys(v, path, {"preset", "normalized"}, required=("preset",))
+            name = get_string(v["preset"], join_key(path, "preset"))
+            preset = presets.find(name, join_key(path, "preset"))
+            where = join_key(path, "preset")
+        rgb = preset.get("RGBPoints")
+        if not isinstance(rgb, list) or len(rgb) < 4 or len(rgb) % 4 != 0:
+            raise SceneError(where, "preset '%s' has no usable RGBPoints (categorical presets are not supported)" % preset["Name"])
+        try:
+            points = [[float(c) for c in rgb[i : i + 4]] for i in range(0, len(rgb), 4)]
+        except (TypeError, ValueError):
+            raise SceneError(where, "preset '%s' has non-numeric RGBPoints" % preset["Name"])
+        normalized = get_bool(v["normalized"], join_key(path, "normalized")) if "normalized" in v else True
+        return {
+            "points": points,
+            "normalized": normalized,
+            "preset": preset["Name"],
+            "color_space": preset.get("ColorSpace"),
+        }
+    raise SceneError(
+        path, 'expected a list of [x, r, g, b] points, {"preset": name} or {"preset_file": file}, got %s' % type_name(v)
+    )
+
+
+def parse_lighting(v):
+    """The "lighting" object: lights, ambient radiance and scattering settings
+    (Documentation/scene-format.md). Its presence turns ShadeOn."""
+    if not isinstance(v, dict):
+        raise SceneError("lighting", "expected an object, got %s" % json.dumps(v))
+    for k in v:
+        if k not in LIGHTING_KEYS:
+            raise SceneError(join_key("lighting", k), "unknown key (known: %s)" % ", ".join(sorted(LIGHTING_KEYS)))
+    out = {"lights": [], "ambient": [0.2, 0.2, 0.2], "shadows": "ratio", "max_scattering_depth": 1,
+           "gradient_shading": False, "shininess": 32.0}
+    lights = v.get("lights", [])
+    if not isinstance(lights, list) or len(lights) > 8:
+        raise SceneError("lighting.lights", "expected a list of at most 8 light objects")
+    for i, l in enumerate(lights):
+        path = "lighting.lights[%d]" % i
+        if not isinstance(l, dict):
+            raise SceneError(path, "expected a light object")
+        for k in l:
+            if k not in LIGHT_KEYS:
+                raise SceneError(join_key(path, k), "unknown key (known: %s)" % ", ".join(sorted(LIGHT_KEYS)))
+        kind = get_string(l.get("type", "directional"), join_key(path, "type"), ("directional", "point"))
+        key = "direction" if kind == "directional" else "position"
+        if key not in l:
+            raise SceneError(path, "a %s light needs \"%s\"" % (kind, key))
+        vec = get_vector(l[key], join_key(path, key), 3, "[x, y, z]")
+        if kind == "directional" and not any(vec):
+            raise SceneError(join_key(path, key), "the direction must not be zero")
+        out["lights"].append({
+            "type": kind, "vector": vec,
+            "color": get_vector(l["color"], join_key(path, "color"), 3, "[r, g, b] >= 0", lo=0.0) if "color" in l
+            else [1.0, 1.0, 1.0],
+            "intensity": get_number(l["intensity"], join_key(path, "intensity"), lo=0.0) if "intensity" in l else 1.0,
+        })
+    if "ambient" in v:
+        out["ambient"] = get_vector(v["ambient"], "lighting.ambient", 3, "[r, g, b] >= 0", lo=0.0)
+    if "shadows" in v:
+        out["shadows"] = get_string(v["shadows"], "lighting.shadows", SHADOWS)
+    if "max_scattering_depth" in v:
+        out["max_scattering_depth"] = get_number(v["max_scattering_depth"], "lighting.max_scattering_depth", lo=1,
+                                                 hi=1024, integer=True)
+    if "gradient_shading" in v:
+        if not isinstance(v["gradient_shading"], bool):
+            raise SceneError("lighting.gradient_shading", "expected true or false")
+        out["gradient_shading"] = v["gradient_shading"]
+    if "shininess" in v:
+        out["shininess"] = get_number(v["shininess"], "lighting.shininess", lo=0.0, hi=1e4)
+    return out
+
+
+def parse_channel(v, path, scene_dir, presets):
+    check_keys(v, path, CHANNEL_KEYS)
+    ch = {"path": path}
+    if "name" in v:
+        ch["name"] = get_string(v["name"], join_key(path, "name"))
+    if "array" in v:
+        ch["array"] = get_string(v["array"], join_key(path, "array"))
+    if "component" in v:
+        c = v["component"]
+        if isinstance(c, str):
+            ch["component"] = c
+        else:
+            ch["component"] = get_number(c, join_key(path, "component"), lo=0, integer=True)
+    if "color" in v:
+        ch["color"] = parse_color(v["color"], join_key(path, "color"), scene_dir, presets)
+    if "opacity" in v:
+        ch["opacity"] = get_points(v["opacity"], join_key(path, "opacity"), 2, "[x, a] pairs")
+    ch["normalized"] = get_bool(v["normalized"], join_key(path, "normalized")) if "normalized" in v else False
+    if "range" in v:
+        r = get_vector(v["range"], join_key(path, "range"), 2, "[min, max]")
+        if not r[0] < r[1]:
+            raise SceneError(join_key(path, "range"), "min must be less than max, got %s" % json.dumps(v["range"]))
+        ch["range"] = r
+    if "unit_distance" in v:
+        ch["unit_distance"] = get_number(v["unit_distance"], join_key(path, "unit_distance"), lo=0, lo_open=True)
+    if "mix_weight" in v:
+        ch["mix_weight"] = get_number(v["mix_weight"], join_key(path, "mix_weight"), lo=0)
+    if "albedo" in v:
+        ch["albedo"] = get_number(v["albedo"], join_key(path, "albedo"), lo=0.0, hi=1.0)
+    if "anisotropy" in v:
+        ch["anisotropy"] = get_number(v["anisotropy"], join_key(path, "anisotropy"), lo=-1.0, hi=1.0, lo_open=True,
+                                      hi_open=True)
+    return ch
+
+
+def parse_camera(v):
+    check_keys(v, "camera", CAMERA_KEYS)
+    cam = {}
+    for k in ("position", "focal_point", "view_up"):
+        if k in v:
+            cam[k] = get_vector(v[k], join_key("camera", k), 3, "[x, y, z]")
+    if "view_up" in cam and all(c == 0 for c in cam["view_up"]):
+        raise SceneError("camera.view_up", "must not be the zero vector")
+    if "position" in cam and "focal_point" in cam and cam["position"] == cam["focal_point"]:
+        raise SceneError("camera.position", "must differ from camera.focal_point")
+    if "view_angle" in v:
+        cam["view_angle"] = get_number(v["view_angle"], "camera.view_angle", lo=0, hi=180, lo_open=True, hi_open=True)
+    if "parallel" in v:
+        cam["parallel"] = get_bool(v["parallel"], "camera.parallel")
+    if "parallel_scale" in v:
+        cam["parallel_scale"] = get_number(v["parallel_scale"], "camera.parallel_scale", lo=0, lo_open=True)
+    for k in ("azimuth", "elevation"):
+        if k in v:
+            cam[k] = get_number(v[k], join_key("camera", k))
+    if "zoom" in v:
+        cam["zoom"] = get_number(v["zoom"], "camera.zoom", lo=0, lo_open=True)
+    return cam
+
+
+def parse_scene(data, scene_dir, presets):
+    """The scene as a dict with every setting filled in, defaults included.
+
+    "channels" is there only when the file lists channels: without them a
+    demo input gets one channel per demo channel, with the demo's suggested
+    transfer functions (assemble.resolve_channels). File names are resolved
+    against `scene_dir`, the scene file's folder. "step_voxels" has no key in
+    the file: it is for the command line's --step-voxels.
+    """
+    check_keys(data, "", TOP_KEYS, required=("input",))
+    s = {}
+    if "description" in data:
+        get_string(data["description"], "description")
+    s["input"] = parse_input(data["input"], scene_dir)
+    if "channels" in data:
+        chs = data["channels"]
+        if not isinstance(chs, list) or not chs:
+            raise SceneError("channels", "expected a non-empty list of channel objects, got %s" % json.dumps(chs))
+        if len(chs) > MAX_CHANNELS:
+            raise SceneError("channels", "at most %d channels, got %d" % (MAX_CHANNELS, len(chs)))
+        s["channels"] = [parse_channel(c, "channels[%d]" % i, scene_dir, presets) for i, c in enumerate(chs)]
+    s["blend"] = get_string(data["blend"], "blend", BLEND_MODES) if "blend" in data else "density"
+    s["tracking"] = get_string(data["tracking"], "tracking", TRACKING) if "tracking" in data else "1-dda"
+    s["backend"] = get_string(data["backend"], "backend", BACKENDS) if "backend" in data else "auto"
+    s["samples_per_pixel"] = (
+        get_number(data["samples_per_pixel"], "samples_per_pixel", lo=1, hi=1 << 24, integer=True)
+        if "samples_per_pixel" in data
+        else 64
+    )
+    s["samples_per_render"] = (
+        get_number(data["samples_per_render"], "samples_per_render", lo=1, hi=4096, integer=True)
+        if "samples_per_render" in data
+        else 16
+    )
+    s["image_size"] = (
+        get_vector(data["image_size"], "image_size", 2, "[width, height]", lo=1, hi=16384, integer=True)
+        if "image_size" in data
+        else [512, 512]
+    )
+    s["camera"] = parse_camera(data["camera"]) if "camera" in data else {}
+    s["background"] = (
+        get_vector(data["background"], "background", 3, "[r, g, b] in [0, 1]", lo=0.0, hi=1.0)
+        if "background" in data
+        else [0.0, 0.0, 0.0]
+    )
+    s["seed"] = get_number(data["seed"], "seed", lo=0, hi=2**32 - 1, integer=True) if "seed" in data else 0
+    s["macrocell_size"] = (
+        get_number(data["macrocell_size"], "macrocell_size", lo=1, hi=256, integer=True)
+        if "macrocell_size" in data
+        else 8
+    )
+    s["renderer"] = get_string(data["renderer"], "renderer", RENDERERS) if "renderer" in data else "montecarlo"
+    s["step"] = get_number(data["step"], "step", lo=0.0, hi=1e300) if "step" in data else 0.0
+    s["step_voxels"] = None
+    s["compositing"] = (
+        get_string(data["compositing"], "compositing", COMPOSITING) if "compositing" in data else "extinction"
+    )
+    s["lighting"] = parse_lighting(data["lighting"]) if "lighting" in data else None
+    if "pixel_jitter" in data:
+        if not isinstance(data["pixel_jitter"], bool):
+            raise SceneError("pixel_jitter", "expected true or false, got %s" % json.dumps(data["pixel_jitter"]))
+        s["pixel_jitter"] = data["pixel_jitter"]
+    else:
+        s["pixel_jitter"] = True
+    return s
+
