@@ -1,0 +1,124 @@
+// SPDX-License-Identifier: BSD-3-Clause
+//
+// mcvol-bench: what the sections share (options, timing, the scene, the CSV
+// rows). Each section is one function in its own Section*.cxx, declared in
+// Sections.h; mcvol_bench.cxx runs them.
+
+#pragma once
+
+#include "mcvol/CameraMath.h"
+#include "mcvol/DemoData.h"
+#include "mcvol/Renderer.h"
+#ifdef MCVOL_WITH_CUDA
+#include "mcvol/CUDARenderer.h"
+#endif
+
+#include <array>
+#include <chrono>
+#include <string>
+#include <vector>
+
+namespace mcvolbench
+{
+struct Options
+{
+  std::string dataset = "cosmology";
+  std::array<int, 3> dims = { 256, 256, 256 };
+  int channels = 0;
+  int width = 512;
+  int height = 512;
+  int warmup = 3;
+  int frames = 10;
+  int macrocell = 8;
+  int tableSize = 1024;
+  mcvol::Backend backend = mcvol::Backend::CPU;
+  std::vector<std::string> sections = { "trackers", "channels", "macrocell", "rebuild", "memory" };
+  std::vector<int> channelCounts = { 1, 2, 4, 8, 12, 16 };
+  std::vector<int> macrocellSizes = { 2, 4, 8, 16, 32, 64 };
+  std::string csv;
+  std::string label; ///< e.g. "NYX-like", printed with the dataset
+  std::string sampling = "texture";
+  int blockX = 8;
+  int blockY = 8;
+  double psnr = 35.0;
+  int referenceSpp = 2048;
+  int maxConvergeFrames = 4096;
+  double density = 1.0; ///< divides every opacity unit distance (denser volumes)
+};
+
+void usage();
+/// Throws std::invalid_argument on a bad command line; --help prints usage() and exits.
+Options parse(int argc, char** argv);
+bool wants(const Options& o, const std::string& s);
+
+using Clock = std::chrono::steady_clock;
+
+double seconds(Clock::time_point t0);
+double median(std::vector<double> v);
+
+/// A loaded dataset with its scene.
+struct Setup
+{
+  mcvol::DemoVolume volume;
+  std::vector<std::array<float, 2>> ranges;
+  mcvol::Scene scene;
+
+  void load(const Options& o, int channels, int macrocell, bool hostAcceleration = true);
+
+  /// A new scene over the first `channels` channels of the loaded volume (the
+  /// channel sweep generates the largest count once).
+  void configure(const Options& o, int channels, int macrocell, bool hostAcceleration);
+};
+
+struct FrameStats
+{
+  double medianMs = 0;
+  double minMs = 0;
+  double meanMs = 0;
+  double readBackMs = 0; ///< median frame time with the image copied back (device backends)
+  double tentativePerRay = 0;
+  double ddaPerRay = 0;
+  double scatterPerRay = 0;
+  double shadowPerRay = 0;
+  double gradientPerRay = 0;
+  double alpha = 0;
+};
+
+mcvol::Camera benchCamera(const Options& o, const mcvol::Scene& scene);
+
+/// Times frames of 1 spp. Device backends: render() + finish() per frame with
+/// the image left on the device; then a few frames with it copied back.
+FrameStats timeFrames(const Options& o, mcvol::Renderer& r, const mcvol::Scene& scene, mcvol::Tracker tracker);
+
+/// PSNR (peak 1) of the premultiplied RGB (the image over black) against a reference.
+double psnrOf(const mcvol::Accumulator& a, const std::vector<float>& ref);
+
+#ifdef MCVOL_WITH_CUDA
+mcvol::CUDARenderer* asCuda(mcvol::Renderer& r);
+#endif
+
+std::string describe(const Options& o, const Setup& s);
+
+/// What every section works with. One Setup serves all sections in turn, as
+/// one renderer does.
+struct Bench
+{
+  const Options& o;
+  mcvol::Renderer& r;
+  bool hostAccel;
+  Setup s;
+  std::vector<std::string> csv = { "section,dataset,channels,macrocell,tracker,backend,value,unit,extra" };
+
+  Bench(const Options& options, mcvol::Renderer& renderer, bool hostAcceleration)
+    : o(options)
+    , r(renderer)
+    , hostAccel(hostAcceleration)
+  {
+  }
+
+  void row(const std::string& section, const std::string& ds, int ch, int mc, const std::string& tr, double value,
+    const std::string& unit, const std::string& extra);
+  /// Writes the CSV rows to --csv (nothing without it).
+  void writeCsv() const;
+};
+} // namespace mcvolbench

@@ -1,0 +1,39 @@
+// SPDX-License-Identifier: BSD-3-Clause
+//
+// mcvol-bench section "paper": the paper's frame-rate protocol (1024^2, 1 spp,
+// 25 warm-up + 500 timed frames), both trackers: FPS = 1000 / mean frame ms.
+
+#include "BenchCommon.h"
+#include "Sections.h"
+
+#include <cstdio>
+#include <string>
+#include <vector>
+
+namespace mcvolbench
+{
+void runPaper(Bench& bench)
+{
+  const Options& o = bench.o;
+  Setup& s = bench.s;
+  mcvol::Renderer& r = bench.r;
+  s.load(o, o.channels, o.macrocell, bench.hostAccel);
+  const std::string ds = describe(o, s);
+  std::printf("## Paper protocol: %s, %d channels, macrocell %d, %dx%d, 1 spp, %d warm-up + %d timed frames\n\n",
+    ds.c_str(), s.volume.numChannels(), o.macrocell, o.width, o.height, o.warmup, o.frames);
+  std::printf("| tracker | FPS (1000 / mean ms) | mean ms | median ms | min ms | ms with copy-back | tentative/ray | "
+              "DDA steps/ray | mean alpha |\n|---|---|---|---|---|---|---|---|---|\n");
+  for (auto t : { mcvol::Tracker::OneDDA, mcvol::Tracker::NDDA })
+  {
+    const FrameStats f = timeFrames(o, r, s.scene, t);
+    std::printf("| %s | %.1f | %.3f | %.3f | %.3f | %.3f | %.2f | %.2f | %.3f |\n", mcvol::toString(t),
+      1000.0 / f.meanMs, f.meanMs, f.medianMs, f.minMs, f.readBackMs, f.tentativePerRay, f.ddaPerRay, f.alpha);
+    bench.row("paper", ds, s.volume.numChannels(), o.macrocell, mcvol::toString(t), 1000.0 / f.meanMs, "fps", "");
+    bench.row("paper", ds, s.volume.numChannels(), o.macrocell, mcvol::toString(t), f.meanMs, "ms", "mean");
+    bench.row(
+      "paper", ds, s.volume.numChannels(), o.macrocell, mcvol::toString(t), f.readBackMs, "ms", "with copy-back");
+    std::fflush(stdout);
+  }
+  std::printf("\n");
+}
+} // namespace mcvolbench

@@ -1,0 +1,21 @@
+// SPDX-License-Identifier: BSD-3-Clause
+//
+// The mcvol-bench sections, one per Section*.cxx; mcvol_bench.cxx runs the
+// ones named by --sections.
+
+#pragma once
+
+#include "BenchCommon.h"
+
+namespace mcvolbench
+{
+void runTrackers(Bench& bench);
+void runChannels(Bench& bench);
+void runMacrocell(Bench& bench);
+void runRebuild(Bench& bench);
+void runMemory(Bench& bench);
+void runPaper(Bench& bench);
+void runSampling(Bench& bench);
+void runEffects(Bench& bench);
+void runConverge(Bench& bench);
+} // namespace mcvolbench
