@@ -77,12 +77,14 @@ MCVOL_HOT decltype(auto) visitScalarType(ScalarType t, F&& f)
       return f(TypeTag<int16_t>{});
     case ScalarType::UInt16:
       return f(TypeTag<uint16_t>{});
+    case ScalarType::Float32:
+      return f(TypeTag<float>{});
     case ScalarType::Float64:
       return f(TypeTag<double>{});
-    case ScalarType::Float32:
-    default:
-      return f(TypeTag<float>{});
   }
+  // Not an enumerator (Scene::setVolume rejects those); a case of its own
+  // above keeps the switch a jump table in per-ray code.
+  return f(TypeTag<float>{});
 }
 
 const char* toString(ScalarType t);
