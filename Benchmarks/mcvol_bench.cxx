@@ -19,6 +19,8 @@
 //   effects    lighting effects one by one: frame time, work per ray (shadow
 //              rays, scattering events, gradients), image change against the
 //              unlit image and 1-spp noise (issue 6)
+//   visibility the visibility optimization (paper 004): frame time against
+//              the unoptimized frame, refining renders, segment-list memory
 //
 // On the CUDA backend frames are timed as render() + finish() with the image
 // left on the device (RenderSettings::readBack = false); a separate column
@@ -57,6 +59,7 @@ const Section sections[] = {
   { "sampling", runSampling },
   { "effects", runEffects },
   { "converge", runConverge },
+  { "visibility", runVisibility },
 };
 } // namespace
 

@@ -109,6 +109,10 @@ vtkMTimeType vtkMultiChannelVolumeMapper::GetMTime()
     {
       mtime = std::max(mtime, this->Internals->Functions.Opacities[c]->GetMTime());
     }
+    if (this->Internals->Functions.Importance[c])
+    {
+      mtime = std::max(mtime, this->Internals->Functions.Importance[c]->GetMTime());
+    }
   }
   return mtime;
 }
@@ -270,6 +274,39 @@ double vtkMultiChannelVolumeMapper::GetMixWeight(int channel)
     return 0.0;
   }
   return this->Internals->MixWeights[channel];
+}
+
+//------------------------------------------------------------------------------
+void vtkMultiChannelVolumeMapper::SetChannelImportance(int channel, vtkPiecewiseFunction* importance)
+{
+  if (channel < 0 || channel >= kMaxChannels)
+  {
+    vtkErrorMacro("SetChannelImportance: channel " << channel << " is outside [0, " << kMaxChannels << ").");
+    return;
+  }
+  if (this->Internals->Functions.Importance[channel] != importance)
+  {
+    this->Internals->Functions.Importance[channel] = importance;
+    this->Modified();
+  }
+}
+
+//------------------------------------------------------------------------------
+vtkPiecewiseFunction* vtkMultiChannelVolumeMapper::GetChannelImportance(int channel)
+{
+  return channel >= 0 && channel < kMaxChannels ? this->Internals->Functions.Importance[channel].Get() : nullptr;
+}
+
+//------------------------------------------------------------------------------
+double vtkMultiChannelVolumeMapper::GetImportanceMemory()
+{
+  return static_cast<double>(this->Internals->Accum.importancePoolIfAny().bytes());
+}
+
+//------------------------------------------------------------------------------
+double vtkMultiChannelVolumeMapper::GetImportanceOverflows()
+{
+  return static_cast<double>(this->Internals->Accum.importancePoolIfAny().overflows);
 }
 
 //------------------------------------------------------------------------------
@@ -667,6 +704,23 @@ bool vtkMultiChannelVolumeMapper::UpdateScene(RenderPass& pass)
     lighting.Shininess = this->Shininess;
     in.Scene.setLighting(
       mcvol::adapter::CollectLighting(pass.Renderer, pass.Property, lighting, numChannels, pass.LightsMTime));
+    // Visibility optimization: importance over the colour tables' ranges.
+    in.Tables.UpdateImportance(in.Functions, numChannels);
+    mcvol::ImportanceDesc importance;
+    importance.enabled = this->VisibilityOptimization;
+    if (importance.enabled)
+    {
+      importance.tables = in.Tables.ImportanceTables();
+    }
+    importance.p = this->DeviationWeight;
+    importance.q = this->OcclusionWeight;
+    importance.r = this->ClutterWeight;
+    importance.lambda = this->ImportanceEmphasis;
+    importance.mergeDistance = this->ImportanceMergeDistance;
+    importance.samplesPerPass = this->ImportanceSamples;
+    importance.lightRays = this->OptimizeLightRays;
+    importance.lightRaySamples = this->LightRayImportanceSamples;
+    in.Scene.setImportance(importance);
     in.Scene.update();
   }
   catch (const std::exception& e)
@@ -798,6 +852,24 @@ void vtkMultiChannelVolumeMapper::PrintSelf(ostream& os, vtkIndent indent)
   for (const std::string& name : in.ChannelArrayNames)
   {
     os << " \"" << name << "\"";
+  }
+  os << "\n";
+  os << indent << "VisibilityOptimization: " << this->VisibilityOptimization << "\n";
+  os << indent << "DeviationWeight: " << this->DeviationWeight << "\n";
+  os << indent << "OcclusionWeight: " << this->OcclusionWeight << "\n";
+  os << indent << "ClutterWeight: " << this->ClutterWeight << "\n";
+  os << indent << "ImportanceEmphasis: " << this->ImportanceEmphasis << "\n";
+  os << indent << "ImportanceMergeDistance: " << this->ImportanceMergeDistance << "\n";
+  os << indent << "ImportanceSamples: " << this->ImportanceSamples << "\n";
+  os << indent << "OptimizeLightRays: " << this->OptimizeLightRays << "\n";
+  os << indent << "LightRayImportanceSamples: " << this->LightRayImportanceSamples << "\n";
+  os << indent << "ChannelImportance:";
+  for (int c = 0; c < kMaxChannels; ++c)
+  {
+    if (in.Functions.Importance[c])
+    {
+      os << " " << c << ": " << in.Functions.Importance[c].Get();
+    }
   }
   os << "\n";
   os << indent << "MixWeights:";

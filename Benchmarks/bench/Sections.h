@@ -18,4 +18,5 @@ void runPaper(Bench& bench);
 void runSampling(Bench& bench);
 void runEffects(Bench& bench);
 void runConverge(Bench& bench);
+void runVisibility(Bench& bench);
 } // namespace mcvolbench

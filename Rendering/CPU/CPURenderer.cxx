@@ -13,15 +13,27 @@ namespace mcvol
 {
 namespace
 {
+/// The visibility optimization's per-pixel lists for one render (null pool:
+/// the optimization is off and no pixel touches any of it).
+struct ImportanceFrame
+{
+  Accumulator::ImportancePool* pool = nullptr;
+  bool refine = false; ///< this render refines the lists (the first passes)
+  uint32_t seed = 0;
+};
+
 template <BlendMode Mode, bool Lit>
 void renderRows(const SceneView& s, const CameraView& cam, const FrameParams& fp, const float* depth, float* rgba,
-  uint32_t previous, int threads, RenderCounters* counters)
+  uint32_t previous, int threads, const ImportanceFrame& imp, RenderCounters* counters)
 {
   uint64_t dda = 0, tentative = 0, real = 0, samples = 0, scattering = 0, shadowRays = 0, gradients = 0;
+  uint64_t importance = 0, overflows = 0;
   const int W = cam.width;
   const int H = cam.height;
+  Accumulator::ImportancePool* pool = imp.pool;
+  const int pass = pool ? pool->passes : 0;
 #pragma omp parallel num_threads(threads > 0 ? threads : omp_get_max_threads()) \
-  reduction(+ : dda, tentative, real, samples, scattering, shadowRays, gradients)
+  reduction(+ : dda, tentative, real, samples, scattering, shadowRays, gradients, importance, overflows)
   {
 #pragma omp for schedule(dynamic, 1)
     for (int y = 0; y < H; ++y)
@@ -31,7 +43,28 @@ void renderRows(const SceneView& s, const CameraView& cam, const FrameParams& fp
       {
         const size_t p = size_t(y) * size_t(W) + size_t(x);
         const float z = depth ? depth[p] : 1.f;
-        const Vec4f sum = renderPixel<Mode, Lit>(s, cam, fp, x, y, z, c);
+        Vec4f sum;
+        if (pool)
+        {
+          ImportanceSegment* seg = pool->segments.data() + p * size_t(kImportanceCapacity);
+          int count = pool->counts[p];
+          if (imp.refine)
+          {
+            bool overflow = false;
+            count = refineImportance(s, cam, x, y, z, pass, imp.seed, seg, count, pool->totals[p], overflow, c);
+            pool->counts[p] = uint8_t(count);
+            overflows += overflow ? 1u : 0u;
+          }
+          RayImportance ri;
+          ri.segments = seg;
+          ri.count = count;
+          ri.total = pool->totals[p];
+          sum = renderPixel<Mode, Lit>(s, cam, fp, x, y, z, c, &ri);
+        }
+        else
+        {
+          sum = renderPixel<Mode, Lit>(s, cam, fp, x, y, z, c);
+        }
         accumulate(rgba + 4 * p, sum, previous, fp.samplesPerPixel);
       }
       dda += c.ddaSteps;
@@ -41,7 +74,13 @@ void renderRows(const SceneView& s, const CameraView& cam, const FrameParams& fp
       scattering += c.scattering;
       shadowRays += c.shadowRays;
       gradients += c.gradients;
+      importance += c.importance;
     }
+  }
+  if (pool)
+  {
+    pool->overflows += overflows;
+    pool->passes += imp.refine ? 1 : 0;
   }
   if (counters)
   {
@@ -53,21 +92,22 @@ void renderRows(const SceneView& s, const CameraView& cam, const FrameParams& fp
     counters->scatteringEvents += scattering;
     counters->shadowRays += shadowRays;
     counters->gradientEvaluations += gradients;
+    counters->importanceSamples += importance;
   }
 }
 /// The unlit kernel unless the scene asks for lighting (compile-time choice:
 /// the unlit kernel contains none of the lighting code).
 template <BlendMode Mode>
 void rows(bool lit, const SceneView& s, const CameraView& cam, const FrameParams& fp, const float* depth, float* rgba,
-  uint32_t previous, int threads, RenderCounters* counters)
+  uint32_t previous, int threads, const ImportanceFrame& imp, RenderCounters* counters)
 {
   if (lit)
   {
-    renderRows<Mode, true>(s, cam, fp, depth, rgba, previous, threads, counters);
+    renderRows<Mode, true>(s, cam, fp, depth, rgba, previous, threads, imp, counters);
   }
   else
   {
-    renderRows<Mode, false>(s, cam, fp, depth, rgba, previous, threads, counters);
+    renderRows<Mode, false>(s, cam, fp, depth, rgba, previous, threads, imp, counters);
   }
 }
 } // namespace
@@ -99,22 +139,30 @@ void CPURenderer::render(const Scene& scene, const Camera& camera, const RenderS
     }
     setLightingFrame(s, camera);
   }
+  ImportanceFrame imp;
+  if (s.importance.enabled)
+  {
+    setImportanceFrame(s, camera);
+    imp.pool = &accum.importancePool();
+    imp.refine = imp.pool->passes < s.importance.refinePasses;
+    imp.seed = settings.seed;
+  }
   float* rgba = accum.rgba();
   const uint32_t previous = accum.samples();
   switch (s.blend.mode)
   {
     case BlendMode::Max:
-      rows<BlendMode::Max>(lit, s, cam, fp, depth, rgba, previous, this->Threads, counters);
+      rows<BlendMode::Max>(lit, s, cam, fp, depth, rgba, previous, this->Threads, imp, counters);
       break;
     case BlendMode::Mix:
-      rows<BlendMode::Mix>(lit, s, cam, fp, depth, rgba, previous, this->Threads, counters);
+      rows<BlendMode::Mix>(lit, s, cam, fp, depth, rgba, previous, this->Threads, imp, counters);
       break;
     case BlendMode::Composite:
-      rows<BlendMode::Composite>(lit, s, cam, fp, depth, rgba, previous, this->Threads, counters);
+      rows<BlendMode::Composite>(lit, s, cam, fp, depth, rgba, previous, this->Threads, imp, counters);
       break;
     case BlendMode::Density:
     default:
-      rows<BlendMode::Density>(lit, s, cam, fp, depth, rgba, previous, this->Threads, counters);
+      rows<BlendMode::Density>(lit, s, cam, fp, depth, rgba, previous, this->Threads, imp, counters);
       break;
   }
   accum.addSamples(uint32_t(settings.samplesPerPixel));

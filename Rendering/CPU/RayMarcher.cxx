@@ -143,6 +143,15 @@ void RayMarcher::render(const Scene& scene, const Camera& camera, const MarchSet
     }
     setLightingFrame(s, camera);
   }
+  if (s.importance.enabled)
+  {
+    if (settings.compositing != Compositing::Extinction)
+    {
+      throw std::invalid_argument("mcvol: the visibility optimization scales extinctions; it needs the extinction "
+                                  "compositing model");
+    }
+    setImportanceFrame(s, camera);
+  }
   MarchParams mp;
   mp.step = float(step);
   mp.terminateTransmittance = settings.terminateTransmittance;

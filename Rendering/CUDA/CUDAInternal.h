@@ -159,6 +159,14 @@ struct CUDARenderer::Internal
   std::vector<float> LastDepth;
   bool HaveDepth = false;
   DeviceBuffer<unsigned long long> Counters;
+  // Visibility optimization: the importance tables and the per-pixel segment
+  // lists of the Accumulator PoolId (restarted when another one renders).
+  DeviceBuffer<float> ImportanceTables; ///< [channel][K]
+  std::vector<float> LastImportanceTables;
+  DeviceBuffer<ImportanceSegment> Segments; ///< [pixel][kImportanceCapacity]
+  DeviceBuffer<uint8_t> SegmentCounts;
+  DeviceBuffer<float> SegmentTotals;
+  uint64_t PoolId = 0;
   cudaEvent_t Start = nullptr;
   cudaEvent_t Stop = nullptr;
 

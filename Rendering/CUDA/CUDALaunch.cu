@@ -75,6 +75,98 @@ __global__ void renderKernel(const __grid_constant__ SceneView s, const __grid_c
   }
 }
 
+/**
+ * The visibility optimization's kernel (paper 004): as renderKernel, with the
+ * pixel's importance segment list refined first on the refining renders
+ * (refinePass >= 0) and passed to the tracking. A kernel of its own, so
+ * the unoptimized kernels stay exactly as they were.
+ */
+template <BlendMode Mode, bool Lit>
+__global__ void renderOptimizedKernel(const __grid_constant__ SceneView s, const __grid_constant__ CameraView cam,
+  const __grid_constant__ FrameParams fp, const float* __restrict__ depth, float4* __restrict__ accum,
+  uint32_t previous, unsigned long long* __restrict__ counters, ImportanceSegment* __restrict__ segments,
+  uint8_t* __restrict__ counts, float* __restrict__ totals, int refinePass)
+{
+  const int x = int(blockIdx.x * blockDim.x + threadIdx.x);
+  const int y = int(blockIdx.y * blockDim.y + threadIdx.y);
+  RayCounters c;
+  unsigned long long overflow = 0;
+  if (x < cam.width && y < cam.height)
+  {
+    const size_t p = size_t(y) * size_t(cam.width) + size_t(x);
+    const float z = depth ? depth[p] : 1.f;
+    ImportanceSegment* seg = segments + p * size_t(kImportanceCapacity);
+    int count = counts[p];
+    float total = totals[p];
+    if (refinePass >= 0)
+    {
+      bool full = false;
+      count = refineImportance(s, cam, x, y, z, refinePass, fp.seed, seg, count, total, full, c);
+      counts[p] = uint8_t(count);
+      totals[p] = total;
+      overflow = full ? 1ull : 0ull;
+    }
+    RayImportance ri;
+    ri.segments = seg;
+    ri.count = count;
+    ri.total = total;
+    const Vec4f sum = renderPixel<Mode, Lit>(s, cam, fp, x, y, z, c, &ri);
+    const float4 old = accum[p];
+    float v[4] = { old.x, old.y, old.z, old.w };
+    accumulate(v, sum, previous, fp.samplesPerPixel);
+    accum[p] = make_float4(v[0], v[1], v[2], v[3]);
+  }
+  // Always counted (one atomic per warp and counter): the overflow count is
+  // needed whatever the caller asked for.
+  const unsigned long long dda = warpSumU64(c.ddaSteps);
+  const unsigned long long tent = warpSumU64(c.tentative);
+  const unsigned long long real = warpSumU64(c.real);
+  const unsigned long long smp = warpSumU64(c.samples);
+  const unsigned long long sca = Lit ? warpSumU64(c.scattering) : 0ull;
+  const unsigned long long shd = Lit ? warpSumU64(c.shadowRays) : 0ull;
+  const unsigned long long grd = Lit ? warpSumU64(c.gradients) : 0ull;
+  const unsigned long long imp = warpSumU64(c.importance);
+  const unsigned long long ovf = warpSumU64(overflow);
+  const unsigned lane = (threadIdx.y * blockDim.x + threadIdx.x) & 31u;
+  if (lane == 0)
+  {
+    atomicAdd(counters + 0, dda);
+    atomicAdd(counters + 1, tent);
+    atomicAdd(counters + 2, real);
+    atomicAdd(counters + 3, smp);
+    atomicAdd(counters + 4, sca);
+    atomicAdd(counters + 5, shd);
+    atomicAdd(counters + 6, grd);
+    atomicAdd(counters + 7, imp);
+    atomicAdd(counters + 8, ovf);
+  }
+}
+
+/// Device copies of what the optimized kernel reads.
+struct OptimizedLaunch
+{
+  ImportanceSegment* segments = nullptr;
+  uint8_t* counts = nullptr;
+  float* totals = nullptr;
+  int refinePass = -1;
+};
+
+template <BlendMode Mode>
+void launchOptimized(bool lit, dim3 grid, dim3 block, const SceneView& s, const CameraView& cam, const FrameParams& fp,
+  const float* depth, float4* accum, uint32_t previous, unsigned long long* counters, const OptimizedLaunch& o)
+{
+  if (lit)
+  {
+    renderOptimizedKernel<Mode, true>
+      <<<grid, block>>>(s, cam, fp, depth, accum, previous, counters, o.segments, o.counts, o.totals, o.refinePass);
+  }
+  else
+  {
+    renderOptimizedKernel<Mode, false>
+      <<<grid, block>>>(s, cam, fp, depth, accum, previous, counters, o.segments, o.counts, o.totals, o.refinePass);
+  }
+}
+
 template <BlendMode Mode>
 void launchRender(bool count, bool lit, dim3 grid, dim3 block, const SceneView& s, const CameraView& cam,
   const FrameParams& fp, const float* depth, float4* accum, uint32_t previous, unsigned long long* counters)
@@ -112,6 +204,7 @@ void CUDARenderer::render(const Scene& scene, const Camera& camera, const Render
 
   // Per-render view: blend parameters, interpolation and sampling path.
   SceneView s = in.View;
+  s.importance = ImportanceView(); // host pointers: never on the device
   const SceneView& hv = scene.view();
   s.blend = hv.blend;
   s.volume.nearest = hv.volume.nearest;
@@ -186,10 +279,50 @@ void CUDARenderer::render(const Scene& scene, const Camera& camera, const Render
   }
 
   const FrameParams fp = frameParams(settings, accum.samples());
-  const bool count = counters != nullptr;
+  // Visibility optimization: tables uploaded when they change; the segment
+  // lists belong to one Accumulator's image and restart with it (or when
+  // another Accumulator rendered since: the lists of this one are gone).
+  const bool optimized = hv.importance.enabled;
+  OptimizedLaunch opt;
+  Accumulator::ImportancePool* pool = nullptr;
+  if (optimized)
+  {
+    s.importance = hv.importance;
+    setImportanceFrame(s, camera);
+    const std::vector<float>& tables = scene.importanceTables();
+    if (tables != in.LastImportanceTables)
+    {
+      in.ImportanceTables.resize(tables.size());
+      MCVOL_CUDA(
+        cudaMemcpy(in.ImportanceTables.ptr, tables.data(), tables.size() * sizeof(float), cudaMemcpyHostToDevice));
+      in.LastImportanceTables = tables;
+    }
+    s.importance.table = in.ImportanceTables.ptr;
+    pool = &accum.importancePool(false);
+    if (in.Segments.count != P * size_t(kImportanceCapacity))
+    {
+      in.Segments.resize(P * size_t(kImportanceCapacity));
+      in.SegmentCounts.resize(P);
+      in.SegmentTotals.resize(P);
+      in.PoolId = 0;
+    }
+    if (in.PoolId != accum.id() || pool->passes == 0)
+    {
+      MCVOL_CUDA(cudaMemsetAsync(in.SegmentCounts.ptr, 0, P));
+      MCVOL_CUDA(cudaMemsetAsync(in.SegmentTotals.ptr, 0, P * sizeof(float)));
+      pool->passes = 0;
+      in.PoolId = accum.id();
+    }
+    pool->deviceBytes = in.Segments.bytes() + in.SegmentCounts.bytes() + in.SegmentTotals.bytes();
+    opt.segments = in.Segments.ptr;
+    opt.counts = in.SegmentCounts.ptr;
+    opt.totals = in.SegmentTotals.ptr;
+    opt.refinePass = pool->passes < s.importance.refinePasses ? pool->passes : -1;
+  }
+  const bool count = counters != nullptr || optimized;
   if (count)
   {
-    MCVOL_CUDA(cudaMemsetAsync(in.Counters.ptr, 0, 7 * sizeof(unsigned long long)));
+    MCVOL_CUDA(cudaMemsetAsync(in.Counters.ptr, 0, 9 * sizeof(unsigned long long)));
   }
   const dim3 block = in.Block;
   const dim3 grid((unsigned(camera.width) + block.x - 1) / block.x, (unsigned(camera.height) + block.y - 1) / block.y);
@@ -197,35 +330,70 @@ void CUDARenderer::render(const Scene& scene, const Camera& camera, const Render
   {
     // Launched even with no active channel: the mean must still take the
     // added (transparent) samples.
-    switch (s.blend.mode)
+    if (optimized)
     {
-      case BlendMode::Max:
-        launchRender<BlendMode::Max>(
-          count, lit, grid, block, s, cam, fp, devDepth, in.Accum.ptr, previous, in.Counters.ptr);
-        break;
-      case BlendMode::Mix:
-        launchRender<BlendMode::Mix>(
-          count, lit, grid, block, s, cam, fp, devDepth, in.Accum.ptr, previous, in.Counters.ptr);
-        break;
-      case BlendMode::Composite:
-        launchRender<BlendMode::Composite>(
-          count, lit, grid, block, s, cam, fp, devDepth, in.Accum.ptr, previous, in.Counters.ptr);
-        break;
-      case BlendMode::Density:
-      default:
-        launchRender<BlendMode::Density>(
-          count, lit, grid, block, s, cam, fp, devDepth, in.Accum.ptr, previous, in.Counters.ptr);
-        break;
+      switch (s.blend.mode)
+      {
+        case BlendMode::Max:
+          launchOptimized<BlendMode::Max>(
+            lit, grid, block, s, cam, fp, devDepth, in.Accum.ptr, previous, in.Counters.ptr, opt);
+          break;
+        case BlendMode::Mix:
+          launchOptimized<BlendMode::Mix>(
+            lit, grid, block, s, cam, fp, devDepth, in.Accum.ptr, previous, in.Counters.ptr, opt);
+          break;
+        case BlendMode::Composite:
+          launchOptimized<BlendMode::Composite>(
+            lit, grid, block, s, cam, fp, devDepth, in.Accum.ptr, previous, in.Counters.ptr, opt);
+          break;
+        case BlendMode::Density:
+        default:
+          launchOptimized<BlendMode::Density>(
+            lit, grid, block, s, cam, fp, devDepth, in.Accum.ptr, previous, in.Counters.ptr, opt);
+          break;
+      }
     }
+    else
+      switch (s.blend.mode)
+      {
+        case BlendMode::Max:
+          launchRender<BlendMode::Max>(
+            count, lit, grid, block, s, cam, fp, devDepth, in.Accum.ptr, previous, in.Counters.ptr);
+          break;
+        case BlendMode::Mix:
+          launchRender<BlendMode::Mix>(
+            count, lit, grid, block, s, cam, fp, devDepth, in.Accum.ptr, previous, in.Counters.ptr);
+          break;
+        case BlendMode::Composite:
+          launchRender<BlendMode::Composite>(
+            count, lit, grid, block, s, cam, fp, devDepth, in.Accum.ptr, previous, in.Counters.ptr);
+          break;
+        case BlendMode::Density:
+        default:
+          launchRender<BlendMode::Density>(
+            count, lit, grid, block, s, cam, fp, devDepth, in.Accum.ptr, previous, in.Counters.ptr);
+          break;
+      }
     MCVOL_CUDA(cudaGetLastError());
   }
   accum.addSamples(uint32_t(settings.samplesPerPixel));
   in.AccumSamples = accum.samples();
   accum.setPendingOnDevice(true);
+  if (pool && opt.refinePass >= 0)
+  {
+    ++pool->passes;
+  }
+  unsigned long long c[9] = {};
   if (count)
   {
-    unsigned long long c[7];
     MCVOL_CUDA(cudaMemcpy(c, in.Counters.ptr, sizeof(c), cudaMemcpyDeviceToHost));
+    if (pool)
+    {
+      pool->overflows += c[8];
+    }
+  }
+  if (counters)
+  {
     counters->rays += uint64_t(camera.width) * uint64_t(camera.height) * uint64_t(settings.samplesPerPixel);
     counters->ddaSteps += c[0];
     counters->tentativeCollisions += c[1];
@@ -234,6 +402,7 @@ void CUDARenderer::render(const Scene& scene, const Camera& camera, const Render
     counters->scatteringEvents += c[4];
     counters->shadowRays += c[5];
     counters->gradientEvaluations += c[6];
+    counters->importanceSamples += c[7];
   }
   if (settings.readBack)
   {

@@ -99,7 +99,7 @@ CUDARenderer::CUDARenderer(int device)
   MCVOL_CUDA(cudaGetDeviceProperties(&this->In->Props, device));
   MCVOL_CUDA(cudaEventCreate(&this->In->Start));
   MCVOL_CUDA(cudaEventCreate(&this->In->Stop));
-  this->In->Counters.resize(7);
+  this->In->Counters.resize(9);
   this->In->ChannelMax.resize(kMaxChannels);
   this->In->NaNFlags.resize(kMaxChannels);
   std::fill(std::begin(this->In->ChannelTableVersion), std::end(this->In->ChannelTableVersion), ~0ull);

@@ -19,6 +19,7 @@ void Accumulator::resize(int width, int height)
     this->RGBA.assign(size_t(width) * size_t(height) * 4, 0.f);
     this->Samples = 0;
     this->Pending = false;
+    this->Importance = ImportancePool();
   }
 }
 
@@ -27,5 +28,24 @@ void Accumulator::reset()
   std::fill(this->RGBA.begin(), this->RGBA.end(), 0.f);
   this->Samples = 0;
   this->Pending = false;
+  // The segment lists belong to the image: a new image refines anew.
+  std::fill(this->Importance.counts.begin(), this->Importance.counts.end(), uint8_t(0));
+  this->Importance.passes = 0;
+  this->Importance.overflows = 0;
+}
+
+Accumulator::ImportancePool& Accumulator::importancePool(bool hostLists)
+{
+  const size_t pixels = size_t(this->Width) * size_t(this->Height);
+  ImportancePool& p = this->Importance;
+  if (hostLists && p.counts.size() != pixels)
+  {
+    p.segments.assign(pixels * size_t(kImportanceCapacity), ImportanceSegment());
+    p.counts.assign(pixels, uint8_t(0));
+    p.totals.assign(pixels, 0.f);
+    p.passes = 0;
+    p.overflows = 0;
+  }
+  return p;
 }
 } // namespace mcvol

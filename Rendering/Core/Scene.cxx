@@ -111,6 +111,7 @@ bool Scene::update()
         std::to_string(this->NumChannels) + " channels need " + std::to_string(this->NumChannels) + ")");
     }
   }
+  this->refreshImportance();
   bool changed = false;
   if (!this->HostAcceleration)
   {

@@ -78,6 +78,44 @@ bool ResolveChannelFunctions(const ChannelFunctionOverrides& overrides, vtkVolum
 }
 
 //------------------------------------------------------------------------------
+void TransferFunctionTables::UpdateImportance(const ChannelFunctionOverrides& overrides, int numChannels)
+{
+  bool changed = int(this->Importance.size()) != numChannels;
+  this->Importance.resize(size_t(numChannels));
+  for (int c = 0; c < numChannels; ++c)
+  {
+    ImportanceKey key;
+    key.Function = overrides.Importance[c];
+    key.MTime = key.Function ? key.Function->GetMTime() : 0;
+    key.Range[0] = this->Functions[c].Range[0];
+    key.Range[1] = this->Functions[c].Range[1];
+    ImportanceKey& last = this->ImportanceKeys[c];
+    if (key.Function == last.Function && key.MTime == last.MTime && key.Range[0] == last.Range[0] &&
+      key.Range[1] == last.Range[1])
+    {
+      continue;
+    }
+    last = key;
+    std::vector<float> table;
+    if (key.Function)
+    {
+      // The same texels as the colour table, so the core looks both up alike.
+      table.resize(kTableSize);
+      key.Function->GetTable(key.Range[0], key.Range[1], kTableSize, table.data());
+    }
+    if (table != this->Importance[size_t(c)])
+    {
+      this->Importance[size_t(c)] = std::move(table);
+      changed = true;
+    }
+  }
+  if (changed)
+  {
+    ++this->TablesVersion;
+  }
+}
+
+//------------------------------------------------------------------------------
 void TransferFunctionTables::Forget()
 {
   for (auto& tf : this->Functions)
@@ -89,6 +127,8 @@ void TransferFunctionTables::Forget()
     table = TransferFunctionDesc();
     table.rgb.clear();
   }
+  this->ImportanceKeys.fill(ImportanceKey());
+  this->Importance.clear();
   ++this->TablesVersion;
 }
 

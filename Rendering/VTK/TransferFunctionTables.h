@@ -8,6 +8,7 @@
 
 #include <array>
 #include <string>
+#include <vector>
 
 class vtkColorTransferFunction;
 class vtkObject;
@@ -32,6 +33,8 @@ struct ChannelFunctionOverrides
   std::array<vtkSmartPointer<vtkColorTransferFunction>, kMaxChannels> Colors;
   std::array<vtkSmartPointer<vtkPiecewiseFunction>, kMaxChannels> Opacities;
   std::array<double, kMaxChannels> UnitDistances{};
+  /// Visibility optimization: importance of the channel's value (none: null).
+  std::array<vtkSmartPointer<vtkPiecewiseFunction>, kMaxChannels> Importance;
 };
 
 /// Everything that decides which transfer-function table a channel gets; a
@@ -88,6 +91,12 @@ public:
     return updates;
   }
 
+  /// Importance tables of the channels that have an importance function,
+  /// sampled over the same ranges as their colour tables (call after
+  /// Update()); empty for the others. A change moves Version().
+  void UpdateImportance(const ChannelFunctionOverrides& overrides, int numChannels);
+  const std::vector<std::vector<float>>& ImportanceTables() const { return this->Importance; }
+
   /// The Scene holds no tables any more (new volume or an error).
   void Forget();
 
@@ -100,6 +109,14 @@ private:
   std::array<ChannelFunctions, kMaxChannels> Functions{};
   std::array<TransferFunctionDesc, kMaxChannels> Tables{};
   unsigned long long TablesVersion = 0;
+  struct ImportanceKey
+  {
+    vtkPiecewiseFunction* Function = nullptr;
+    vtkMTimeType MTime = 0;
+    double Range[2] = { 0.0, 0.0 };
+  };
+  std::array<ImportanceKey, kMaxChannels> ImportanceKeys{};
+  std::vector<std::vector<float>> Importance;
 };
 } // namespace adapter
 } // namespace mcvol

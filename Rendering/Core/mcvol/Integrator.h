@@ -25,8 +25,8 @@ struct FrameParams
  * the result depends on nothing but the pixel, the sample indices and the seed.
  */
 template <BlendMode Mode, bool Lit = false>
-MCVOL_FUNC Vec4f renderPixel(
-  const SceneView& s, const CameraView& cam, const FrameParams& fp, int x, int y, float depth, RayCounters& c)
+MCVOL_FUNC Vec4f renderPixel(const SceneView& s, const CameraView& cam, const FrameParams& fp, int x, int y,
+  float depth, RayCounters& c, const RayImportance* imp = nullptr)
 {
   ShadowCounters sc;
   Vec4f sum;
@@ -41,14 +41,64 @@ MCVOL_FUNC Vec4f renderPixel(
     {
       continue;
     }
-    const Vec4f v = Lit ? traceLitSample<Mode>(s, fp.tracker, ray.o, ray.d, ray.world, ray.tmax, rng, c, sc)
-                        : traceSample<Mode>(s, fp.tracker, ray.o, ray.d, 0.f, ray.tmax, rng, c);
+    const Vec4f v = Lit ? traceLitSample<Mode>(s, fp.tracker, ray.o, ray.d, ray.world, ray.tmax, rng, c, sc, imp)
+                        : traceSample<Mode>(s, fp.tracker, ray.o, ray.d, 0.f, ray.tmax, rng, c, imp);
     sum.r += v.r;
     sum.g += v.g;
     sum.b += v.b;
     sum.a += v.a;
   }
   return sum;
+}
+
+/**
+ * One refinement pass of pixel (x, y)'s importance segments (paper 004,
+ * Sec. 5.1-5.2): stratified importance samples along the pixel's centre ray
+ * (pass 0 uniform, later passes adaptive) merged into its list by Algorithm
+ * 1. Samples draw from their own random stream (sample index `pass` of a
+ * seed distinct from the tracking's), so a fixed seed gives the same list
+ * whatever the thread count. Returns the new count; when the merged list
+ * would not fit, the list is left as it was and `overflow` is set.
+ */
+MCVOL_FUNC int refineImportance(const SceneView& s, const CameraView& cam, int x, int y, float depth, int pass,
+  uint32_t seed, ImportanceSegment* seg, int count, float& total, bool& overflow, RayCounters& c)
+{
+  const ImportanceView& iv = s.importance;
+  overflow = false;
+  IndexRay ray;
+  if (!generateRay(cam, s.volume, float(x) + 0.5f, float(y) + 0.5f, depth, ray))
+  {
+    return count;
+  }
+  const float T = ray.tmax * iv.invLengthUnit;
+  const uint32_t pixel = uint32_t(y) * uint32_t(cam.width) + uint32_t(x);
+  Rng rng(pixel, uint32_t(pass), seed ^ 0x5bd1e995u);
+  const int N = iv.samplesPerPass < kMaxImportanceSamples ? iv.samplesPerPass : kMaxImportanceSamples;
+  float pos[kMaxImportanceSamples];
+  const int n = importanceSamplePositions(seg, count, T, N, pass, rng, pos);
+  ImportanceSegment samples[kMaxImportanceSamples];
+  const float toWorld = 1.f / iv.invLengthUnit;
+  for (int k = 0; k < n; ++k)
+  {
+    samples[k].t = pos[k];
+    samples[k].length = 0.f;
+    samples[k].k = importanceAt(s, ray.o + ray.d * (pos[k] * toWorld));
+    samples[k].K = 0.f;
+  }
+  c.importance += uint32_t(n);
+  // Two strata by default: consecutive samples of one importance then always
+  // join into one segment.
+  const float strata = float(N >= 3 ? N - 2 : N);
+  const float d = iv.mergeDistance > 0.f ? iv.mergeDistance : 2.f * T / strata;
+  float newTotal = total;
+  const int merged = importanceMerge(seg, count, kImportanceCapacity, samples, n, d, T, newTotal);
+  if (merged < 0)
+  {
+    overflow = true;
+    return count;
+  }
+  total = newTotal;
+  return merged;
 }
 
 /// Folds a render's per-pixel sum into the running mean of `previous` samples.

@@ -3,6 +3,7 @@
 
 #include "mcvol/Blend.h"
 #include "mcvol/DDA.h"
+#include "mcvol/Importance.h"
 #include "mcvol/Random.h"
 #include "mcvol/Tracking.h"
 
@@ -67,7 +68,8 @@ enum class ShadowEstimator : int
 struct ShadowCounters
 {
   uint32_t rays = 0;
-  uint32_t tentative = 0; ///< tentative collisions along shadow rays
+  uint32_t tentative = 0;  ///< tentative collisions along shadow rays
+  uint32_t importance = 0; ///< importance evaluations of optimized shadow rays
 };
 
 /**
@@ -82,7 +84,7 @@ struct ShadowCounters
  */
 template <BlendMode Mode>
 MCVOL_HOT float shadowTransmittance(const SceneView& s, const int* channels, int count, Vec3f o, Vec3f d, float tmax,
-  ShadowEstimator estimator, Rng& rng, ShadowCounters& c)
+  ShadowEstimator estimator, Rng& rng, ShadowCounters& c, const RayImportance* imp = nullptr)
 {
   ++c.rays;
   if (count == 0 || !(tmax > 0.f))
@@ -124,7 +126,13 @@ MCVOL_HOT float shadowTransmittance(const SceneView& s, const int* channels, int
         t = advance(t, tau / m);
         tau = sampleOpticalDepth(rng);
         ++c.tentative;
-        const float sigma = blendedOptics<Mode>(s, channels, count, o + d * t).sigma;
+        float sigma = blendedOptics<Mode>(s, channels, count, o + d * t).sigma;
+        if (imp && sigma > 0.f)
+        {
+          // Ratio or delta tracking through mu' (paper 004, Sec. 5.3).
+          ++c.importance;
+          sigma *= importanceFactor(s.importance, *imp, t, importanceAt(s, o + d * t));
+        }
         if (estimator == ShadowEstimator::Delta)
         {
           if (rng.next() * m < sigma)
@@ -147,6 +155,29 @@ MCVOL_HOT float shadowTransmittance(const SceneView& s, const int* channels, int
     dda.next();
   }
   return T;
+}
+
+/**
+ * The transmittance of a ray to a light: optimized through a fresh segment
+ * list when the visibility optimization covers light rays (paper 004, Sec.
+ * 5.3; every connection to a light, at every scattering vertex: Sec. 5.4,
+ * option 2), else the plain estimate. A list that would overflow leaves that
+ * ray unoptimized.
+ */
+template <BlendMode Mode>
+MCVOL_HOT float optimizedShadow(
+  const SceneView& s, Vec3f x, Vec3f d, float tmax, ShadowEstimator est, Rng& rng, ShadowCounters& sc)
+{
+  if (s.importance.enabled && s.importance.lightRays && tmax > 0.f)
+  {
+    ImportanceSegment seg[kImportanceCapacity];
+    RayImportance ri;
+    if (buildLightRayImportance(s, x, d, tmax, rng, seg, ri, sc.importance))
+    {
+      return shadowTransmittance<Mode>(s, s.active, s.numActive, x, d, tmax, est, rng, sc, &ri);
+    }
+  }
+  return shadowTransmittance<Mode>(s, s.active, s.numActive, x, d, tmax, est, rng, sc);
 }
 
 /// 3x3 row-major matrix times vector.
@@ -233,7 +264,7 @@ MCVOL_HOT float scatterFunction(
  */
 template <BlendMode Mode>
 MCVOL_HOT Vec4f traceLitSample(const SceneView& s, Tracker tracker, Vec3f o, Vec3f d, Vec3f w, float tmax, Rng& rng,
-  RayCounters& c, ShadowCounters& sc)
+  RayCounters& c, ShadowCounters& sc, const RayImportance* imp = nullptr)
 {
   const LightingView& L = s.lighting;
   const ShadowEstimator est = L.shadowEstimator == 1 ? ShadowEstimator::Delta : ShadowEstimator::Ratio;
@@ -242,8 +273,11 @@ MCVOL_HOT Vec4f traceLitSample(const SceneView& s, Tracker tracker, Vec3f o, Vec
   Vec3f throughput(1.f, 1.f, 1.f);
   for (int depth = 0;; ++depth)
   {
-    const Hit hit = tracker == Tracker::OneDDA ? track1DDA<Mode>(s, o, d, 0.f, tmax, rng, c)
-                                               : trackNDDA<Mode>(s, o, d, 0.f, tmax, rng, c);
+    // The visibility optimization acts on the camera ray only (its segment
+    // list belongs to the pixel).
+    const RayImportance* camImp = depth == 0 ? imp : nullptr;
+    const Hit hit = tracker == Tracker::OneDDA ? track1DDA<Mode>(s, o, d, 0.f, tmax, rng, c, camImp)
+                                               : trackNDDA<Mode>(s, o, d, 0.f, tmax, rng, c, camImp);
     if (!hit.found())
     {
       break; // escaped: the environment was counted at the vertices
@@ -300,8 +334,7 @@ MCVOL_HOT Vec4f traceLitSample(const SceneView& s, Tracker tracker, Vec3f o, Vec
       if (L.shadows)
       {
         ++c.shadowRays;
-        T = shadowTransmittance<Mode>(
-          s, s.active, s.numActive, x, dl, minf(boxExit(s.volume, x, dl), dist), est, rng, sc);
+        T = optimizedShadow<Mode>(s, x, dl, minf(boxExit(s.volume, x, dl), dist), est, rng, sc);
       }
       radiance += throughput * L.lightRadiance[l] * (f * T * falloff);
     }
@@ -313,7 +346,7 @@ MCVOL_HOT Vec4f traceLitSample(const SceneView& s, Tracker tracker, Vec3f o, Vec
       {
         ++c.shadowRays;
         const Vec3f da = mul3(L.toIndex, wa);
-        T = shadowTransmittance<Mode>(s, s.active, s.numActive, x, da, boxExit(s.volume, x, da), est, rng, sc);
+        T = optimizedShadow<Mode>(s, x, da, boxExit(s.volume, x, da), est, rng, sc);
       }
       radiance += throughput * L.ambient * T;
     }
@@ -335,6 +368,8 @@ MCVOL_HOT Vec4f traceLitSample(const SceneView& s, Tracker tracker, Vec3f o, Vec
     o = x;
     tmax = boxExit(s.volume, o, d);
   }
+  c.importance += sc.importance;
+  sc.importance = 0;
   out.r = radiance.x;
   out.g = radiance.y;
   out.b = radiance.z;

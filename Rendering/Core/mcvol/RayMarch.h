@@ -3,6 +3,7 @@
 
 #include "mcvol/Blend.h"
 #include "mcvol/DDA.h"
+#include "mcvol/Importance.h"
 #include "mcvol/Lighting.h"
 #include "mcvol/Random.h"
 #include "mcvol/RayGen.h"
@@ -182,6 +183,101 @@ MCVOL_HOT StepOptics stepOptics(const SceneView& s, const MarchParams& mp, const
   return out;
 }
 
+/**
+ * The visibility optimization as a march (paper 004 Sec. 6.2, after Ament et
+ * al.): the integrals of Eq. 7 become sums over the lattice, K(t_k) =
+ * sum_{j<k} g_j^2 dx + g_k^2 phase dx (the sample's share of its own
+ * interval), and K(z) the sum over the whole ray. `dx` is the step in
+ * normalised ray units.
+ */
+struct MarchImportance
+{
+  float total = 0.f; ///< K(z)
+  float K = 0.f;     ///< integral over the lattice intervals before the current one
+  float dx = 0.f;
+  float phase = 0.5f;
+};
+
+/// K(z) of a ray: one importance sample per lattice point over [0, tmax].
+MCVOL_HOT MarchImportance marchImportanceStart(
+  const SceneView& s, const MarchParams& mp, Vec3f o, Vec3f d, float tmax, float phase, MarchCounters& mc)
+{
+  MarchImportance mi;
+  mi.dx = mp.step * s.importance.invLengthUnit;
+  mi.phase = phase;
+  for (int64_t k = 0;; ++k)
+  {
+    const float t = float((double(k) + double(phase)) * double(mp.step));
+    if (!(t < tmax))
+    {
+      break;
+    }
+    const float g = importanceAt(s, o + d * t);
+    mi.total += g * g * mi.dx;
+    ++mc.samples;
+  }
+  return mi;
+}
+
+/// The factor mu'/mu at the next lattice point p (points must come in order,
+/// none skipped), Eq. 7-8 with the sums above.
+MCVOL_HOT float marchImportanceFactor(const SceneView& s, MarchImportance& mi, Vec3f p)
+{
+  const ImportanceView& iv = s.importance;
+  const float g = importanceAt(s, p);
+  const float K = mi.K + g * g * mi.phase * mi.dx;
+  mi.K += g * g * mi.dx;
+  const float h = (iv.r - iv.q) * K + iv.q * mi.total;
+  const float oneMinusG = 1.f - g;
+  const float w = iv.twoLambda == 0.f ? 1.f : (oneMinusG > 0.f ? powf(oneMinusG, iv.twoLambda) : 0.f);
+  const float denom = iv.p + w * (h > 0.f ? h : 0.f);
+  return denom > 0.f ? iv.p / denom : 1.f;
+}
+
+/// The optimized march (extinction model, unlit): every lattice point, no
+/// empty-space skipping (importance may sit where the opacity is zero).
+template <BlendMode Mode>
+MCVOL_HOT Vec4f marchOptimized(const SceneView& s, const MarchParams& mp, const int* channels, int count, Vec3f o,
+  Vec3f d, float tmax, float phase, MarchCounters& mc)
+{
+  Vec4f out;
+  if (!(tmax > 0.f))
+  {
+    return out;
+  }
+  MarchImportance mi = marchImportanceStart(s, mp, o, d, tmax, phase, mc);
+  float T = 1.f;
+  Vec3f C;
+  for (int64_t k = 0;; ++k)
+  {
+    const float t = float((double(k) + double(phase)) * double(mp.step));
+    if (!(t < tmax))
+    {
+      break;
+    }
+    const Vec3f p = o + d * t;
+    const float f = marchImportanceFactor(s, mi, p);
+    const PointOptics po = blendedOptics<Mode>(s, channels, count, p);
+    ++mc.samples;
+    if (po.sigma > 0.f)
+    {
+      const float alpha = -expm1f(-po.sigma * f * mp.step);
+      C += po.emission * (alpha * T);
+      T *= 1.f - alpha;
+      if (T < mp.terminateTransmittance)
+      {
+        ++mc.terminated;
+        break;
+      }
+    }
+  }
+  out.r = C.x;
+  out.g = C.y;
+  out.b = C.z;
+  out.a = 1.f - T;
+  return out;
+}
+
 /// Front-to-back march over [0, tmax] with the listed channels; premultiplied
 /// RGB and alpha.
 template <BlendMode Mode>
@@ -192,6 +288,10 @@ MCVOL_HOT Vec4f marchChannels(const SceneView& s, const MarchParams& mp, const i
   if (count == 0 || !(tmax > 0.f))
   {
     return out;
+  }
+  if (s.importance.enabled)
+  {
+    return marchOptimized<Mode>(s, mp, channels, count, o, d, tmax, phase, mc);
   }
   float T = 1.f;
   Vec3f C;
@@ -273,6 +373,30 @@ MCVOL_HOT float marchTransmittance(
   return expf(-tau);
 }
 
+/// marchTransmittance through the optimized extinction of a light ray (paper
+/// 004 Sec. 5.3 with sums for the integrals, as marchOptimized).
+template <BlendMode Mode>
+MCVOL_HOT float marchTransmittanceOptimized(
+  const SceneView& s, const int* channels, int count, Vec3f x, Vec3f dl, float tmax, float step)
+{
+  MarchImportance mi;
+  mi.dx = step * s.importance.invLengthUnit;
+  mi.phase = 0.5f;
+  for (float t = 0.5f * step; t < tmax; t += step)
+  {
+    const float g = importanceAt(s, x + dl * t);
+    mi.total += g * g * mi.dx;
+  }
+  float tau = 0.f;
+  for (float t = 0.5f * step; t < tmax; t += step)
+  {
+    const Vec3f p = x + dl * t;
+    const float f = marchImportanceFactor(s, mi, p);
+    tau += blendedOptics<Mode>(s, channels, count, p).sigma * f * step;
+  }
+  return expf(-tau);
+}
+
 /**
  * Lit reference (issue 6): single scattering with shadows, extinction model.
  * At each sample the source is sum_n sigma_n [(1 - a_n) c_n + a_n c_n S_n]
@@ -291,6 +415,14 @@ MCVOL_HOT Vec4f marchLit(
   Vec3f C;
   float T = 1.f;
   RayCounters rc;
+  // The optimization scales the camera ray's extinction (as the Monte Carlo
+  // camera ray); shadow rays stay unoptimized.
+  const bool optimized = s.importance.enabled;
+  MarchImportance mi;
+  if (optimized)
+  {
+    mi = marchImportanceStart(s, mp, o, d, tmax, phase, mc);
+  }
   for (int64_t k = 0;; ++k)
   {
     const float t = float((double(k) + double(phase)) * double(mp.step));
@@ -300,6 +432,7 @@ MCVOL_HOT Vec4f marchLit(
     }
     const Vec3f x = o + d * t;
     ++mc.samples;
+    const float f = optimized ? marchImportanceFactor(s, mi, x) : 1.f;
     // Light arriving at x from each light (direction, radiance * transmittance).
     Vec3f wl[kMaxLights];
     Vec3f arriving[kMaxLights];
@@ -321,9 +454,14 @@ MCVOL_HOT Vec4f marchLit(
         dl = toLight * (1.f / dist);
         falloff = 1.f / (dist * dist);
       }
-      const float Tl = L.shadows
-        ? marchTransmittance<Mode>(s, s.active, s.numActive, x, dl, minf(boxExit(s.volume, x, dl), dist), mp.step)
-        : 1.f;
+      const float tl = minf(boxExit(s.volume, x, dl), dist);
+      float Tl = 1.f;
+      if (L.shadows)
+      {
+        Tl = optimized && s.importance.lightRays
+          ? marchTransmittanceOptimized<Mode>(s, s.active, s.numActive, x, dl, tl, mp.step)
+          : marchTransmittance<Mode>(s, s.active, s.numActive, x, dl, tl, mp.step);
+      }
       arriving[l] = L.lightRadiance[l] * (Tl * falloff);
     }
     Vec3f grad;
@@ -381,7 +519,7 @@ MCVOL_HOT Vec4f marchLit(
     }
     if (sigma > 0.f)
     {
-      const float alpha = -expm1f(-sigma * mp.step);
+      const float alpha = -expm1f(-sigma * f * mp.step);
       C += source * (T * alpha / sigma);
       T *= 1.f - alpha;
       if (T < mp.terminateTransmittance)

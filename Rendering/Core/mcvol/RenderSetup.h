@@ -4,6 +4,7 @@
 #include "mcvol/Integrator.h"
 #include "mcvol/Renderer.h"
 
+#include <cmath>
 #include <stdexcept>
 
 namespace mcvol
@@ -45,6 +46,41 @@ inline void setLightingFrame(SceneView& s, const Camera& camera)
     L.toWorld[i] = float(inv[i]);
   }
   L.indexOffset = Vec3f(float(w[3]), float(w[7]), float(w[11]));
+}
+
+/// The per-render frame of the visibility optimization: the world length of
+/// one normalised ray unit is half the largest world extent of the volume's
+/// box (the paper scales volumes into [-1, 1]^3, so its weights carry over).
+inline void setImportanceFrame(SceneView& s, const Camera& camera)
+{
+  const double* w = camera.worldToIndex;
+  const double m[9] = { w[0], w[1], w[2], w[4], w[5], w[6], w[8], w[9], w[10] };
+  const double det =
+    m[0] * (m[4] * m[8] - m[5] * m[7]) - m[1] * (m[3] * m[8] - m[5] * m[6]) + m[2] * (m[3] * m[7] - m[4] * m[6]);
+  const double inv[9] = { (m[4] * m[8] - m[5] * m[7]) / det, (m[2] * m[7] - m[1] * m[8]) / det,
+    (m[1] * m[5] - m[2] * m[4]) / det, (m[5] * m[6] - m[3] * m[8]) / det, (m[0] * m[8] - m[2] * m[6]) / det,
+    (m[2] * m[3] - m[0] * m[5]) / det, (m[3] * m[7] - m[4] * m[6]) / det, (m[1] * m[6] - m[0] * m[7]) / det,
+    (m[0] * m[4] - m[1] * m[3]) / det };
+  double lo[3] = { 1e300, 1e300, 1e300 }, hi[3] = { -1e300, -1e300, -1e300 };
+  for (int corner = 0; corner < 8; ++corner)
+  {
+    const double idx[3] = { (corner & 1) ? s.volume.boxHi.x : s.volume.boxLo.x,
+      (corner & 2) ? s.volume.boxHi.y : s.volume.boxLo.y, (corner & 4) ? s.volume.boxHi.z : s.volume.boxLo.z };
+    for (int a = 0; a < 3; ++a)
+    {
+      // Translation drops out of an extent; the linear part is enough.
+      const double v = inv[3 * a] * idx[0] + inv[3 * a + 1] * idx[1] + inv[3 * a + 2] * idx[2];
+      lo[a] = v < lo[a] ? v : lo[a];
+      hi[a] = v > hi[a] ? v : hi[a];
+    }
+  }
+  double extent = 0.0;
+  for (int a = 0; a < 3; ++a)
+  {
+    extent = hi[a] - lo[a] > extent ? hi[a] - lo[a] : extent;
+  }
+  const double unit = 0.5 * extent;
+  s.importance.invLengthUnit = unit > 0.0 && std::isfinite(unit) ? float(1.0 / unit) : 1.f;
 }
 
 /// What a render asks of every pixel, continuing after `firstSample` samples.

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 
+#include "mcvol/Importance.h"
 #include "mcvol/Scene.h"
 #include "mcvol/Types.h"
 
@@ -53,6 +54,8 @@ struct RenderCounters
   uint64_t scatteringEvents = 0;
   uint64_t shadowRays = 0;
   uint64_t gradientEvaluations = 0;
+  // Visibility optimization: zero when it is off.
+  uint64_t importanceSamples = 0; ///< importance evaluations (refinement and collisions)
 };
 
 /**
@@ -80,6 +83,31 @@ public:
   bool pendingOnDevice() const { return this->Pending; }
   void setPendingOnDevice(bool pending) { this->Pending = pending; }
 
+  /**
+   * The visibility optimization's per-pixel segment lists (paper 004, Sec.
+   * 5.1), kept across renders with the image and cleared with it by reset()
+   * and resize(): a pool of kImportanceCapacity segments per pixel, a count
+   * and the ray's integral K(z) per pixel. Allocated on first use only.
+   */
+  struct ImportancePool
+  {
+    std::vector<ImportanceSegment> segments; ///< [pixel][kImportanceCapacity]
+    std::vector<uint8_t> counts;             ///< segments in use per pixel
+    std::vector<float> totals;               ///< K over the whole ray per pixel
+    int passes = 0;                          ///< refinement passes done
+    uint64_t overflows = 0;                  ///< pixel passes dropped for lack of room
+    size_t deviceBytes = 0;                  ///< the device backend's copy (its lists live there)
+    size_t bytes() const
+    {
+      return segments.size() * sizeof(ImportanceSegment) + counts.size() + totals.size() * sizeof(float) + deviceBytes;
+    }
+  };
+  /// The pool, sized to the image (the host lists are allocated on the first
+  /// call; a device backend keeps its lists on the device and asks for the
+  /// bookkeeping only, `hostLists` false).
+  ImportancePool& importancePool(bool hostLists = true);
+  const ImportancePool& importancePoolIfAny() const { return this->Importance; }
+
 private:
   int Width = 0;
   int Height = 0;
@@ -87,6 +115,7 @@ private:
   bool Pending = false;
   ObjectId Id;
   std::vector<float> RGBA;
+  ImportancePool Importance;
 };
 
 /**

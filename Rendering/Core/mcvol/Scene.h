@@ -75,6 +75,32 @@ struct LightingDesc
   float shininess = 32.f;
 };
 
+/**
+ * Visibility optimization (paper 004). Each channel's importance function is
+ * a table over the same value range as its transfer-function table (same
+ * size); an empty table means the channel carries no importance. Values are
+ * clamped to [0, 1] and snapped to the levels 0, 1/4, 1/2, 3/4, 1: the paper's
+ * importance is a step function with a few distinct values (Sec. 4.2), and
+ * few levels keep the per-ray segment lists short.
+ */
+struct ImportanceDesc
+{
+  bool enabled = false;
+  std::vector<std::vector<float>> tables; ///< per channel; missing or empty: none
+  double p = 1.0;                         ///< deviation weight (> 0)
+  double q = 70.0;                        ///< occlusion weight (>= 0)
+  double r = 30.0;                        ///< clutter weight (>= 0)
+  double lambda = 1.0;                    ///< emphasis (>= 0)
+  double mergeDistance = 0.0;             ///< d in normalised ray units (the volume spans 2); 0: two strata
+  int samplesPerPass = 32;                ///< 1 .. kMaxImportanceSamples
+  int refinePasses = 4;                   ///< passes that refine a pixel's segments (>= 1)
+  bool lightRays = true;                  ///< optimize the rays to the lights too (Sec. 5.3)
+  int lightRaySamples = 200;              ///< samples of each light ray's list (2 .. 4096)
+};
+
+/// Snaps an importance value to the levels of ImportanceDesc.
+float snapImportance(float v);
+
 /// Memory of the acceleration structures, for the benchmark (paper Table 1).
 struct MemoryStats
 {
@@ -126,6 +152,11 @@ public:
   /// Lights and scattering (throws std::invalid_argument on bad values).
   void setLighting(const LightingDesc& lighting);
   bool lit() const { return this->View.lighting.enabled; }
+  /// Importance functions and weights (throws std::invalid_argument on bad
+  /// values or a table whose size differs from the channel's colour table).
+  void setImportance(const ImportanceDesc& importance);
+  /// Whether rendering runs the visibility optimization.
+  bool optimized() const { return this->View.importance.enabled; }
 
   /**
    * Whether update() builds the macrocell ranges and majorants on the host
@@ -171,12 +202,15 @@ public:
   const std::vector<float>& macrocellRanges() const { return this->Ranges; }
   const std::vector<float>& majorants() const { return this->Majorants; }
   const std::vector<float>& tables() const { return this->Tables; }
+  /// Snapped importance tables [channel][K] (the view's importance.table).
+  const std::vector<float>& importanceTables() const { return this->ImportanceTables; }
 
 private:
   void layoutGrid();
   void rebuildMacrocells();
   void rebuildMajorants(int channel);
   void refreshView(bool majorantsChanged);
+  void refreshImportance();
 
   int Dims[3] = { 0, 0, 0 };
   int NumChannels = 0;
@@ -191,9 +225,11 @@ private:
   int MacrocellSize = 8;
   std::array<float, kMaxChannels> MixWeights{};
 
-  std::vector<float> Tables;    ///< [channel][K][4]: r, g, b, extinction
-  std::vector<float> Ranges;    ///< [cell][channel][2]: min, max
-  std::vector<float> Majorants; ///< [cell][channel]
+  std::vector<float> Tables; ///< [channel][K][4]: r, g, b, extinction
+  ImportanceDesc Importance;
+  std::vector<float> ImportanceTables; ///< [channel][K], snapped
+  std::vector<float> Ranges;           ///< [cell][channel][2]: min, max
+  std::vector<float> Majorants;        ///< [cell][channel]
   SceneView View;
   double LastMajorantSeconds = 0.0;
   int LastMajorantChannels = 0;

@@ -97,6 +97,31 @@ struct LightingView
   Vec3f indexOffset;
 };
 
+/**
+ * Visibility optimization (paper 004; mcvol/Importance.h). enabled is false
+ * when the optimization is off or no channel carries importance anywhere,
+ * and then nothing below is read: tracking is exactly the unoptimized code.
+ */
+struct ImportanceView
+{
+  bool enabled = false;
+  int numChannels = 0;          ///< channels with an importance function
+  int channels[kMaxChannels];   ///< which (opacity may be zero there)
+  const float* table = nullptr; ///< [channel][TableView::size] snapped importance, over the TF table's range
+  float p = 1.f;                ///< deviation weight
+  float q = 70.f;               ///< occlusion weight
+  float r = 30.f;               ///< clutter weight
+  float twoLambda = 2.f;        ///< 2 lambda, the emphasis exponent of (1 - g)
+  float mergeDistance = 0.f;    ///< d in normalised ray units; 0: two strata
+  int samplesPerPass = 32;      ///< stratified samples per refinement pass
+  int refinePasses = 4;         ///< one uniform, then adaptive passes
+  bool lightRays = true;        ///< optimize every connection to a light too (Sec. 5.3-5.4)
+  int lightRaySamples = 200;    ///< stratified samples of a light ray's fresh list
+  /// Set per render by the backend from the camera: world length of one
+  /// normalised ray unit (half the volume's largest world extent), inverse.
+  float invLengthUnit = 1.f;
+};
+
 struct SceneView
 {
   VolumeView volume;
@@ -113,5 +138,6 @@ struct SceneView
   /// transfer function is opaque over a tiny unit distance.
   float sigmaLimit = 3.4e38f;
   LightingView lighting;
+  ImportanceView importance;
 };
 } // namespace mcvol

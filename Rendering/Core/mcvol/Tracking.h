@@ -3,6 +3,7 @@
 
 #include "mcvol/Blend.h"
 #include "mcvol/DDA.h"
+#include "mcvol/Importance.h"
 #include "mcvol/Random.h"
 #include "mcvol/Sampling.h"
 
@@ -23,6 +24,8 @@ struct RayCounters
   uint32_t scattering = 0; ///< real collisions that scattered
   uint32_t shadowRays = 0;
   uint32_t gradients = 0; ///< extinction gradients evaluated
+  // Visibility optimization (zero whenever it is off).
+  uint32_t importance = 0; ///< importance evaluations
 };
 
 /// Result of tracking one ray: the accepted collision, if any.
@@ -40,8 +43,24 @@ struct Hit
  * `xiMaj` is xi * majorant: a collision is real when it is below the
  * channel's effective extinction. On a real collision `rgb` gets L_e.
  */
+/// The visibility optimization's test at a collision that passed without it:
+/// still real under mu' = f mu (paper 004, Eq. 8)? The factor f <= 1 scales
+/// the blend's extinction and so every channel's alike (colours keep their
+/// proportions); `sigma` is the extinction the unoptimized test used.
+MCVOL_HOT bool realUnderImportance(
+  const SceneView& s, const RayImportance* imp, float t, Vec3f p, float xiMaj, float sigma, RayCounters& c)
+{
+  if (!imp)
+  {
+    return true;
+  }
+  ++c.importance;
+  return xiMaj < sigma * importanceFactor(s.importance, *imp, t, importanceAt(s, p));
+}
+
 template <BlendMode Mode>
-MCVOL_HOT bool realCollision(const SceneView& s, int n, Vec3f p, float xiMaj, Vec3f& rgb, RayCounters& c)
+MCVOL_HOT bool realCollision(const SceneView& s, int n, Vec3f p, float xiMaj, Vec3f& rgb, RayCounters& c,
+  const RayImportance* imp = nullptr, float t = 0.f)
 {
   const TFSample own = channelOptics(s, n, p);
   ++c.samples;
@@ -52,6 +71,10 @@ MCVOL_HOT bool realCollision(const SceneView& s, int n, Vec3f p, float xiMaj, Ve
   }
   if (Mode == BlendMode::Density || Mode == BlendMode::Composite)
   {
+    if (!realUnderImportance(s, imp, t, p, xiMaj, own.sigma, c))
+    {
+      return false;
+    }
     rgb = own.rgb;
     return true;
   }
@@ -75,6 +98,10 @@ MCVOL_HOT bool realCollision(const SceneView& s, int n, Vec3f p, float xiMaj, Ve
     {
       mix += other.rgb * (other.sigma * s.blend.mixWeights[k]);
     }
+  }
+  if (!realUnderImportance(s, imp, t, p, xiMaj, own.sigma, c))
+  {
+    return false;
   }
   // Eq. 10: sum_k w_k sigma_k c_k / max_k sigma_k (sigma_n is the max).
   rgb = Mode == BlendMode::Max ? own.rgb : mix * (1.f / own.sigma);
@@ -107,7 +134,7 @@ MCVOL_HOT float sampleOpticalDepth(Rng& rng)
  */
 template <BlendMode Mode>
 MCVOL_HOT bool woodcockSegment(const SceneView& s, int n, Vec3f o, Vec3f d, float t0, float tStop, float m, float& tau,
-  Rng& rng, RayCounters& c, Hit& hit)
+  Rng& rng, RayCounters& c, Hit& hit, const RayImportance* imp = nullptr)
 {
   float t = t0;
   while (true)
@@ -122,7 +149,7 @@ MCVOL_HOT bool woodcockSegment(const SceneView& s, int n, Vec3f o, Vec3f d, floa
     tau = sampleOpticalDepth(rng);
     ++c.tentative;
     Vec3f rgb;
-    if (realCollision<Mode>(s, n, o + d * t, rng.next() * m, rgb, c))
+    if (realCollision<Mode>(s, n, o + d * t, rng.next() * m, rgb, c, imp, t))
     {
       hit.t = t;
       hit.rgb = rgb;
@@ -145,7 +172,8 @@ MCVOL_HOT bool woodcockSegment(const SceneView& s, int n, Vec3f o, Vec3f d, floa
  * channel per cell, which is most of the work in sparse regions.
  */
 template <BlendMode Mode>
-MCVOL_HOT Hit track1DDA(const SceneView& s, Vec3f o, Vec3f d, float tmin, float tmax, Rng& rng, RayCounters& c)
+MCVOL_HOT Hit track1DDA(const SceneView& s, Vec3f o, Vec3f d, float tmin, float tmax, Rng& rng, RayCounters& c,
+  const RayImportance* imp = nullptr)
 {
   Hit hit;
   hit.t = tmax;
@@ -173,7 +201,7 @@ MCVOL_HOT Hit track1DDA(const SceneView& s, Vec3f o, Vec3f d, float tmin, float 
       {
         continue; // empty for this channel: no sampling at all
       }
-      woodcockSegment<Mode>(s, n, o, d, dda.t0, minf(dda.t1, hit.t), m, tau[i], rng, c, hit);
+      woodcockSegment<Mode>(s, n, o, d, dda.t0, minf(dda.t1, hit.t), m, tau[i], rng, c, hit, imp);
     }
     if (hit.found())
     {
@@ -189,8 +217,8 @@ MCVOL_HOT Hit track1DDA(const SceneView& s, Vec3f o, Vec3f d, float tmin, float 
 /// for each channel and by post-render compositing); the optical depth is
 /// carried across cells as in track1DDA.
 template <BlendMode Mode>
-MCVOL_HOT bool trackChannel(
-  const SceneView& s, int n, Vec3f o, Vec3f d, float tmin, float tmax, Rng& rng, RayCounters& c, Hit& hit)
+MCVOL_HOT bool trackChannel(const SceneView& s, int n, Vec3f o, Vec3f d, float tmin, float tmax, Rng& rng,
+  RayCounters& c, Hit& hit, const RayImportance* imp = nullptr)
 {
   DDA dda;
   dda.init(s.grid, o, d, tmin, tmax);
@@ -200,7 +228,7 @@ MCVOL_HOT bool trackChannel(
   {
     ++c.ddaSteps;
     const float m = minf(s.grid.majorants[dda.cellIndex() * N + n], s.sigmaLimit);
-    if (m > 0.f && woodcockSegment<Mode>(s, n, o, d, dda.t0, dda.t1, m, tau, rng, c, hit))
+    if (m > 0.f && woodcockSegment<Mode>(s, n, o, d, dda.t0, dda.t1, m, tau, rng, c, hit, imp))
     {
       return true;
     }
@@ -214,13 +242,14 @@ MCVOL_HOT bool trackChannel(
  * each ending at the closest collision found so far; the closest wins.
  */
 template <BlendMode Mode>
-MCVOL_HOT Hit trackNDDA(const SceneView& s, Vec3f o, Vec3f d, float tmin, float tmax, Rng& rng, RayCounters& c)
+MCVOL_HOT Hit trackNDDA(const SceneView& s, Vec3f o, Vec3f d, float tmin, float tmax, Rng& rng, RayCounters& c,
+  const RayImportance* imp = nullptr)
 {
   Hit hit;
   hit.t = tmax;
   for (int i = 0; i < s.numActive; ++i)
   {
-    trackChannel<Mode>(s, s.active[i], o, d, tmin, hit.t, rng, c, hit);
+    trackChannel<Mode>(s, s.active[i], o, d, tmin, hit.t, rng, c, hit, imp);
   }
   if (hit.found())
   {
@@ -235,13 +264,14 @@ MCVOL_HOT Hit trackNDDA(const SceneView& s, Vec3f o, Vec3f d, float tmin, float 
  * "any channel collided" estimates without bias since channels draw
  * independent random numbers).
  */
-MCVOL_HOT Vec4f trackComposite(const SceneView& s, Vec3f o, Vec3f d, float tmin, float tmax, Rng& rng, RayCounters& c)
+MCVOL_HOT Vec4f trackComposite(const SceneView& s, Vec3f o, Vec3f d, float tmin, float tmax, Rng& rng, RayCounters& c,
+  const RayImportance* imp = nullptr)
 {
   Vec4f out;
   for (int i = 0; i < s.numActive; ++i)
   {
     Hit hit;
-    if (trackChannel<BlendMode::Composite>(s, s.active[i], o, d, tmin, tmax, rng, c, hit))
+    if (trackChannel<BlendMode::Composite>(s, s.active[i], o, d, tmin, tmax, rng, c, hit, imp))
     {
       ++c.real;
       out.r += hit.rgb.x;
@@ -256,15 +286,15 @@ MCVOL_HOT Vec4f trackComposite(const SceneView& s, Vec3f o, Vec3f d, float tmin,
 /// One Monte Carlo sample of a ray: premultiplied RGB and alpha (1 if the
 /// path collided, else 0).
 template <BlendMode Mode>
-MCVOL_HOT Vec4f traceSample(
-  const SceneView& s, Tracker tracker, Vec3f o, Vec3f d, float tmin, float tmax, Rng& rng, RayCounters& c)
+MCVOL_HOT Vec4f traceSample(const SceneView& s, Tracker tracker, Vec3f o, Vec3f d, float tmin, float tmax, Rng& rng,
+  RayCounters& c, const RayImportance* imp = nullptr)
 {
   if (Mode == BlendMode::Composite)
   {
-    return trackComposite(s, o, d, tmin, tmax, rng, c);
+    return trackComposite(s, o, d, tmin, tmax, rng, c, imp);
   }
-  const Hit hit = tracker == Tracker::OneDDA ? track1DDA<Mode>(s, o, d, tmin, tmax, rng, c)
-                                             : trackNDDA<Mode>(s, o, d, tmin, tmax, rng, c);
+  const Hit hit = tracker == Tracker::OneDDA ? track1DDA<Mode>(s, o, d, tmin, tmax, rng, c, imp)
+                                             : trackNDDA<Mode>(s, o, d, tmin, tmax, rng, c, imp);
   Vec4f out;
   if (hit.found())
   {

@@ -197,7 +197,12 @@ def build_transfer_functions(channels, demo):
             unit = ch["unit_distance"]
         if unit is None or not unit > 0:
             unit = 1.0
-        out.append((color, opacity, unit))
+        importance = None
+        if "importance" in ch:
+            importance = vtkPiecewiseFunction()
+            for p in ch["importance"]:
+                importance.AddPoint(place(p[0], ch["normalized"]), p[1])
+        out.append((color, opacity, unit, importance))
     return out
 
 
@@ -305,7 +310,7 @@ class Pipeline:
 def setup_mapper(mapper, prop, scene, channels, tfs, render_image, reference):
     """Transfer functions and per-channel settings, blend mode, sampling.
     Returns (total, per_render) samples per pixel."""
-    for i, (color, opacity, unit) in enumerate(tfs):
+    for i, (color, opacity, unit, importance) in enumerate(tfs):
         if i < VTK_MAX_VRCOMP:
             prop.SetColor(i, color)
             prop.SetScalarOpacity(i, opacity)
@@ -320,6 +325,19 @@ def setup_mapper(mapper, prop, scene, channels, tfs, render_image, reference):
             mapper.SetChannelAlbedo(i, channels[i]["albedo"])
         if "anisotropy" in channels[i]:
             mapper.SetChannelAnisotropy(i, channels[i]["anisotropy"])
+        if importance is not None:
+            mapper.SetChannelImportance(i, importance)
+    vis = scene.get("visibility")
+    if vis is not None:
+        mapper.SetVisibilityOptimization(vis["enabled"])
+        mapper.SetDeviationWeight(vis["deviation_weight"])
+        mapper.SetOcclusionWeight(vis["occlusion_weight"])
+        mapper.SetClutterWeight(vis["clutter_weight"])
+        mapper.SetImportanceEmphasis(vis["emphasis"])
+        mapper.SetImportanceMergeDistance(vis["merge_distance"])
+        mapper.SetImportanceSamples(vis["samples"])
+        mapper.SetOptimizeLightRays(vis["light_rays"])
+        mapper.SetLightRayImportanceSamples(vis["light_ray_samples"])
     {
         "density": mapper.SetChannelBlendModeToDensity,
         "max": mapper.SetChannelBlendModeToMax,

@@ -24,6 +24,7 @@ from .schema import (
     SHADOWS,
     TOP_KEYS,
     TRACKING,
+    VISIBILITY_KEYS,
     check_keys,
     get_bool,
     get_number,
@@ -144,6 +145,36 @@ def parse_lighting(v):
     return out
 
 
+def parse_visibility(v):
+    """The "visibility" object: the view-dependent visibility optimization
+    (paper 004) and its weights. Its presence turns it on unless "enabled" is
+    false; the channels' "importance" functions say what is important."""
+    if not isinstance(v, dict):
+        raise SceneError("visibility", "expected an object, got %s" % json.dumps(v))
+    check_keys(v, "visibility", VISIBILITY_KEYS)
+    out = {"enabled": True, "deviation_weight": 1.0, "occlusion_weight": 70.0, "clutter_weight": 30.0,
+           "emphasis": 1.0, "merge_distance": 0.0, "samples": 32, "light_rays": True, "light_ray_samples": 200}
+    for k in ("enabled", "light_rays"):
+        if k in v:
+            out[k] = get_bool(v[k], join_key("visibility", k))
+    if "deviation_weight" in v:
+        out["deviation_weight"] = get_number(v["deviation_weight"], "visibility.deviation_weight", lo=0.0,
+                                             lo_open=True, hi=1e12)
+    for k in ("occlusion_weight", "clutter_weight"):
+        if k in v:
+            out[k] = get_number(v[k], join_key("visibility", k), lo=0.0, hi=1e12)
+    if "emphasis" in v:
+        out["emphasis"] = get_number(v["emphasis"], "visibility.emphasis", lo=0.0, hi=1e3)
+    if "merge_distance" in v:
+        out["merge_distance"] = get_number(v["merge_distance"], "visibility.merge_distance", lo=0.0, hi=1e6)
+    if "samples" in v:
+        out["samples"] = get_number(v["samples"], "visibility.samples", lo=1, hi=64, integer=True)
+    if "light_ray_samples" in v:
+        out["light_ray_samples"] = get_number(v["light_ray_samples"], "visibility.light_ray_samples", lo=2,
+                                              hi=4096, integer=True)
+    return out
+
+
 def parse_channel(v, path, scene_dir, presets):
     check_keys(v, path, CHANNEL_KEYS)
     ch = {"path": path}
@@ -176,6 +207,12 @@ def parse_channel(v, path, scene_dir, presets):
     if "anisotropy" in v:
         ch["anisotropy"] = get_number(v["anisotropy"], join_key(path, "anisotropy"), lo=-1.0, hi=1.0, lo_open=True,
                                       hi_open=True)
+    if "importance" in v:
+        pts = get_points(v["importance"], join_key(path, "importance"), 2, "[x, importance] pairs")
+        for p in pts:
+            if not 0.0 <= p[1] <= 1.0:
+                raise SceneError(join_key(path, "importance"), "importance values must be in [0, 1], got %s" % p[1])
+        ch["importance"] = pts
     return ch
 
 
@@ -261,6 +298,7 @@ def parse_scene(data, scene_dir, presets):
         get_string(data["compositing"], "compositing", COMPOSITING) if "compositing" in data else "extinction"
     )
     s["lighting"] = parse_lighting(data["lighting"]) if "lighting" in data else None
+    s["visibility"] = parse_visibility(data["visibility"]) if "visibility" in data else None
     if "pixel_jitter" in data:
         if not isinstance(data["pixel_jitter"], bool):
             raise SceneError("pixel_jitter", "expected true or false, got %s" % json.dumps(data["pixel_jitter"]))

@@ -39,9 +39,21 @@ TOP_KEYS = {
     "compositing",
     "pixel_jitter",
     "lighting",
+    "visibility",
 }
 LIGHTING_KEYS = {"lights", "ambient", "shadows", "max_scattering_depth", "gradient_shading", "shininess"}
 LIGHT_KEYS = {"type", "direction", "position", "color", "intensity"}
+VISIBILITY_KEYS = {
+    "enabled",
+    "deviation_weight",
+    "occlusion_weight",
+    "clutter_weight",
+    "emphasis",
+    "merge_distance",
+    "samples",
+    "light_rays",
+    "light_ray_samples",
+}
 CHANNEL_KEYS = {
     "name",
     "array",
@@ -54,6 +66,7 @@ CHANNEL_KEYS = {
     "mix_weight",
     "albedo",
     "anisotropy",
+    "importance",
 }
 CAMERA_KEYS = {
     "position",
