@@ -14,6 +14,9 @@
 #include "vtkScalarsToColors.h"
 #include "vtkVolumeProperty.h"
 
+#include <algorithm>
+#include <cmath>
+#include <limits>
 #include <sstream>
 
 vtkStandardNewMacro(vtkMultiChannelVolumeRepresentation);
@@ -40,6 +43,17 @@ template <typename T>
 T EntryOr(const std::vector<T>& list, int index, T fallback)
 {
   return static_cast<size_t>(index) < list.size() ? list[index] : fallback;
+}
+
+// The mapper's importance levels (mcvol::snapImportance): anything that
+// snaps to 0, NaN included, means the channel carries no importance.
+double SnapImportanceLevel(double level)
+{
+  if (!(level > 0.0))
+  {
+    return 0.0;
+  }
+  return level >= 1.0 ? 1.0 : std::round(level * 4.0) / 4.0;
 }
 
 // Points the mapper at a point array by name, touching it only on a change
@@ -251,6 +265,71 @@ void vtkMultiChannelVolumeRepresentation::SetChannelAnisotropy(int channel, doub
   SetEntry(this->Anisotropies, channel, g, 0.0);
 }
 
+void vtkMultiChannelVolumeRepresentation::SetVisibilityOptimization(bool on)
+{
+  this->GetMultiChannelMapper()->SetVisibilityOptimization(on);
+}
+
+void vtkMultiChannelVolumeRepresentation::SetDeviationWeight(double p)
+{
+  this->GetMultiChannelMapper()->SetDeviationWeight(p);
+}
+
+void vtkMultiChannelVolumeRepresentation::SetOcclusionWeight(double q)
+{
+  this->GetMultiChannelMapper()->SetOcclusionWeight(q);
+}
+
+void vtkMultiChannelVolumeRepresentation::SetClutterWeight(double r)
+{
+  this->GetMultiChannelMapper()->SetClutterWeight(r);
+}
+
+void vtkMultiChannelVolumeRepresentation::SetImportanceEmphasis(double lambda)
+{
+  this->GetMultiChannelMapper()->SetImportanceEmphasis(lambda);
+}
+
+void vtkMultiChannelVolumeRepresentation::SetImportanceMergeDistance(double d)
+{
+  this->GetMultiChannelMapper()->SetImportanceMergeDistance(d);
+}
+
+void vtkMultiChannelVolumeRepresentation::SetImportanceSamples(int n)
+{
+  this->GetMultiChannelMapper()->SetImportanceSamples(n);
+}
+
+void vtkMultiChannelVolumeRepresentation::SetOptimizeLightRays(bool on)
+{
+  this->GetMultiChannelMapper()->SetOptimizeLightRays(on);
+}
+
+void vtkMultiChannelVolumeRepresentation::SetLightRayImportanceSamples(int n)
+{
+  this->GetMultiChannelMapper()->SetLightRayImportanceSamples(n);
+}
+
+void vtkMultiChannelVolumeRepresentation::SetNumberOfChannelImportanceLevels(int n)
+{
+  this->ImportanceLevels.assign(static_cast<size_t>(std::max(0, n)), 0.0);
+}
+
+void vtkMultiChannelVolumeRepresentation::SetChannelImportanceLevel(int channel, double level)
+{
+  SetEntry(this->ImportanceLevels, channel, level, 0.0);
+}
+
+void vtkMultiChannelVolumeRepresentation::SetNumberOfChannelImportanceThresholds(int n)
+{
+  this->ImportanceThresholds.assign(static_cast<size_t>(std::max(0, n)), std::numeric_limits<double>::quiet_NaN());
+}
+
+void vtkMultiChannelVolumeRepresentation::SetChannelImportanceThreshold(int channel, double threshold)
+{
+  SetEntry(this->ImportanceThresholds, channel, threshold, std::numeric_limits<double>::quiet_NaN());
+}
+
 //------------------------------------------------------------------------------
 int vtkMultiChannelVolumeRepresentation::GetTotalSamples()
 {
@@ -278,6 +357,16 @@ int vtkMultiChannelVolumeRepresentation::GetNumberOfChannels()
   return this->GetMultiChannelMapper()->GetNumberOfChannels();
 }
 
+double vtkMultiChannelVolumeRepresentation::GetImportanceMemory()
+{
+  return this->GetMultiChannelMapper()->GetImportanceMemory();
+}
+
+double vtkMultiChannelVolumeRepresentation::GetImportanceOverflows()
+{
+  return this->GetMultiChannelMapper()->GetImportanceOverflows();
+}
+
 const char* vtkMultiChannelVolumeRepresentation::GetBackendReport()
 {
   this->BackendReport = this->GetMultiChannelMapper()->GetBackendReport();
@@ -297,8 +386,7 @@ void vtkMultiChannelVolumeRepresentation::UpdateMapperParameters()
   // correlated, and "front over back" is unbiased only for independent
   // estimates (E[(1 - a1) c2] = (1 - E[a1]) E[c2]).
   vtkMultiProcessController* controller = vtkMultiProcessController::GetGlobalController();
-  const unsigned int rank =
-    controller ? static_cast<unsigned int>(controller->GetLocalProcessId()) : 0u;
+  const unsigned int rank = controller ? static_cast<unsigned int>(controller->GetLocalProcessId()) : 0u;
   mapper->SetSeed(this->Seed + 0x9E3779B9u * rank);
 
   // ---- Channels -------------------------------------------------------------
@@ -311,8 +399,7 @@ void vtkMultiChannelVolumeRepresentation::UpdateMapperParameters()
     vtkDataArray* array = (image && !this->ChannelComponentsArray.empty())
       ? image->GetPointData()->GetArray(this->ChannelComponentsArray.c_str())
       : nullptr;
-    numChannels = array ? array->GetNumberOfComponents()
-                        : static_cast<int>(this->ChannelLookupTables.size());
+    numChannels = array ? array->GetNumberOfComponents() : static_cast<int>(this->ChannelLookupTables.size());
     if (this->ChannelComponentsArray.empty())
     {
       status << "no channel array selected";
@@ -388,9 +475,54 @@ void vtkMultiChannelVolumeRepresentation::UpdateMapperParameters()
     mapper->SetChannelAnisotropy(c, EntryOr(this->Anisotropies, c, 0.0));
   }
 
+  this->UpdateChannelImportance(numChannels);
+
   this->ChannelStatus = status.str();
   // Volume mappers do not like inputs they cannot draw (as the superclass).
   this->Actor->SetVisibility(this->ChannelStatus.empty() && numChannels > 0);
+}
+
+//------------------------------------------------------------------------------
+void vtkMultiChannelVolumeRepresentation::UpdateChannelImportance(int numChannels)
+{
+  vtkMultiChannelVolumeMapper* mapper = this->GetMultiChannelMapper();
+  const double none = std::numeric_limits<double>::quiet_NaN();
+  this->ImportanceSteps.resize(vtkMultiChannelVolumeMapper::MAX_CHANNELS);
+  for (int c = 0; c < vtkMultiChannelVolumeMapper::MAX_CHANNELS; ++c)
+  {
+    // Entries past the channel list are ignored rather than kept on the
+    // mapper, which would otherwise hold them for channels that come later.
+    const double level = c < numChannels ? SnapImportanceLevel(EntryOr(this->ImportanceLevels, c, 0.0)) : 0.0;
+    const double threshold = EntryOr(this->ImportanceThresholds, c, none);
+    if (level == 0.0 || !std::isfinite(threshold))
+    {
+      mapper->SetChannelImportance(c, nullptr);
+      continue;
+    }
+    ImportanceStep& step = this->ImportanceSteps[c];
+    if (!step.Function || step.Level != level || step.Threshold != threshold)
+    {
+      if (!step.Function)
+      {
+        step.Function = vtkSmartPointer<vtkPiecewiseFunction>::New();
+      }
+      // vtkPiecewiseFunction interpolates linearly between points and clamps
+      // beyond them. A point at the largest double below the threshold makes
+      // the ramp one ulp wide: exactly 0 below T and the level from T up.
+      // The mapper samples it into its 1024-texel table over the channel's
+      // transfer-function range, so the step is resolved to one texel.
+      const double below = std::nextafter(threshold, -std::numeric_limits<double>::infinity());
+      step.Function->RemoveAllPoints();
+      if (std::isfinite(below))
+      {
+        step.Function->AddPoint(below, 0.0);
+      }
+      step.Function->AddPoint(threshold, level);
+      step.Level = level;
+      step.Threshold = threshold;
+    }
+    mapper->SetChannelImportance(c, step.Function);
+  }
 }
 
 //------------------------------------------------------------------------------
@@ -406,5 +538,12 @@ void vtkMultiChannelVolumeRepresentation::PrintSelf(ostream& os, vtkIndent inden
   os << "\n";
   os << indent << "ChannelComponentsArray: " << this->ChannelComponentsArray << "\n";
   os << indent << "ChannelLookupTables: " << this->ChannelLookupTables.size() << "\n";
+  os << indent << "ChannelImportance (level, threshold):";
+  for (size_t c = 0; c < std::max(this->ImportanceLevels.size(), this->ImportanceThresholds.size()); ++c)
+  {
+    os << " (" << EntryOr(this->ImportanceLevels, static_cast<int>(c), 0.0) << ", "
+       << EntryOr(this->ImportanceThresholds, static_cast<int>(c), std::numeric_limits<double>::quiet_NaN()) << ")";
+  }
+  os << "\n";
   os << indent << "ChannelStatus: " << this->ChannelStatus << "\n";
 }

@@ -31,10 +31,10 @@
 #include <vector> // For std::vector
 
 class vtkMultiChannelVolumeMapper;
+class vtkPiecewiseFunction;
 class vtkScalarsToColors;
 
-class MCVOLPARAVIEWREPRESENTATION_EXPORT vtkMultiChannelVolumeRepresentation
-  : public vtkImageVolumeRepresentation
+class MCVOLPARAVIEWREPRESENTATION_EXPORT vtkMultiChannelVolumeRepresentation : public vtkImageVolumeRepresentation
 {
 public:
   static vtkMultiChannelVolumeRepresentation* New();
@@ -103,6 +103,31 @@ public:
   void SetChannelAlbedo(int channel, double albedo);
   void SetNumberOfChannelAnisotropies(int n);
   void SetChannelAnisotropy(int channel, double g);
+  void SetVisibilityOptimization(bool on);
+  void SetDeviationWeight(double p);
+  void SetOcclusionWeight(double q);
+  void SetClutterWeight(double r);
+  void SetImportanceEmphasis(double lambda);
+  void SetImportanceMergeDistance(double d);
+  void SetImportanceSamples(int n);
+  void SetOptimizeLightRays(bool on);
+  void SetLightRayImportanceSamples(int n);
+  ///@}
+
+  ///@{
+  /**
+   * Per-channel importance of the visibility optimization as a step in data
+   * units: channel c carries importance level L (snapped to 0, 1/4, 1/2,
+   * 3/4, 1) where its value is >= threshold T, and 0 below. A channel
+   * carries no importance unless both lists have an entry for it, the
+   * snapped level is > 0 and the threshold is finite (NaN: none). Missing
+   * levels are 0 so that setting thresholds alone never makes a channel
+   * important by accident.
+   */
+  void SetNumberOfChannelImportanceLevels(int n);
+  void SetChannelImportanceLevel(int channel, double level);
+  void SetNumberOfChannelImportanceThresholds(int n);
+  void SetChannelImportanceThreshold(int channel, double threshold);
   ///@}
 
   ///@{
@@ -114,6 +139,8 @@ public:
   int GetNumberOfChannels();
   const char* GetBackendReport();
   const char* GetChannelStatus() { return this->ChannelStatus.c_str(); }
+  double GetImportanceMemory();
+  double GetImportanceOverflows();
   ///@}
 
   vtkMultiChannelVolumeMapper* GetMultiChannelMapper();
@@ -123,6 +150,7 @@ protected:
   ~vtkMultiChannelVolumeRepresentation() override;
 
   void UpdateMapperParameters() override;
+  void UpdateChannelImportance(int numChannels);
 
   int ChannelSource = ARRAYS;
   unsigned int Seed = 0;
@@ -133,6 +161,19 @@ protected:
   std::vector<double> MixWeights;
   std::vector<double> Albedos;
   std::vector<double> Anisotropies;
+  std::vector<double> ImportanceLevels;
+  std::vector<double> ImportanceThresholds;
+  // Each channel keeps one function object for good, because the mapper
+  // starts its image over when handed a different object; its points are
+  // rewritten only when the values change (this runs before every render,
+  // and every rewrite makes the mapper resample the function).
+  struct ImportanceStep
+  {
+    vtkSmartPointer<vtkPiecewiseFunction> Function;
+    double Level = 0.0;
+    double Threshold = 0.0;
+  };
+  std::vector<ImportanceStep> ImportanceSteps;
   std::string ChannelStatus;
   std::string BackendReport;
 

@@ -36,11 +36,28 @@ settings = {
     "ChannelAlbedos": [0.9, 0.8, 0.7],
     "ChannelAnisotropies": [0.1, -0.2, 0.3],
     "ScalarOpacityUnitDistance": 2.5,
+    "VisibilityOptimization": 1,
+    "ChannelImportanceLevels": [0.0, 1.0, 0.5],
+    "ChannelImportanceThresholds": [0.0, 0.5, 0.7],
+    "DeviationWeight": 2.0,
+    "OcclusionWeight": 60.0,
+    "ClutterWeight": 20.0,
+    "ImportanceEmphasis": 1.5,
+    "ImportanceMergeDistance": 0.05,
+    "ImportanceSamples": 16,
+    "OptimizeLightRays": 0,
+    "LightRayImportanceSamples": 64,
 }
 for name, value in settings.items():
     setattr(rep, name, value)
 T.render_converged(view, rep)
 before = T.capture(view)
+# The importance must matter here, or losing it on load would go unnoticed.
+rep.VisibilityOptimization = 0
+T.render_converged(view, rep)
+d = np.abs(T.capture(view).astype(int) - before.astype(int)).mean()
+checks.check(d > 0.1, "the visibility optimization changes this scene's image (mean |diff| %.3f)" % d)
+rep.VisibilityOptimization = 1
 functions = {n: (list(simple.GetColorTransferFunction(n).RGBPoints), list(simple.GetOpacityTransferFunction(n).Points))
              for n in names}
 
