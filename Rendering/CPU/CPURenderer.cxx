@@ -75,6 +75,7 @@ void renderRows(const SceneView& s, const CameraView& cam, const FrameParams& fp
       shadowRays += c.shadowRays;
       gradients += c.gradients;
       importance += c.importance;
+      overflows += c.importanceOverflows;
     }
   }
   if (pool)

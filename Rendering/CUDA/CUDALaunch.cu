@@ -126,7 +126,7 @@ __global__ void renderOptimizedKernel(const __grid_constant__ SceneView s, const
   const unsigned long long shd = Lit ? warpSumU64(c.shadowRays) : 0ull;
   const unsigned long long grd = Lit ? warpSumU64(c.gradients) : 0ull;
   const unsigned long long imp = warpSumU64(c.importance);
-  const unsigned long long ovf = warpSumU64(overflow);
+  const unsigned long long ovf = warpSumU64(overflow + c.importanceOverflows);
   const unsigned lane = (threadIdx.y * blockDim.x + threadIdx.x) & 31u;
   if (lane == 0)
   {

@@ -68,8 +68,9 @@ enum class ShadowEstimator : int
 struct ShadowCounters
 {
   uint32_t rays = 0;
-  uint32_t tentative = 0;  ///< tentative collisions along shadow rays
-  uint32_t importance = 0; ///< importance evaluations of optimized shadow rays
+  uint32_t tentative = 0;           ///< tentative collisions along shadow rays
+  uint32_t importance = 0;          ///< importance evaluations of optimized shadow rays
+  uint32_t importanceOverflows = 0; ///< light-ray lists that did not fit (ray left unoptimized)
 };
 
 /**
@@ -162,7 +163,8 @@ MCVOL_HOT float shadowTransmittance(const SceneView& s, const int* channels, int
  * list when the visibility optimization covers light rays (paper 004, Sec.
  * 5.3; every connection to a light, at every scattering vertex: Sec. 5.4,
  * option 2), else the plain estimate. A list that would overflow leaves that
- * ray unoptimized.
+ * ray unoptimized, counted (the mapper reports it with the camera rays'
+ * overflows).
  */
 template <BlendMode Mode>
 MCVOL_HOT float optimizedShadow(
@@ -176,6 +178,7 @@ MCVOL_HOT float optimizedShadow(
     {
       return shadowTransmittance<Mode>(s, s.active, s.numActive, x, d, tmax, est, rng, sc, &ri);
     }
+    ++sc.importanceOverflows;
   }
   return shadowTransmittance<Mode>(s, s.active, s.numActive, x, d, tmax, est, rng, sc);
 }
@@ -369,7 +372,9 @@ MCVOL_HOT Vec4f traceLitSample(const SceneView& s, Tracker tracker, Vec3f o, Vec
     tmax = boxExit(s.volume, o, d);
   }
   c.importance += sc.importance;
+  c.importanceOverflows += sc.importanceOverflows;
   sc.importance = 0;
+  sc.importanceOverflows = 0;
   out.r = radiance.x;
   out.g = radiance.y;
   out.b = radiance.z;

@@ -95,7 +95,7 @@ public:
     std::vector<uint8_t> counts;             ///< segments in use per pixel
     std::vector<float> totals;               ///< K over the whole ray per pixel
     int passes = 0;                          ///< refinement passes done
-    uint64_t overflows = 0;                  ///< pixel passes dropped for lack of room
+    uint64_t overflows = 0;                  ///< pixel passes and light-ray lists dropped for lack of room
     size_t deviceBytes = 0;                  ///< the device backend's copy (its lists live there)
     size_t bytes() const
     {

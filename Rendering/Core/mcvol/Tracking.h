@@ -25,7 +25,8 @@ struct RayCounters
   uint32_t shadowRays = 0;
   uint32_t gradients = 0; ///< extinction gradients evaluated
   // Visibility optimization (zero whenever it is off).
-  uint32_t importance = 0; ///< importance evaluations
+  uint32_t importance = 0;          ///< importance evaluations
+  uint32_t importanceOverflows = 0; ///< light-ray segment lists that did not fit
 };
 
 /// Result of tracking one ray: the accepted collision, if any.
