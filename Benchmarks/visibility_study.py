@@ -52,13 +52,28 @@ def scene(args):
     return image, prop, important
 
 
+LIT = False
+
+
 def render(mapper, image, prop, size, renders):
     mapper.SetInputData(image)
+    if LIT:
+        # The ray march has no ambient term: none for either.
+        mapper.SetAmbientRadiance(0, 0, 0)
     volume = vtkVolume()
     volume.SetMapper(mapper)
     volume.SetProperty(prop)
     ren = vtkRenderer()
     ren.AddVolume(volume)
+    if LIT:
+        from vtkmodules.vtkRenderingCore import vtkLight
+        light = vtkLight()
+        light.SetLightTypeToSceneLight()
+        light.SetPositional(False)
+        light.SetPosition(1, 1, 2)
+        light.SetFocalPoint(0, 0, 0)
+        light.SetIntensity(12.0)
+        ren.AddLight(light)
     win = vtkRenderWindow()
     win.SetOffScreenRendering(1)
     win.SetSize(size, size)
@@ -106,9 +121,14 @@ def main():
     p.add_argument("--size", type=int, default=256)
     p.add_argument("--ref-step-voxels", type=float, default=0.125)
     p.add_argument("--out", default=".")
+    p.add_argument("--lit", action="store_true", help="one directional light (ShadeOn), light rays optimized too")
     args = p.parse_args()
+    global LIT
+    LIT = args.lit
     os.makedirs(args.out, exist_ok=True)
     image, prop, important = scene(args)
+    if LIT:
+        prop.ShadeOn()
 
     # Reference: the optimized ray march at a fine step.
     ref_mapper = vtkMultiChannelRayMarchMapper()
@@ -138,15 +158,18 @@ def main():
     mc2.SetBackendToCPU()
     mc2.SetSamplesPerPixel(1)
     mc_img, mc_s = render(mc2, image, prop, args.size, spp)
-    print("## Equal time, unlit, microscopy %s at %dx%d (2 CPU cores)\n" % ("x".join(map(str, args.dims)), args.size,
-                                                                             args.size))
+    print("## Equal time, %s, microscopy %s at %dx%d (2 CPU cores)\n" % (
+        "lit (one light)" if LIT else "unlit", "x".join(map(str, args.dims)), args.size, args.size))
     print("Reference: the optimized ray march at %.3g voxels (%.1f s).\n" % (args.ref_step_voxels, ref_s))
     print("| renderer | s | RMSE | SSIM |\n|---|---|---|---|")
     print("| ray march, Nyquist step | %.2f | %.5f | %.4f |" % (rm_s, rmse(rm_img, ref), ssim(rm_img, ref)))
     print("| Monte Carlo, %d spp | %.2f | %.5f | %.4f |" % (spp, mc_s, rmse(mc_img, ref), ssim(mc_img, ref)))
-    save(os.path.join(args.out, "equal-time-raymarch.png"), rm_img)
-    save(os.path.join(args.out, "equal-time-montecarlo.png"), mc_img)
-    save(os.path.join(args.out, "equal-time-reference.png"), ref)
+    tag = "lit-" if LIT else ""
+    save(os.path.join(args.out, tag + "equal-time-raymarch.png"), rm_img)
+    save(os.path.join(args.out, tag + "equal-time-montecarlo.png"), mc_img)
+    save(os.path.join(args.out, tag + "equal-time-reference.png"), ref)
+    if LIT:
+        return
 
     # The clutter weight r (Fig. 10), on the ray-marched reference (no noise).
     print("\n## Clutter weight r (ray march, default step)\n")
