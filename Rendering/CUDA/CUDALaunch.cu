@@ -28,6 +28,15 @@ __device__ MCVOL_FORCE_INLINE unsigned long long warpSumU64(unsigned long long v
   return v;
 }
 
+/// The core's running mean (accumulate()) on one pixel of the device image.
+__device__ MCVOL_FORCE_INLINE void accumulatePixel(float4* pixel, const Vec4f& sum, uint32_t previous, int added)
+{
+  const float4 old = *pixel;
+  float v[4] = { old.x, old.y, old.z, old.w };
+  accumulate(v, sum, previous, added);
+  *pixel = make_float4(v[0], v[1], v[2], v[3]);
+}
+
 /// One thread per pixel: renderPixel() from the core, folded into the
 /// running mean in `accum`. Count adds the work counters (warp sums, one
 /// atomic per warp and counter).
@@ -44,10 +53,7 @@ __global__ void renderKernel(const __grid_constant__ SceneView s, const __grid_c
     const size_t p = size_t(y) * size_t(cam.width) + size_t(x);
     const float z = depth ? depth[p] : 1.f;
     const Vec4f sum = renderPixel<Mode, Lit>(s, cam, fp, x, y, z, c);
-    const float4 old = accum[p];
-    float v[4] = { old.x, old.y, old.z, old.w };
-    accumulate(v, sum, previous, fp.samplesPerPixel);
-    accum[p] = make_float4(v[0], v[1], v[2], v[3]);
+    accumulatePixel(accum + p, sum, previous, fp.samplesPerPixel);
   }
   if (Count)
   {
@@ -111,10 +117,7 @@ __global__ void renderOptimizedKernel(const __grid_constant__ SceneView s, const
     ri.count = count;
     ri.total = total;
     const Vec4f sum = renderPixel<Mode, Lit>(s, cam, fp, x, y, z, c, &ri);
-    const float4 old = accum[p];
-    float v[4] = { old.x, old.y, old.z, old.w };
-    accumulate(v, sum, previous, fp.samplesPerPixel);
-    accum[p] = make_float4(v[0], v[1], v[2], v[3]);
+    accumulatePixel(accum + p, sum, previous, fp.samplesPerPixel);
   }
   // Always counted (one atomic per warp and counter): the overflow count is
   // needed whatever the caller asked for.

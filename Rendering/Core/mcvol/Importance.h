@@ -428,15 +428,22 @@ MCVOL_HOT bool buildLightRayImportance(const SceneView& s, Vec3f o, Vec3f d, flo
   return true;
 }
 
-/// The factor mu'/mu at world distance t along the ray, where the importance
-/// is g (Eq. 7-8).
-MCVOL_HOT float importanceFactor(const ImportanceView& iv, const RayImportance& ray, float t, float g)
+/// Eq. 8's factor mu'/mu = p / (p + (1 - g)^(2 lambda) h) with Eq. 7's
+/// h = (r - q) K + q Kz, for importance g, the integral K before the point and
+/// Kz over the whole ray (both backends' tracking and the ray march use it).
+MCVOL_HOT float optimizedExtinctionFactor(const ImportanceView& iv, float g, float K, float Kz)
 {
-  const float K = importanceIntegral(ray.segments, ray.count, t * iv.invLengthUnit);
-  const float h = (iv.r - iv.q) * K + iv.q * ray.total;
+  const float h = (iv.r - iv.q) * K + iv.q * Kz;
   const float oneMinusG = 1.f - g;
   const float w = iv.twoLambda == 0.f ? 1.f : (oneMinusG > 0.f ? powf(oneMinusG, iv.twoLambda) : 0.f);
   const float denom = iv.p + w * (h > 0.f ? h : 0.f);
   return denom > 0.f ? iv.p / denom : 1.f;
+}
+
+/// The factor mu'/mu at world distance t along the ray, where the importance
+/// is g (Eq. 7-8), K from the ray's segment list.
+MCVOL_HOT float importanceFactor(const ImportanceView& iv, const RayImportance& ray, float t, float g)
+{
+  return optimizedExtinctionFactor(iv, g, importanceIntegral(ray.segments, ray.count, t * iv.invLengthUnit), ray.total);
 }
 } // namespace mcvol

@@ -223,15 +223,10 @@ MCVOL_HOT MarchImportance marchImportanceStart(
 /// none skipped), Eq. 7-8 with the sums above.
 MCVOL_HOT float marchImportanceFactor(const SceneView& s, MarchImportance& mi, Vec3f p)
 {
-  const ImportanceView& iv = s.importance;
   const float g = importanceAt(s, p);
   const float K = mi.K + g * g * mi.phase * mi.dx;
   mi.K += g * g * mi.dx;
-  const float h = (iv.r - iv.q) * K + iv.q * mi.total;
-  const float oneMinusG = 1.f - g;
-  const float w = iv.twoLambda == 0.f ? 1.f : (oneMinusG > 0.f ? powf(oneMinusG, iv.twoLambda) : 0.f);
-  const float denom = iv.p + w * (h > 0.f ? h : 0.f);
-  return denom > 0.f ? iv.p / denom : 1.f;
+  return optimizedExtinctionFactor(s.importance, g, K, mi.total);
 }
 
 /// The optimized march (extinction model, unlit): every lattice point, no

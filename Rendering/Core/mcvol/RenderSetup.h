@@ -28,23 +28,36 @@ inline CameraView toView(const Camera& c)
   return v;
 }
 
+/// The linear part of a camera's worldToIndex (row-major 3x3) and its inverse.
+inline void worldToIndexLinear(const Camera& camera, double m[9], double inv[9])
+{
+  const double* w = camera.worldToIndex;
+  const double a[9] = { w[0], w[1], w[2], w[4], w[5], w[6], w[8], w[9], w[10] };
+  const double det =
+    a[0] * (a[4] * a[8] - a[5] * a[7]) - a[1] * (a[3] * a[8] - a[5] * a[6]) + a[2] * (a[3] * a[7] - a[4] * a[6]);
+  const double b[9] = { (a[4] * a[8] - a[5] * a[7]) / det, (a[2] * a[7] - a[1] * a[8]) / det,
+    (a[1] * a[5] - a[2] * a[4]) / det, (a[5] * a[6] - a[3] * a[8]) / det, (a[0] * a[8] - a[2] * a[6]) / det,
+    (a[2] * a[3] - a[0] * a[5]) / det, (a[3] * a[7] - a[4] * a[6]) / det, (a[1] * a[6] - a[0] * a[7]) / det,
+    (a[0] * a[4] - a[1] * a[3]) / det };
+  for (int i = 0; i < 9; ++i)
+  {
+    m[i] = a[i];
+    inv[i] = b[i];
+  }
+}
+
 /// The per-render frame of lighting: world-to-index maps from the camera.
 inline void setLightingFrame(SceneView& s, const Camera& camera)
 {
   LightingView& L = s.lighting;
-  const double* w = camera.worldToIndex;
-  const double m[9] = { w[0], w[1], w[2], w[4], w[5], w[6], w[8], w[9], w[10] };
-  const double det =
-    m[0] * (m[4] * m[8] - m[5] * m[7]) - m[1] * (m[3] * m[8] - m[5] * m[6]) + m[2] * (m[3] * m[7] - m[4] * m[6]);
-  const double inv[9] = { (m[4] * m[8] - m[5] * m[7]) / det, (m[2] * m[7] - m[1] * m[8]) / det,
-    (m[1] * m[5] - m[2] * m[4]) / det, (m[5] * m[6] - m[3] * m[8]) / det, (m[0] * m[8] - m[2] * m[6]) / det,
-    (m[2] * m[3] - m[0] * m[5]) / det, (m[3] * m[7] - m[4] * m[6]) / det, (m[1] * m[6] - m[0] * m[7]) / det,
-    (m[0] * m[4] - m[1] * m[3]) / det };
+  double m[9], inv[9];
+  worldToIndexLinear(camera, m, inv);
   for (int i = 0; i < 9; ++i)
   {
     L.toIndex[i] = float(m[i]);
     L.toWorld[i] = float(inv[i]);
   }
+  const double* w = camera.worldToIndex;
   L.indexOffset = Vec3f(float(w[3]), float(w[7]), float(w[11]));
 }
 
@@ -53,14 +66,8 @@ inline void setLightingFrame(SceneView& s, const Camera& camera)
 /// box (the paper scales volumes into [-1, 1]^3, so its weights carry over).
 inline void setImportanceFrame(SceneView& s, const Camera& camera)
 {
-  const double* w = camera.worldToIndex;
-  const double m[9] = { w[0], w[1], w[2], w[4], w[5], w[6], w[8], w[9], w[10] };
-  const double det =
-    m[0] * (m[4] * m[8] - m[5] * m[7]) - m[1] * (m[3] * m[8] - m[5] * m[6]) + m[2] * (m[3] * m[7] - m[4] * m[6]);
-  const double inv[9] = { (m[4] * m[8] - m[5] * m[7]) / det, (m[2] * m[7] - m[1] * m[8]) / det,
-    (m[1] * m[5] - m[2] * m[4]) / det, (m[5] * m[6] - m[3] * m[8]) / det, (m[0] * m[8] - m[2] * m[6]) / det,
-    (m[2] * m[3] - m[0] * m[5]) / det, (m[3] * m[7] - m[4] * m[6]) / det, (m[1] * m[6] - m[0] * m[7]) / det,
-    (m[0] * m[4] - m[1] * m[3]) / det };
+  double m[9], inv[9];
+  worldToIndexLinear(camera, m, inv);
   double lo[3] = { 1e300, 1e300, 1e300 }, hi[3] = { -1e300, -1e300, -1e300 };
   for (int corner = 0; corner < 8; ++corner)
   {
