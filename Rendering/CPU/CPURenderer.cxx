@@ -22,7 +22,9 @@ struct ImportanceFrame
   uint32_t seed = 0;
 };
 
-template <BlendMode Mode, bool Lit>
+/// Optimized is a compile-time choice, as Lit: the unoptimized rows contain
+/// none of the optimization's code (its off state costs nothing).
+template <BlendMode Mode, bool Lit, bool Optimized>
 void renderRows(const SceneView& s, const CameraView& cam, const FrameParams& fp, const float* depth, float* rgba,
   uint32_t previous, int threads, const ImportanceFrame& imp, RenderCounters* counters)
 {
@@ -30,7 +32,7 @@ void renderRows(const SceneView& s, const CameraView& cam, const FrameParams& fp
   uint64_t importance = 0, overflows = 0;
   const int W = cam.width;
   const int H = cam.height;
-  Accumulator::ImportancePool* pool = imp.pool;
+  Accumulator::ImportancePool* pool = Optimized ? imp.pool : nullptr;
   const int pass = pool ? pool->passes : 0;
 #pragma omp parallel num_threads(threads > 0 ? threads : omp_get_max_threads()) \
   reduction(+ : dda, tentative, real, samples, scattering, shadowRays, gradients, importance, overflows)
@@ -44,7 +46,7 @@ void renderRows(const SceneView& s, const CameraView& cam, const FrameParams& fp
         const size_t p = size_t(y) * size_t(W) + size_t(x);
         const float z = depth ? depth[p] : 1.f;
         Vec4f sum;
-        if (pool)
+        if (Optimized)
         {
           ImportanceSegment* seg = pool->segments.data() + p * size_t(kImportanceCapacity);
           int count = pool->counts[p];
@@ -59,7 +61,7 @@ void renderRows(const SceneView& s, const CameraView& cam, const FrameParams& fp
           ri.segments = seg;
           ri.count = count;
           ri.total = pool->totals[p];
-          sum = renderPixel<Mode, Lit>(s, cam, fp, x, y, z, c, &ri);
+          sum = renderPixel<Mode, Lit, true>(s, cam, fp, x, y, z, c, &ri);
         }
         else
         {
@@ -74,8 +76,11 @@ void renderRows(const SceneView& s, const CameraView& cam, const FrameParams& fp
       scattering += c.scattering;
       shadowRays += c.shadowRays;
       gradients += c.gradients;
-      importance += c.importance;
-      overflows += c.importanceOverflows;
+      if (Optimized)
+      {
+        importance += c.importance;
+        overflows += c.importanceOverflows;
+      }
     }
   }
   if (pool)
@@ -102,13 +107,16 @@ template <BlendMode Mode>
 void rows(bool lit, const SceneView& s, const CameraView& cam, const FrameParams& fp, const float* depth, float* rgba,
   uint32_t previous, int threads, const ImportanceFrame& imp, RenderCounters* counters)
 {
+  const bool optimized = imp.pool != nullptr;
   if (lit)
   {
-    renderRows<Mode, true>(s, cam, fp, depth, rgba, previous, threads, imp, counters);
+    optimized ? renderRows<Mode, true, true>(s, cam, fp, depth, rgba, previous, threads, imp, counters)
+              : renderRows<Mode, true, false>(s, cam, fp, depth, rgba, previous, threads, imp, counters);
   }
   else
   {
-    renderRows<Mode, false>(s, cam, fp, depth, rgba, previous, threads, imp, counters);
+    optimized ? renderRows<Mode, false, true>(s, cam, fp, depth, rgba, previous, threads, imp, counters)
+              : renderRows<Mode, false, false>(s, cam, fp, depth, rgba, previous, threads, imp, counters);
   }
 }
 } // namespace

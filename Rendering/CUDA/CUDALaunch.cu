@@ -116,7 +116,7 @@ __global__ void renderOptimizedKernel(const __grid_constant__ SceneView s, const
     ri.segments = seg;
     ri.count = count;
     ri.total = total;
-    const Vec4f sum = renderPixel<Mode, Lit>(s, cam, fp, x, y, z, c, &ri);
+    const Vec4f sum = renderPixel<Mode, Lit, true>(s, cam, fp, x, y, z, c, &ri);
     accumulatePixel(accum + p, sum, previous, fp.samplesPerPixel);
   }
   // Always counted (one atomic per warp and counter): the overflow count is

@@ -23,11 +23,15 @@ struct FrameParams
  * Sum of `samplesPerPixel` Monte Carlo samples of pixel (x, y), premultiplied
  * RGBA. Sample k of a pixel draws from Rng(pixel, firstSample + k, seed), so
  * the result depends on nothing but the pixel, the sample indices and the seed.
+ * Optimized (a compile-time choice, as Lit) tracks through the visibility
+ * optimization with the pixel's list `imp`; without it the tracking code is
+ * exactly the unoptimized one (the null list folds away).
  */
-template <BlendMode Mode, bool Lit = false>
+template <BlendMode Mode, bool Lit = false, bool Optimized = false>
 MCVOL_FUNC Vec4f renderPixel(const SceneView& s, const CameraView& cam, const FrameParams& fp, int x, int y,
   float depth, RayCounters& c, const RayImportance* imp = nullptr)
 {
+  const RayImportance* ri = Optimized ? imp : nullptr;
   ShadowCounters sc;
   Vec4f sum;
   const uint32_t pixel = uint32_t(y) * uint32_t(cam.width) + uint32_t(x);
@@ -41,8 +45,8 @@ MCVOL_FUNC Vec4f renderPixel(const SceneView& s, const CameraView& cam, const Fr
     {
       continue;
     }
-    const Vec4f v = Lit ? traceLitSample<Mode>(s, fp.tracker, ray.o, ray.d, ray.world, ray.tmax, rng, c, sc, imp)
-                        : traceSample<Mode>(s, fp.tracker, ray.o, ray.d, 0.f, ray.tmax, rng, c, imp);
+    const Vec4f v = Lit ? traceLitSample<Mode>(s, fp.tracker, ray.o, ray.d, ray.world, ray.tmax, rng, c, sc, ri)
+                        : traceSample<Mode>(s, fp.tracker, ray.o, ray.d, 0.f, ray.tmax, rng, c, ri);
     sum.r += v.r;
     sum.g += v.g;
     sum.b += v.b;
