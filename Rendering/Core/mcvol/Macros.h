@@ -19,6 +19,14 @@
 #endif
 
 #define MCVOL_FUNC MCVOL_HOST_DEVICE inline
+/// Rarely taken per-ray code kept out of line on the CPU, so that its
+/// presence does not change how the hot path around it is inlined (the
+/// device compiler inlines it as usual).
+#if defined(__CUDACC__) || !defined(__GNUC__)
+#define MCVOL_OUTLINE MCVOL_HOST_DEVICE inline
+#else
+#define MCVOL_OUTLINE __attribute__((noinline)) inline
+#endif
 #define MCVOL_HOT MCVOL_HOST_DEVICE MCVOL_FORCE_INLINE
 
 namespace mcvol

@@ -48,15 +48,17 @@ struct Hit
 /// still real under mu' = f mu (paper 004, Eq. 8)? The factor f <= 1 scales
 /// the blend's extinction and so every channel's alike (colours keep their
 /// proportions); `sigma` is the extinction the unoptimized test used.
+MCVOL_OUTLINE bool optimizedCollision(
+  const SceneView& s, const RayImportance& imp, float t, Vec3f p, float xiMaj, float sigma, RayCounters& c)
+{
+  ++c.importance;
+  return xiMaj < sigma * importanceFactor(s.importance, imp, t, importanceAt(s, p));
+}
+
 MCVOL_HOT bool realUnderImportance(
   const SceneView& s, const RayImportance* imp, float t, Vec3f p, float xiMaj, float sigma, RayCounters& c)
 {
-  if (!imp)
-  {
-    return true;
-  }
-  ++c.importance;
-  return xiMaj < sigma * importanceFactor(s.importance, *imp, t, importanceAt(s, p));
+  return !imp || optimizedCollision(s, *imp, t, p, xiMaj, sigma, c);
 }
 
 template <BlendMode Mode>
