@@ -56,6 +56,26 @@ double SnapImportanceLevel(double level)
   return level >= 1.0 ? 1.0 : std::round(level * 4.0) / 4.0;
 }
 
+// Whether any control point of an importance function snaps to a level > 0
+// (between points the function interpolates, so it never exceeds them).
+bool CarriesImportance(vtkPiecewiseFunction* function)
+{
+  if (!function)
+  {
+    return false;
+  }
+  double node[4];
+  for (int i = 0; i < function->GetSize(); ++i)
+  {
+    function->GetNodeValue(i, node);
+    if (SnapImportanceLevel(node[1]) > 0.0)
+    {
+      return true;
+    }
+  }
+  return false;
+}
+
 // Points the mapper at a point array by name, touching it only on a change
 // (every touch would restart the image).
 void SelectPointArray(vtkMultiChannelVolumeMapper* mapper, const std::string& name)
@@ -330,6 +350,20 @@ void vtkMultiChannelVolumeRepresentation::SetChannelImportanceThreshold(int chan
   SetEntry(this->ImportanceThresholds, channel, threshold, std::numeric_limits<double>::quiet_NaN());
 }
 
+void vtkMultiChannelVolumeRepresentation::SetChannelImportanceFunction(int channel, vtkPiecewiseFunction* function)
+{
+  if (channel < 0 || channel >= NUMBER_OF_IMPORTANCE_FUNCTIONS)
+  {
+    vtkErrorMacro("importance function " << channel + 1 << " is outside 1.." << NUMBER_OF_IMPORTANCE_FUNCTIONS);
+    return;
+  }
+  if (this->ImportanceFunctions[channel] != function)
+  {
+    this->ImportanceFunctions[channel] = function;
+    this->MarkModified();
+  }
+}
+
 //------------------------------------------------------------------------------
 int vtkMultiChannelVolumeRepresentation::GetTotalSamples()
 {
@@ -492,6 +526,12 @@ void vtkMultiChannelVolumeRepresentation::UpdateChannelImportance(int numChannel
   {
     // Entries past the channel list are ignored rather than kept on the
     // mapper, which would otherwise hold them for channels that come later.
+    vtkPiecewiseFunction* function = c < NUMBER_OF_IMPORTANCE_FUNCTIONS ? this->ImportanceFunctions[c].Get() : nullptr;
+    if (c < numChannels && CarriesImportance(function))
+    {
+      mapper->SetChannelImportance(c, function);
+      continue;
+    }
     const double level = c < numChannels ? SnapImportanceLevel(EntryOr(this->ImportanceLevels, c, 0.0)) : 0.0;
     const double threshold = EntryOr(this->ImportanceThresholds, c, none);
     if (level == 0.0 || !std::isfinite(threshold))

@@ -132,6 +132,28 @@ public:
 
   ///@{
   /**
+   * Per-channel importance as a function of the channel's value (data
+   * units), edited in ParaView like an opacity function: properties
+   * "Channel 1 Importance" ... "Channel 8 Importance". A function whose
+   * values all snap to 0 (the default: 0 everywhere) leaves the channel to
+   * the level/threshold lists above; one that reaches 0.125 or more is handed
+   * to the mapper (vtkMultiChannelVolumeMapper::SetChannelImportance, which
+   * snaps it to 0, 1/4, 1/2, 3/4, 1) and wins over the lists.
+   */
+  static constexpr int NUMBER_OF_IMPORTANCE_FUNCTIONS = 8;
+  void SetChannelImportanceFunction(int channel, vtkPiecewiseFunction* function);
+  void SetChannelImportanceFunction1(vtkPiecewiseFunction* f) { this->SetChannelImportanceFunction(0, f); }
+  void SetChannelImportanceFunction2(vtkPiecewiseFunction* f) { this->SetChannelImportanceFunction(1, f); }
+  void SetChannelImportanceFunction3(vtkPiecewiseFunction* f) { this->SetChannelImportanceFunction(2, f); }
+  void SetChannelImportanceFunction4(vtkPiecewiseFunction* f) { this->SetChannelImportanceFunction(3, f); }
+  void SetChannelImportanceFunction5(vtkPiecewiseFunction* f) { this->SetChannelImportanceFunction(4, f); }
+  void SetChannelImportanceFunction6(vtkPiecewiseFunction* f) { this->SetChannelImportanceFunction(5, f); }
+  void SetChannelImportanceFunction7(vtkPiecewiseFunction* f) { this->SetChannelImportanceFunction(6, f); }
+  void SetChannelImportanceFunction8(vtkPiecewiseFunction* f) { this->SetChannelImportanceFunction(7, f); }
+  ///@}
+
+  ///@{
+  /**
    * Read back by the client (information properties).
    */
   int GetTotalSamples();
@@ -174,6 +196,7 @@ protected:
     double Threshold = 0.0;
   };
   std::vector<ImportanceStep> ImportanceSteps;
+  vtkSmartPointer<vtkPiecewiseFunction> ImportanceFunctions[NUMBER_OF_IMPORTANCE_FUNCTIONS];
   std::string ChannelStatus;
   std::string BackendReport;
 

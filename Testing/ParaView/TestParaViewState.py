@@ -50,6 +50,9 @@ settings = {
 }
 for name, value in settings.items():
     setattr(rep, name, value)
+# Channel 3's importance from its function (it wins over the lists' entry).
+importance3 = [0.0, 0.0, 0.5, 0.0, 0.6, 0.0, 0.5, 0.0, 0.6001, 0.75, 0.5, 0.0, 1.0, 0.75, 0.5, 0.0]
+rep.ChannelImportanceFunction3.Points = importance3
 T.render_converged(view, rep)
 before = T.capture(view)
 # The importance must matter here, or losing it on load would go unnoticed.
@@ -85,6 +88,10 @@ for name, value in settings.items():
         got = list(got)
     ok = np.allclose(got, value) if isinstance(value, (list, float)) else got == value
     checks.check(ok, "%s is kept (%s)" % (name, got))
+checks.check(np.allclose(list(rep.ChannelImportanceFunction3.Points), importance3),
+             "channel 3's importance function is kept (%s)" % list(rep.ChannelImportanceFunction3.Points))
+checks.check(max(list(rep.ChannelImportanceFunction1.Points)[1::4]) == 0.0,
+             "an untouched importance function is kept at 0")
 checks.check(list(rep.ChannelLookupTables) == [simple.GetColorTransferFunction(n) for n in names],
              "ChannelLookupTables point at the loaded transfer functions of the channels")
 for n in names:

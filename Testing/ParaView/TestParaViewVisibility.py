@@ -183,6 +183,53 @@ share_occluder = green_share(render())
 checks.check(share_occluder <= share_off + 0.01,
              "importance on the occluder does not raise the target's share (green share %.3f)" % share_occluder)
 
+occluder_important = render()
+
+# ---- Importance functions, edited like opacity functions ----------------------
+# "Channel 2 Importance" as the same step (0 below 0.5, 1 from 0.5 up) that the
+# lists make: the same table, so the same image, bit for bit.
+below = float(np.nextafter(0.5, -np.inf))
+step = [below, 0.0, 0.5, 0.0, 0.5, 1.0, 0.5, 0.0]
+function2 = rep.ChannelImportanceFunction2
+checks.check(max(list(function2.Points)[1::4]) == 0.0, "an importance function starts at 0 everywhere")
+rep.ChannelImportanceLevels = []
+rep.ChannelImportanceThresholds = []
+function2.Points = step
+d = differs(render(), on)
+checks.check(d == 0.0, "a step importance function gives the image of the same step from the lists "
+             "(mean |diff| %.4f)" % d)
+# The function wins over the lists; a function that snaps to 0 leaves them be.
+rep.ChannelImportanceLevels = [0.0, 0.5]
+rep.ChannelImportanceThresholds = [0.0, 0.9]
+d = differs(render(), on)
+checks.check(d == 0.0, "channel 2's function wins over its list entries (mean |diff| %.4f)" % d)
+rep.ChannelImportanceLevels = [1.0, 0.0]
+rep.ChannelImportanceThresholds = [0.5, 0.0]
+function2.Points = [0.0, 0.1, 0.5, 0.0, 1.0, 0.1, 0.5, 0.0]
+d = differs(render(), occluder_important)
+checks.check(d == 0.0, "a function below 1/8 everywhere (snapped to 0) leaves the lists in charge "
+             "(mean |diff| %.4f)" % d)
+rep.ChannelImportanceLevels = []
+rep.ChannelImportanceThresholds = []
+function2.Points = step
+render()
+total = T.info(rep, "TotalSamples")
+simple.Render(view)
+checks.check(T.info(rep, "TotalSamples") > total or T.info(rep, "Converged") == 1,
+             "an unchanged function keeps refining")
+function2.Points = [0.7999, 0.0, 0.5, 0.0, 0.8, 1.0, 0.5, 0.0]
+simple.Render(view)
+checks.check(T.info(rep, "TotalSamples") == 8, "editing the function restarts the image (%d samples)"
+             % T.info(rep, "TotalSamples"))
+d = differs(render(), on)
+checks.check(d > 0.0, "a higher threshold in the function changes the image (mean |diff| %.4f)" % d)
+# Channel 1's function: importance on the occluder, as from the lists.
+function2.Points = [0.0, 0.0, 0.5, 0.0, 1.0, 0.0, 0.5, 0.0]
+rep.ChannelImportanceFunction1.Points = step
+d = differs(render(), occluder_important)
+checks.check(d == 0.0, "channel 1's function reaches channel 1 (mean |diff| %.4f)" % d)
+rep.ChannelImportanceFunction1.Points = [0.0, 0.0, 0.5, 0.0, 1.0, 0.0, 0.5, 0.0]
+
 # Channels from the components of one array: component k is channel k.
 rep.ChannelImportanceLevels = [0.0, 1.0]
 rep.ChannelImportanceThresholds = [0.0, 0.5]
