@@ -16,11 +16,18 @@ from .schema import (
     CAMERA_KEYS,
     CHANNEL_KEYS,
     COMPOSITING,
+    DEMO_INPUT_KEYS,
     DEMO_NAMES,
+    ENDIANNESS,
+    FILE_FORMATS,
+    FILE_INPUT_KEYS,
     LIGHT_KEYS,
     LIGHTING_KEYS,
     MAX_CHANNELS,
+    RAW_INPUT_KEYS,
+    RAW_TYPES,
     RENDERERS,
+    RESAMPLING,
     SHADOWS,
     TOP_KEYS,
     TRACKING,
@@ -32,32 +39,104 @@ from .schema import (
     get_string,
     get_vector,
     join_key,
+    split_extension,
     type_name,
 )
 
 
-def parse_input(v, scene_dir):
+def parse_demo(v):
+    check_keys(v, "input", DEMO_INPUT_KEYS, required=("demo",))
+    demo = {"demo": get_string(v["demo"], "input.demo", DEMO_NAMES), "dimensions": [0, 0, 0], "channels": 0}
+    if "dimensions" in v:
+        demo["dimensions"] = get_vector(
+            v["dimensions"], "input.dimensions", 3, "[x, y, z] voxel counts", lo=1, hi=8192, integer=True
+        )
+    if "channels" in v:
+        demo["channels"] = get_number(v["channels"], "input.channels", lo=1, hi=MAX_CHANNELS, integer=True)
+    return demo
+
+
+def parse_file_input(v, path, scene_dir):
+    """One file: a name, {"file": name, ...} or a raw file {"raw": name, ...}.
+    `key` is where it is in the scene, `file_key` the key naming the file."""
     if isinstance(v, str):
-        filename = v if os.path.isabs(v) else os.path.join(scene_dir, v)
-        ext = os.path.splitext(v)[1].lower()
-        if ext not in (".vti", ".mha", ".mhd", ".nrrd", ".nhdr"):
-            raise SceneError("input", "unsupported file type '%s' (expected .vti, .mha, .mhd, .nrrd or .nhdr)" % ext)
-        if not os.path.isfile(filename):
-            raise SceneError("input", "file not found: %s" % filename)
-        return {"file": filename, "ext": ext}
-    if isinstance(v, dict):
-        check_keys(v, "input", {"demo", "dimensions", "channels"}, required=("demo",))
-        demo = {"demo": get_string(v["demo"], "input.demo", DEMO_NAMES), "dimensions": [0, 0, 0], "channels": 0}
-        if "dimensions" in v:
-            demo["dimensions"] = get_vector(
-                v["dimensions"], "input.dimensions", 3, "[x, y, z] voxel counts", lo=1, hi=8192, integer=True
-            )
-        if "channels" in v:
-            demo["channels"] = get_number(v["channels"], "input.channels", lo=1, hi=MAX_CHANNELS, integer=True)
-        return demo
-    raise SceneError(
-        "input", 'expected a file name or {"demo": name, ...}, got %s' % type_name(v)
-    )
+        v, file_key = {"file": v}, path
+    elif isinstance(v, dict) and "demo" in v:
+        raise SceneError(path, "a demo cannot be one of several inputs")
+    elif isinstance(v, dict) and "raw" in v:
+        check_keys(v, path, RAW_INPUT_KEYS, required=("raw", "dimensions", "type"))
+        file_key = join_key(path, "raw")
+    elif isinstance(v, dict) and "file" in v:
+        check_keys(v, path, FILE_INPUT_KEYS)
+        file_key = join_key(path, "file")
+    elif isinstance(v, dict):
+        raise SceneError(path, 'an input object needs "file", "raw" or "demo"')
+    else:
+        raise SceneError(path, "expected a file name or an input object, got %s" % type_name(v))
+    name = get_string(v["raw"] if "raw" in v else v["file"], file_key)
+    stem, ext = split_extension(name)
+    entry = {"key": path, "file_key": file_key, "name": stem, "resample": None}
+    if "raw" in v:
+        entry["format"] = "raw"
+        entry["raw"] = {
+            "dimensions": get_vector(v["dimensions"], join_key(path, "dimensions"), 3, "[x, y, z] voxel counts", lo=1,
+                                     hi=1 << 20, integer=True),
+            "type": get_string(v["type"], join_key(path, "type"), RAW_TYPES),
+            "endianness": get_string(v["endianness"], join_key(path, "endianness"), ENDIANNESS)
+            if "endianness" in v else "little",
+            "components": get_number(v["components"], join_key(path, "components"), lo=1, hi=MAX_CHANNELS,
+                                     integer=True) if "components" in v else 1,
+        }
+    elif ext in FILE_FORMATS:
+        entry["format"] = FILE_FORMATS[ext]
+    else:
+        raise SceneError(file_key, "unsupported file type '%s' (expected %s; raw files: {\"raw\": name, ...})"
+                         % (ext, ", ".join(FILE_FORMATS)))
+    entry["file"] = name if os.path.isabs(name) else os.path.join(scene_dir, name)
+    if not os.path.isfile(entry["file"]):
+        raise SceneError(file_key, "file not found: %s" % entry["file"])
+    if "name" in v:
+        entry["name"] = get_string(v["name"], join_key(path, "name"))
+        if not entry["name"]:
+            raise SceneError(join_key(path, "name"), "must not be empty")
+    if "spacing" in v:
+        entry["spacing"] = get_vector(v["spacing"], join_key(path, "spacing"), 3, "[x, y, z] > 0", lo=0.0,
+                                      lo_open=True)
+    if "origin" in v:
+        entry["origin"] = get_vector(v["origin"], join_key(path, "origin"), 3, "[x, y, z]")
+    if "resample" in v:
+        r = v["resample"]
+        if isinstance(r, bool):
+            entry["resample"] = "auto" if r else None
+        else:
+            entry["resample"] = get_string(r, join_key(path, "resample"), RESAMPLING)
+    return entry
+
+
+def parse_input(v, scene_dir):
+    """A demo ({"demo": ...}), or {"inputs": [file entries], "list": bool}:
+    one file, or a list of files whose arrays make up one image."""
+    if isinstance(v, dict) and "demo" in v:
+        return parse_demo(v)
+    if isinstance(v, list):
+        if not v or len(v) > MAX_CHANNELS:
+            raise SceneError("input", "expected a list of 1 to %d inputs, got %d" % (MAX_CHANNELS, len(v)))
+        entries = [parse_file_input(x, "input[%d]" % i, scene_dir) for i, x in enumerate(v)]
+        if entries[0]["resample"]:
+            raise SceneError("input[0].resample", "the first input is the grid that the others are resampled onto")
+        names = {}
+        for e in entries:
+            if e["name"] in names:
+                raise SceneError(e["key"], "two inputs are named '%s' (%s and %s): give one a \"name\""
+                                 % (e["name"], names[e["name"]], e["key"]))
+            names[e["name"]] = e["key"]
+        return {"inputs": entries, "list": True}
+    if isinstance(v, (str, dict)):
+        entry = parse_file_input(v, "input", scene_dir)
+        if entry["resample"]:
+            raise SceneError("input.resample", "only the inputs of a list after the first are resampled")
+        return {"inputs": [entry], "list": False}
+    raise SceneError("input", 'expected a file name, an input object or a list of inputs, got %s' % type_name(v))
 
 
 def parse_color(v, path, scene_dir, presets):

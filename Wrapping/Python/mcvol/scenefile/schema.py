@@ -8,6 +8,7 @@ offending entry ("channels[2].opacity[1][1]: must be <= 1.0, got 2").
 
 import json
 import math
+import os
 
 from .errors import SceneError
 
@@ -19,6 +20,25 @@ RENDERERS = ("montecarlo", "raymarch")
 COMPOSITING = ("extinction", "opacity")
 SHADOWS = ("ratio", "delta", "none")
 MAX_CHANNELS = 32
+
+# Input files by extension (readers.py reads them); ".nii.gz" counts as one.
+FILE_FORMATS = {
+    ".vti": "vti",
+    ".mha": "meta",
+    ".mhd": "meta",
+    ".nrrd": "nrrd",
+    ".nhdr": "nrrd",
+    ".nii": "nifti",
+    ".nii.gz": "nifti",
+    ".tif": "tiff",
+    ".tiff": "tiff",
+}
+RAW_TYPES = ("uint8", "int16", "uint16", "float32", "float64")
+ENDIANNESS = ("little", "big")
+RESAMPLING = ("linear", "nearest")
+DEMO_INPUT_KEYS = {"demo", "dimensions", "channels"}
+FILE_INPUT_KEYS = {"file", "name", "spacing", "origin", "resample"}
+RAW_INPUT_KEYS = {"raw", "dimensions", "type", "endianness", "components", "name", "spacing", "origin", "resample"}
 
 TOP_KEYS = {
     "description",
@@ -85,6 +105,18 @@ def join_key(path, key):
     if isinstance(key, int):
         return "%s[%d]" % (path, key)
     return "%s.%s" % (path, key) if path else key
+
+
+def split_extension(filename):
+    """(stem, extension) of a file name, the extension lower case: "T1.nii.gz"
+    -> ("T1", ".nii.gz"), "cells.ome.tif" -> ("cells", ".tif")."""
+    base = os.path.basename(filename)
+    lower = base.lower()
+    for ext, kept in ((".nii.gz", ".nii.gz"), (".ome.tiff", ".tiff"), (".ome.tif", ".tif")):
+        if lower.endswith(ext):
+            return base[: -len(ext)], kept
+    stem, ext = os.path.splitext(base)
+    return stem, ext.lower()
 
 
 def type_name(v):
