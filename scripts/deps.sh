@@ -10,7 +10,7 @@ MCVOL_PACKAGES=(
   # find_package(ParaView) needs these Qt development packages
   qtbase5-dev qttools5-dev libqt5svg5-dev libqt5x11extras5-dev libqt5opengl5-dev
   # tests: an X server for OpenGL, GoogleTest sources, numpy/matplotlib/scikit-image
-  xvfb xauth googletest python3-numpy python3-matplotlib python3-skimage
+  xvfb xauth googletest python3-numpy python3-matplotlib python3-skimage python3-tifffile
   # ParaView's VTK links VTK::glew and VTK::tiff through these -dev packages' targets
   libglew-dev libtiff-dev
   # The ParaView plugin: find_package(ParaView COMPONENTS RemotingViews) looks up

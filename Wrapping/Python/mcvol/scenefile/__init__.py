@@ -9,7 +9,8 @@ The steps, one module each, in the order a scene goes through them:
                  presets.py (colour maps by name, ParaView's JSON format).
     assemble.py  plain data -> a VTK pipeline: the input read or generated,
                  its channels found, transfer functions, mapper, lights,
-                 camera, an offscreen window.
+                 camera, an offscreen window. Builds on readers.py (the
+                 input files, one or several, as one vtkImageData).
     render.py    accumulates the samples and writes the outputs (output.py:
                  PNG and PFM).
 

@@ -18,7 +18,8 @@ VTK_MAX_VRCOMP = 4
 
 
 def load_input(spec, errors, need_arrays=True):
-    """Returns (vtkImageData, demo source or None)."""
+    """Returns (vtkImageData, demo source or None): the demo generated, or
+    the files read (readers.py)."""
     if "demo" in spec:
         from mcvol import vtkMultiChannelDemoSource
 
@@ -33,29 +34,9 @@ def load_input(spec, errors, need_arrays=True):
         if errors.messages:
             raise SceneError("input", "cannot generate the demo: %s" % errors.messages[-1])
         return src.GetOutput(), src
-    ext = spec["ext"]
-    if ext == ".vti":
-        from vtkmodules.vtkIOXML import vtkXMLImageDataReader
+    from .readers import read_inputs
 
-        reader = vtkXMLImageDataReader()
-    elif ext in (".mha", ".mhd"):
-        from vtkmodules.vtkIOImage import vtkMetaImageReader
-
-        reader = vtkMetaImageReader()
-    else:
-        from vtkmodules.vtkIOImage import vtkNrrdReader
-
-        reader = vtkNrrdReader()
-    errors.watch(reader)
-    reader.SetFileName(spec["file"])
-    if not reader.CanReadFile(spec["file"]):
-        raise SceneError("input", "cannot read '%s' as %s" % (spec["file"], ext))
-    reader.Update()
-    image = reader.GetOutput()
-    if errors.messages or image is None or image.GetNumberOfPoints() == 0:
-        detail = (": " + errors.messages[-1]) if errors.messages else ""
-        raise SceneError("input", "cannot read image data from '%s'%s" % (spec["file"], detail))
-    return image, None
+    return read_inputs(spec, errors), None
 
 
 def resolve_channels(scene, image, demo):
@@ -87,7 +68,9 @@ def resolve_channels(scene, image, demo):
         else:
             array = scalars
             if array is None:
-                raise SceneError(path, "the input has no point scalars: give \"array\"")
+                names = [pd.GetArrayName(k) for k in range(pd.GetNumberOfArrays())]
+                raise SceneError(path, "the input has no point scalars: give \"array\" (the input has: %s)"
+                                 % (", ".join(n for n in names if n) or "none"))
             where = "the point scalars '%s'" % (array.GetName() or "")
             key = path
         ncomp = array.GetNumberOfComponents()

@@ -127,9 +127,9 @@ def parse_input(v, scene_dir):
         names = {}
         for e in entries:
             if e["name"] in names:
-                raise SceneError(e["key"], "two inputs are named '%s' (%s and %s): give one a \"name\""
-                                 % (e["name"], names[e["name"]], e["key"]))
-            names[e["name"]] = e["key"]
+                raise SceneError(e["key"], "'%s' and '%s' (%s) are both named '%s': give one a \"name\""
+                                 % (e["file"], names[e["name"]]["file"], names[e["name"]]["key"], e["name"]))
+            names[e["name"]] = e
         return {"inputs": entries, "list": True}
     if isinstance(v, (str, dict)):
         entry = parse_file_input(v, "input", scene_dir)
