@@ -692,6 +692,7 @@ bool vtkMultiChannelVolumeMapper::UpdateScene(RenderPass& pass)
       weights[c] = static_cast<float>(in.MixWeights[c]);
     }
     in.Scene.setMixWeights(weights.data(), numChannels);
+    in.Scene.setMixAverage(this->MixColorMode == MIX_AVERAGE);
     // Lighting: only with ShadeOn (the lights' state joins the reset key).
     mcvol::adapter::LightingSettings lighting;
     lighting.AmbientRadiance = this->AmbientRadiance;
@@ -829,6 +830,7 @@ void vtkMultiChannelVolumeMapper::PrintSelf(ostream& os, vtkIndent indent)
   this->Superclass::PrintSelf(os, indent);
   vtkInternals& in = *this->Internals;
   os << indent << "ChannelBlendMode: " << this->GetChannelBlendModeAsString() << "\n";
+  os << indent << "MixColorMode: " << (this->MixColorMode == MIX_AVERAGE ? "Average" : "Equation10") << "\n";
   os << indent << "TrackingMethod: " << this->GetTrackingMethodAsString() << "\n";
   os << indent << "SamplesPerPixel: " << this->SamplesPerPixel << "\n";
   os << indent << "Progressive: " << this->Progressive << "\n";

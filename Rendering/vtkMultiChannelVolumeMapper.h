@@ -310,6 +310,32 @@ public:
   double GetMixWeight(int channel);
   ///@}
 
+  enum MixColorModes
+  {
+    MIX_AVERAGE = 0,
+    MIX_EQUATION_10 = 1
+  };
+
+  ///@{
+  /**
+   * The colour of MC_MIX_BLEND at a point (extinction is max_n sigma_n either
+   * way):
+   * - MIX_AVERAGE (default): sum_n w_n sigma_n c_n / sum_n w_n sigma_n, the
+   *   weighted average of the colours of the channels present there. A
+   *   channel alone keeps its full colour whatever the number of channels.
+   * - MIX_EQUATION_10: sum_n w_n sigma_n c_n / max_n sigma_n with the weights
+   *   normalised to sum 1, as Sahistan et al. publish it. With N equal
+   *   weights a channel alone shows 1/N of its colour.
+   * Both are the same where the present channels have equal extinction and
+   * their weights sum to 1. The ray-marching mapper follows the same setting
+   * (with opacities in place of extinctions in its opacity model).
+   */
+  vtkSetClampMacro(MixColorMode, int, MIX_AVERAGE, MIX_EQUATION_10);
+  vtkGetMacro(MixColorMode, int);
+  void SetMixColorModeToAverage() { this->SetMixColorMode(MIX_AVERAGE); }
+  void SetMixColorModeToEquation10() { this->SetMixColorMode(MIX_EQUATION_10); }
+  ///@}
+
   ///@{
   /**
    * View-dependent visibility optimization (Lerzer and Dachsbacher, EG 2025):
@@ -488,6 +514,7 @@ protected:
 #endif
 
   int ChannelBlendMode = MC_DENSITY_BLEND;
+  int MixColorMode = MIX_AVERAGE;
   int TrackingMethod = ONE_DDA;
   int SamplesPerPixel = 1;
   unsigned int Seed = 0;

@@ -194,6 +194,11 @@ void vtkMultiChannelVolumeRepresentation::SetNumberOfMixWeights(int n)
   this->MixWeights.assign(static_cast<size_t>(std::max(0, n)), 1.0);
 }
 
+void vtkMultiChannelVolumeRepresentation::SetMixColorMode(int mode)
+{
+  this->GetMultiChannelMapper()->SetMixColorMode(mode);
+}
+
 void vtkMultiChannelVolumeRepresentation::SetMixWeight(int channel, double weight)
 {
   SetEntry(this->MixWeights, channel, weight, 1.0);

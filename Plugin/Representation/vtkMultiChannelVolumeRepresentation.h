@@ -86,6 +86,7 @@ public:
   void SetChannelBlendMode(int mode);
   void SetNumberOfMixWeights(int n);
   void SetMixWeight(int channel, double weight);
+  void SetMixColorMode(int mode);
   void SetTrackingMethod(int method);
   void SetSamplesPerRender(int spp);
   void SetProgressiveRefinement(bool on);

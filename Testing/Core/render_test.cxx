@@ -222,6 +222,7 @@ TEST(BlendModes, MixFollowsEquation10)
       const double s0 = order == 0 ? 0.04 : 0.1, s1 = order == 0 ? 0.1 : 0.04;
       TwoChannelSlab slab(s0, s1, BlendMode::Mix);
       slab.scene.setMixWeights(w, 2);
+      slab.scene.setMixAverage(false);
       slab.scene.update();
       EXPECT_FLOAT_EQ(slab.scene.view().blend.mixWeights[0], 0.75f);
       EXPECT_FLOAT_EQ(slab.scene.view().blend.mixWeights[1], 0.25f);
@@ -232,6 +233,49 @@ TEST(BlendModes, MixFollowsEquation10)
       const std::string what = std::string("mix ") + toString(t) + " order " + std::to_string(order);
       const double hits = slab.render(t, spp, ++seed, rgb, what);
       expectBinomial(hits, n, -std::expm1(-0.1 * slab.kThickness), kAlpha / 4, what);
+    }
+  }
+}
+
+// Mix, weighted-average colour (the default): extinction max_n sigma_n,
+// colour sum_n w_n sigma_n c_n / sum_n w_n sigma_n. Weights (3, 1); red from
+// channel 0, green from channel 1. Then one channel alone (the other at zero
+// opacity) keeps its full colour, where Eq. 10 shows w_0 of it. Alpha by
+// binomial tests (8 checks, kAlpha / 8 each).
+TEST(BlendModes, MixAverageKeepsALoneChannelsColour)
+{
+  uint32_t seed = 150;
+  const float w[2] = { 3.f, 1.f };
+  for (Tracker t : { Tracker::OneDDA, Tracker::NDDA })
+  {
+    for (int order = 0; order < 2; ++order)
+    {
+      const double s0 = order == 0 ? 0.04 : 0.1, s1 = order == 0 ? 0.1 : 0.04;
+      TwoChannelSlab slab(s0, s1, BlendMode::Mix);
+      slab.scene.setMixWeights(w, 2);
+      slab.scene.update();
+      EXPECT_TRUE(slab.scene.view().blend.mixAverage) << "the default";
+      const double sum = 0.75 * s0 + 0.25 * s1;
+      const float rgb[3] = { float(0.75 * s0 / sum), float(0.25 * s1 / sum), 0.f };
+      const int spp = 64;
+      const double n = double(slab.cam.width * slab.cam.height * spp);
+      const std::string what = std::string("mix average ") + toString(t) + " order " + std::to_string(order);
+      const double hits = slab.render(t, spp, ++seed, rgb, what);
+      expectBinomial(hits, n, -std::expm1(-0.1 * slab.kThickness), kAlpha / 8, what);
+    }
+    // Channel 1 absent: channel 0's own colour, full (Eq. 10: 0.75 of it).
+    for (bool average : { true, false })
+    {
+      TwoChannelSlab slab(0.1, 0.0, BlendMode::Mix);
+      slab.scene.setMixWeights(w, 2);
+      slab.scene.setMixAverage(average);
+      slab.scene.update();
+      const float rgb[3] = { average ? 1.f : 0.75f, 0.f, 0.f };
+      const int spp = 64;
+      const double n = double(slab.cam.width * slab.cam.height * spp);
+      const std::string what = std::string(average ? "average" : "Eq. 10") + ", channel 0 alone, " + toString(t);
+      const double hits = slab.render(t, spp, ++seed, rgb, what);
+      expectBinomial(hits, n, -std::expm1(-0.1 * slab.kThickness), kAlpha / 8, what);
     }
   }
 }

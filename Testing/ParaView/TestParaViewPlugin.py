@@ -25,6 +25,9 @@ T.set_channel_functions(names)
 simple.Hide(figure3, view)
 
 images = {}
+# The baseline of Mix is Eq. 10 as published (the default colour, Average,
+# is tested in TestParaViewProperties and the core tests).
+rep.MixColorMode = "Equation 10"
 for mode in ["Density", "Max", "Mix", "Composite"]:
     rep.ChannelBlendMode = mode
     total = T.render_converged(view, rep)
@@ -43,6 +46,7 @@ for a in range(4):
         diff = np.abs(images[ma].astype(int) - images[mb].astype(int)).mean()
         checks.check(diff > 1.0, "blend modes %s and %s give different images (mean |diff| %.2f)" % (ma, mb, diff))
 
+rep.MixColorMode = "Average"
 # Mix weights: only the red channel left.
 rep.ChannelBlendMode = "Mix"
 rep.MixWeights = [1.0, 0.0, 0.0]

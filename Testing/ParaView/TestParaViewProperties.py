@@ -67,7 +67,10 @@ expect_property("SamplesPerRender", 4, False, "SamplesPerRender (same total)")
 expect_property("MaximumTotalSamples", 64, True)
 expect_property("ChannelBlendMode", "Mix", True)
 expect_property("MixWeights", [1.0, 0.0, 0.0], False, "MixWeights outside Mix")
+expect_property("MixColorMode", "Equation 10", False, "MixColorMode outside Mix")
 rep.ChannelBlendMode = "Mix"
+reference = image()
+expect_property("MixColorMode", "Equation 10", True, "MixColorMode in Mix")
 rep.MixWeights = [1.0, 0.0, 0.0]
 reference = image()
 expect_property("MixWeights", [1.0, 0.2, 0.2], True, "MixWeights in Mix")

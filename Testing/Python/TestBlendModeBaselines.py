@@ -31,7 +31,9 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 BASELINES = os.path.join(HERE, "..", "Data", "Baseline")
 SIZE = 160
 SPP = 32
-MODES = ["Density", "Max", "Mix", "Composite"]
+# "Mix" is Eq. 10 as published (SetMixColorModeToEquation10); "MixAverage" is
+# the default mix colour, the weighted average of the channels present.
+MODES = ["Density", "Max", "Mix", "MixAverage", "Composite"]
 DATASETS = ["figure3", "microscopy"]
 
 
@@ -65,12 +67,14 @@ def render(dataset, mode, tracker, spp=SPP, seed=7):
         prop.SetScalarOpacityUnitDistance(c, u[0])
     mapper = vtkMultiChannelVolumeMapper()
     mapper.SetInputConnection(src.GetOutputPort())
-    getattr(mapper, "SetChannelBlendModeTo" + mode)()
+    getattr(mapper, "SetChannelBlendModeTo" + ("Mix" if mode == "MixAverage" else mode))()
+    if mode == "Mix":
+        mapper.SetMixColorModeToEquation10()
     mapper.SetTrackingMethod(tracker)
     mapper.SetSamplesPerPixel(spp)
     mapper.SetSeed(seed)
     mapper.SetBackendToCPU()
-    if mode == "Mix":
+    if mode in ("Mix", "MixAverage"):
         for c in range(n):
             mapper.SetMixWeight(c, 1.0 + c)  # unequal weights, normalised by the mapper
     vol = vtkVolume()

@@ -71,6 +71,7 @@ BAD_SCENES = [
     ("missing-file", {"input": "no-such-file.vti", "channels": [{"component": 0}]}, "input: file not found"),
     ("bad-blend", {"input": {"demo": "figure3"}, "blend": "sum"}, "blend:"),
     ("bad-tracking", {"input": {"demo": "figure3"}, "tracking": "2-dda"}, "tracking:"),
+    ("bad-mix-color", {"input": {"demo": "figure3"}, "blend": "mix", "mix_color": "sum"}, "mix_color:"),
     ("bad-spp-type", {"input": {"demo": "figure3"}, "samples_per_pixel": "many"}, "samples_per_pixel:"),
     ("bad-spp-range", {"input": {"demo": "figure3"}, "samples_per_pixel": 0}, "samples_per_pixel:"),
     ("bad-size", {"input": {"demo": "figure3"}, "image_size": [64]}, "image_size:"),
@@ -163,6 +164,21 @@ def main():
             outs.append(read_png(out))
         if outs[0] is not None and outs[1] is not None:
             t.check(np.array_equal(outs[0], outs[1]), "two renders of %s differ" % scenes[0])
+
+    # mix_color: a channel alone is dimmed by Eq. 10 (3 equal weights: 1/3 of
+    # its colour) and not by the default weighted average.
+    means = {}
+    for mix_color in ("average", "equation10"):
+        fn = os.path.join(work, "mix-%s.json" % mix_color)
+        with open(fn, "w") as f:
+            json.dump({"input": {"demo": "figure3", "dimensions": [16, 16, 16]}, "blend": "mix",
+                       "mix_color": mix_color, "seed": 3}, f)
+        out = os.path.join(work, "mix-%s.png" % mix_color)
+        r = run(program, [fn, "-o", out, "--spp", "8", "--size", "32x32", "--backend", "cpu", "--quiet"])
+        t.check(r.returncode == 0, "mix_color %s: %d %r" % (mix_color, r.returncode, r.stderr))
+        means[mix_color] = read_png(out)[..., :3].astype(float).mean() if r.returncode == 0 else 0.0
+    t.check(means["average"] > 1.5 * means["equation10"],
+            "mix_color average is brighter than equation10 (%.1f vs %.1f)" % (means["average"], means["equation10"]))
 
     # The ray-marching reference from the command line and from the scene
     # file: one deterministic image, close to a Monte Carlo render of the

@@ -26,6 +26,19 @@ MCVOL_HOT bool outranks(float sk, int k, float sn, int n)
   return sk > sn || (sk == sn && k < n);
 }
 
+/// Mix colour from sum_n w_n sigma_n c_n (weighted), sum_n w_n sigma_n
+/// (weightedSigma) and max_n sigma_n (maxSigma > 0): the weighted average of
+/// the present channels' colours (mixAverage), or Eq. 10. Present channels
+/// that all weigh 0 give black either way.
+MCVOL_HOT Vec3f mixColour(const BlendView& b, Vec3f weighted, float weightedSigma, float maxSigma)
+{
+  if (b.mixAverage)
+  {
+    return weightedSigma > 0.f ? weighted * (1.f / weightedSigma) : Vec3f();
+  }
+  return weighted * (1.f / maxSigma);
+}
+
 /// One channel's transfer-function sample at p (extinction clamped to the
 /// render's limit, as the trackers clamp it).
 MCVOL_HOT TFSample channelOptics(const SceneView& s, int n, Vec3f p)
@@ -47,7 +60,8 @@ template <BlendMode Mode>
 MCVOL_HOT PointOptics blendedOptics(const SceneView& s, const int* channels, int count, Vec3f p)
 {
   PointOptics out;
-  Vec3f weighted; // sum of (weight) sigma_n c_n
+  Vec3f weighted;           // sum of (weight) sigma_n c_n
+  float weightedSigma = 0.f; // mix: sum of w_n sigma_n
   float best = -1.f;
   int bestChannel = -1;
   Vec3f bestColour;
@@ -70,6 +84,7 @@ MCVOL_HOT PointOptics blendedOptics(const SceneView& s, const int* channels, int
     if (Mode == BlendMode::Mix)
     {
       weighted += t.rgb * (t.sigma * s.blend.mixWeights[n]);
+      weightedSigma += t.sigma * s.blend.mixWeights[n];
     }
   }
   if (Mode == BlendMode::Density || Mode == BlendMode::Composite)
@@ -80,7 +95,7 @@ MCVOL_HOT PointOptics blendedOptics(const SceneView& s, const int* channels, int
   out.sigma = best > 0.f ? best : 0.f;
   if (out.sigma > 0.f)
   {
-    out.emission = Mode == BlendMode::Max ? bestColour : weighted * (1.f / out.sigma);
+    out.emission = Mode == BlendMode::Max ? bestColour : mixColour(s.blend, weighted, weightedSigma, out.sigma);
   }
   return out;
 }

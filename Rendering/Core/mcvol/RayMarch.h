@@ -142,6 +142,7 @@ MCVOL_HOT StepOptics stepOptics(const SceneView& s, const MarchParams& mp, const
   const Corners c = cornersOf(s.volume, p);
   float best = -1.f;
   int bestChannel = -1;
+  float mixAlpha = 0.f; // mix: sum of w_n alpha_n
   for (int i = 0; i < count; ++i)
   {
     const int n = channels[i];
@@ -164,6 +165,7 @@ MCVOL_HOT StepOptics stepOptics(const SceneView& s, const MarchParams& mp, const
     if (Mode == BlendMode::Mix)
     {
       out.colour += o.colour * s.blend.mixWeights[n];
+      mixAlpha += o.alpha * s.blend.mixWeights[n];
     }
   }
   if (Mode == BlendMode::Density || Mode == BlendMode::Composite)
@@ -179,6 +181,12 @@ MCVOL_HOT StepOptics stepOptics(const SceneView& s, const MarchParams& mp, const
   if (!(out.alpha > 0.f))
   {
     out.colour = Vec3f();
+  }
+  else if (Mode == BlendMode::Mix && s.blend.mixAverage)
+  {
+    // The opacity-weighted average of the present channels' colours, at the
+    // largest opacity (the opacity-model twin of mixColour).
+    out.colour = mixAlpha > 0.f ? out.colour * (out.alpha / mixAlpha) : Vec3f();
   }
   return out;
 }

@@ -149,6 +149,9 @@ public:
   /// Non-negative weights, one per channel; normalised to sum 1 (Eq. 10).
   /// All zero means equal weights.
   void setMixWeights(const float* weights, int count);
+  /// Mix colour (BlendView::mixAverage): true (default) the weighted average
+  /// of the channels present at a point; false Eq. 10 as published.
+  void setMixAverage(bool average) { this->View.blend.mixAverage = average; }
   /// Lights and scattering (throws std::invalid_argument on bad values).
   void setLighting(const LightingDesc& lighting);
   bool lit() const { return this->View.lighting.enabled; }

@@ -66,6 +66,10 @@ struct BlendView
 {
   BlendMode mode = BlendMode::Density;
   float mixWeights[kMaxChannels]; ///< sum to 1
+  /// Mix colour: divided by sum_n w_n sigma_n (true: the weighted average of
+  /// the channels present, a lone channel keeps its colour) or by
+  /// max_n sigma_n (false: Eq. 10, a lone channel shows w_n of its colour).
+  bool mixAverage = true;
 };
 
 /// Most lights a scene may have.

@@ -84,6 +84,7 @@ MCVOL_HOT bool realCollision(const SceneView& s, int n, Vec3f p, float xiMaj, Ve
   // Max and mix: channel n exists at p only if its extinction is the largest
   // (ties go to the lowest channel index, so equal channels do not vanish).
   Vec3f mix = own.rgb * (own.sigma * s.blend.mixWeights[n]);
+  float mixSigma = own.sigma * s.blend.mixWeights[n];
   for (int i = 0; i < s.numActive; ++i)
   {
     const int k = s.active[i];
@@ -100,14 +101,16 @@ MCVOL_HOT bool realCollision(const SceneView& s, int n, Vec3f p, float xiMaj, Ve
     if (Mode == BlendMode::Mix)
     {
       mix += other.rgb * (other.sigma * s.blend.mixWeights[k]);
+      mixSigma += other.sigma * s.blend.mixWeights[k];
     }
   }
   if (!realUnderImportance(s, imp, t, p, xiMaj, own.sigma, c))
   {
     return false;
   }
-  // Eq. 10: sum_k w_k sigma_k c_k / max_k sigma_k (sigma_n is the max).
-  rgb = Mode == BlendMode::Max ? own.rgb : mix * (1.f / own.sigma);
+  // Mix: sum_k w_k sigma_k c_k over sum_k w_k sigma_k, or over max_k sigma_k
+  // (Eq. 10; sigma_n is the max).
+  rgb = Mode == BlendMode::Max ? own.rgb : mixColour(s.blend, mix, mixSigma, own.sigma);
   return true;
 }
 

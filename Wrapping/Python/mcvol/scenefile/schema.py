@@ -14,6 +14,7 @@ from .errors import SceneError
 
 DEMO_NAMES = ("figure3", "microscopy", "cosmology", "weather")
 BLEND_MODES = ("density", "max", "mix", "composite")
+MIX_COLORS = ("average", "equation10")
 TRACKING = ("1-dda", "n-dda")
 BACKENDS = ("auto", "cpu", "cuda")
 RENDERERS = ("montecarlo", "raymarch")
@@ -45,6 +46,7 @@ TOP_KEYS = {
     "input",
     "channels",
     "blend",
+    "mix_color",
     "tracking",
     "backend",
     "samples_per_pixel",
