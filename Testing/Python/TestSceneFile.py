@@ -72,6 +72,7 @@ BAD_SCENES = [
     ("bad-blend", {"input": {"demo": "figure3"}, "blend": "sum"}, "blend:"),
     ("bad-tracking", {"input": {"demo": "figure3"}, "tracking": "2-dda"}, "tracking:"),
     ("bad-mix-color", {"input": {"demo": "figure3"}, "blend": "mix", "mix_color": "sum"}, "mix_color:"),
+    ("bad-interpolation", {"input": {"demo": "figure3"}, "interpolation": "cubic"}, "interpolation:"),
     ("bad-spp-type", {"input": {"demo": "figure3"}, "samples_per_pixel": "many"}, "samples_per_pixel:"),
     ("bad-spp-range", {"input": {"demo": "figure3"}, "samples_per_pixel": 0}, "samples_per_pixel:"),
     ("bad-size", {"input": {"demo": "figure3"}, "image_size": [64]}, "image_size:"),

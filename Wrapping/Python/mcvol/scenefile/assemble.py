@@ -402,6 +402,10 @@ def assemble(scene, errors, prog):
     mapper.SetInputData(render_image)
     prop = vtkVolumeProperty()
     prop.IndependentComponentsOn()
+    if scene["interpolation"] == "nearest":
+        prop.SetInterpolationTypeToNearest()
+    else:
+        prop.SetInterpolationTypeToLinear()
     total, per_render = setup_mapper(mapper, prop, scene, channels, tfs, render_image, reference)
 
     volume = vtkVolume()

@@ -14,6 +14,7 @@ from .schema import (
     BACKENDS,
     BLEND_MODES,
     MIX_COLORS,
+    INTERPOLATIONS,
     CAMERA_KEYS,
     CHANNEL_KEYS,
     COMPOSITING,
@@ -343,6 +344,9 @@ def parse_scene(data, scene_dir, presets):
         s["channels"] = [parse_channel(c, "channels[%d]" % i, scene_dir, presets) for i, c in enumerate(chs)]
     s["blend"] = get_string(data["blend"], "blend", BLEND_MODES) if "blend" in data else "density"
     s["mix_color"] = get_string(data["mix_color"], "mix_color", MIX_COLORS) if "mix_color" in data else "average"
+    s["interpolation"] = (
+        get_string(data["interpolation"], "interpolation", INTERPOLATIONS) if "interpolation" in data else "linear"
+    )
     s["tracking"] = get_string(data["tracking"], "tracking", TRACKING) if "tracking" in data else "1-dda"
     s["backend"] = get_string(data["backend"], "backend", BACKENDS) if "backend" in data else "auto"
     s["samples_per_pixel"] = (

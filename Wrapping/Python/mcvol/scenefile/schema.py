@@ -15,6 +15,7 @@ from .errors import SceneError
 DEMO_NAMES = ("figure3", "microscopy", "cosmology", "weather")
 BLEND_MODES = ("density", "max", "mix", "composite")
 MIX_COLORS = ("average", "equation10")
+INTERPOLATIONS = ("linear", "nearest")
 TRACKING = ("1-dda", "n-dda")
 BACKENDS = ("auto", "cpu", "cuda")
 RENDERERS = ("montecarlo", "raymarch")
@@ -47,6 +48,7 @@ TOP_KEYS = {
     "channels",
     "blend",
     "mix_color",
+    "interpolation",
     "tracking",
     "backend",
     "samples_per_pixel",
