@@ -147,10 +147,13 @@ def main():
             # The PFM is the float mean composited over the background; the
             # PNG is the same blend done by OpenGL in an 8-bit framebuffer,
             # which saturates at 1 (composite sums can exceed it) and rounds
-            # twice: the background as stored (<= 0.5 level) and the result
-            # (<= 0.5 level). Same row order (bottom first).
+            # three times: the background as stored (<= 0.5 level), the
+            # source colour, which Mesa's llvmpipe converts to the 8-bit
+            # target's precision before blending (<= 0.5 level; seen as 1.046
+            # levels at a pixel of alpha 0.5), and the result (<= 0.5 level).
+            # Same row order (bottom first).
             err = float(np.abs(np.clip(rgb, 0.0, 1.0) * 255.0 - image.astype(np.float32)).max())
-            t.check(err <= 1.0 + 1e-3, "%s: PFM and PNG differ by %.3f levels" % (name, err))
+            t.check(err <= 1.5 + 1e-3, "%s: PFM and PNG differ by %.3f levels" % (name, err))
         t.check(bool(np.all(np.isfinite(rgb))) and float(a.max()) > 0.0 and float(a.min()) >= 0.0,
                 "%s: alpha range [%g, %g]" % (name, float(a.min()), float(a.max())))
     t.check(blends >= {"density", "max", "mix", "composite"}, "example scenes cover blend modes %s" % sorted(blends))
