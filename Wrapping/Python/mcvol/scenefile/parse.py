@@ -274,11 +274,17 @@ def parse_channel(v, path, scene_dir, presets):
     if "opacity" in v:
         ch["opacity"] = get_points(v["opacity"], join_key(path, "opacity"), 2, "[x, a] pairs")
     ch["normalized"] = get_bool(v["normalized"], join_key(path, "normalized")) if "normalized" in v else False
+    # "auto" (default): a robust range (percentiles, see assemble.auto_range);
+    # "data": the finite min..max; or [min, max].
+    ch["range"] = "auto"
     if "range" in v:
-        r = get_vector(v["range"], join_key(path, "range"), 2, "[min, max]")
-        if not r[0] < r[1]:
-            raise SceneError(join_key(path, "range"), "min must be less than max, got %s" % json.dumps(v["range"]))
-        ch["range"] = r
+        if isinstance(v["range"], str):
+            ch["range"] = get_string(v["range"], join_key(path, "range"), RANGE_MODES)
+        else:
+            r = get_vector(v["range"], join_key(path, "range"), 2, '[min, max], "auto" or "data"')
+            if not r[0] < r[1]:
+                raise SceneError(join_key(path, "range"), "min must be less than max, got %s" % json.dumps(v["range"]))
+            ch["range"] = r
     if "unit_distance" in v:
         ch["unit_distance"] = get_number(v["unit_distance"], join_key(path, "unit_distance"), lo=0, lo_open=True)
     if "mix_weight" in v:
