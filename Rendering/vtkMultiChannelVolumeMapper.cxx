@@ -649,6 +649,13 @@ bool vtkMultiChannelVolumeMapper::ResolveTransferFunctions(RenderPass& pass)
     vtkErrorMacro(<< error);
     return false;
   }
+  if (this->VisibilityOptimization)
+  {
+    for (int c = 0; c < pass.Channels.Count; ++c)
+    {
+      pass.Functions[c].Importance = this->Internals->Functions.Importance[c];
+    }
+  }
   return true;
 }
 

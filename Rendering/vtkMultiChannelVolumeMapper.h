@@ -179,9 +179,13 @@ public:
   ///@{
   /**
    * Range over which each channel's transfer functions are tabulated:
-   * DATA_RANGE (default) the channel's finite data range; FUNCTION_RANGE
-   * the union of the colour and opacity functions' own ranges (values
-   * beyond it take the end values, as VTK's clamped functions do). Use
+   * DATA_RANGE (default) the channel's finite data range, clipped to the
+   * functions' own range when the functions clamp (beyond it the table
+   * would hold only their end values: the same image, with the entries where
+   * the functions change, so a few outliers in 16-bit data do not coarsen
+   * the table); FUNCTION_RANGE the union of the colour, opacity and (with
+   * the visibility optimization on) importance functions' own ranges
+   * (values beyond it take the end values, as VTK's clamped functions do). Use
    * FUNCTION_RANGE when the same functions must give the same table on data
    * split over several processes (the ParaView plugin does).
    */

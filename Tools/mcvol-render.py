@@ -42,7 +42,7 @@ IMPORT_FAILED = "%s: cannot import the mcvol Python package (%s); put the build'
 # where it is, rather than print a traceback.
 try:
     from mcvol.scenefile import ErrorCollector, Presets, RenderError, SceneError, parse_scene, render
-    from mcvol.scenefile.schema import BACKENDS, COMPOSITING
+    from mcvol.scenefile.schema import BACKENDS, BLEND_MODES, COMPOSITING, FILE_FORMATS, split_extension
 except ImportError as e:
     print(IMPORT_FAILED % (PROG, e), file=sys.stderr)
     sys.exit(1)
@@ -85,7 +85,13 @@ def main(argv=None):
         description="Renders a multi-channel volume scene file with vtkMultiChannelVolumeMapper "
         "(Monte Carlo, multi-density Woodcock tracking). Scene format: Documentation/scene-format.md.",
     )
-    parser.add_argument("scene", help="scene file (JSON)")
+    parser.add_argument(
+        "scene",
+        nargs="+",
+        help="scene file (JSON), or one or more data files (NIfTI, TIFF, OME-TIFF, VTI, MHA, NRRD on one grid) to "
+        "render with default channels: every array (or component) a channel with its own colour",
+    )
+    parser.add_argument("--blend", choices=BLEND_MODES, help="overrides blend")
     parser.add_argument("-o", "--output", required=True, help="output PNG (RGB over the background)")
     parser.add_argument(
         "--raw", metavar="FILE.pfm", help="also write the linear RGB image (over the background) as a float PFM"
@@ -127,22 +133,36 @@ def main(argv=None):
         if not os.path.isdir(folder):
             parser.error("%s: folder does not exist: %s" % (opt, folder))
 
-    name = args.scene
-    try:
-        with open(args.scene, "r", encoding="utf-8") as f:
-            text = f.read()
-    except OSError as e:
-        print("%s: %s: cannot read: %s" % (PROG, name, e.strerror), file=sys.stderr)
-        return 2
-    try:
-        data = json.loads(text)
-    except ValueError as e:
-        print("%s: invalid JSON: %s" % (name, e), file=sys.stderr)
-        return 2
+    data_files = [f for f in args.scene if split_extension(f)[1] in FILE_FORMATS]
+    if data_files:
+        # Data files: a scene of their own, with default channels.
+        if len(data_files) != len(args.scene):
+            parser.error("give one scene file (JSON), or data files only")
+        name = data_files[0]
+        data = {"input": data_files if len(data_files) > 1 else data_files[0]}
+        scene_dir = os.getcwd()
+    else:
+        if len(args.scene) > 1:
+            parser.error("one scene file at a time (several data files are several channels)")
+        name = args.scene[0]
+        scene_dir = os.path.dirname(os.path.abspath(name))
+        try:
+            with open(name, "r", encoding="utf-8") as f:
+                text = f.read()
+        except OSError as e:
+            print("%s: %s: cannot read: %s" % (PROG, name, e.strerror), file=sys.stderr)
+            return 2
+        try:
+            data = json.loads(text)
+        except ValueError as e:
+            print("%s: invalid JSON: %s" % (name, e), file=sys.stderr)
+            return 2
 
     log = (lambda msg: None) if args.quiet else (lambda msg: print(msg, file=sys.stderr))
     try:
-        scene = parse_scene(data, os.path.dirname(os.path.abspath(args.scene)), Presets(default_presets_file()))
+        scene = parse_scene(data, scene_dir, Presets(default_presets_file()))
+        if args.blend is not None:
+            scene["blend"] = args.blend
         if args.spp is not None:
             scene["samples_per_pixel"] = args.spp
         if args.size is not None:

@@ -200,11 +200,12 @@ ChannelData::Change ChannelData::Detect(Scene& scene, vtkImageData* image, Bound
       }
       if (range[0] == range[1])
       {
-        // A constant channel: centre its value in the table. (Ranges
-        // narrower than float resolution are widened by the core.)
-        const double pad = std::max(0.5, 1e-3 * std::abs(range[0]));
-        range[0] -= pad;
-        range[1] += pad;
+        // A constant channel: its value on the table's first texel, so that
+        // it reads exactly the functions' value there (between two texels
+        // it would blend in its neighbour's, and an all-zero channel whose
+        // opacity is 0 at 0 would add a haze). (Ranges narrower than float
+        // resolution are widened by the core.)
+        range[1] += std::max(1.0, 1e-3 * std::abs(range[0]));
       }
       this->Ranges[c] = { range[0], range[1] };
     }

@@ -138,26 +138,54 @@ bool TransferFunctionTables::UpdateChannel(
 {
   s.Range[0] = lo;
   s.Range[1] = hi;
-  if (functionRange)
+  // The functions' own range: the union of the colour, opacity and (with the
+  // visibility optimization) importance points. Beyond it a clamped function
+  // takes its end values.
+  double cr[2], orr[2];
+  bool clamped = s.Opacity->GetClamping() != 0;
+  if (s.Gray)
   {
-    // Values beyond the functions' range take the end values, as VTK's
-    // clamped functions do.
-    double cr[2], orr[2];
-    if (s.Gray)
+    static_cast<vtkPiecewiseFunction*>(s.Color)->GetRange(cr);
+    clamped = clamped && static_cast<vtkPiecewiseFunction*>(s.Color)->GetClamping() != 0;
+  }
+  else
+  {
+    static_cast<vtkColorTransferFunction*>(s.Color)->GetRange(cr);
+    clamped = clamped && static_cast<vtkColorTransferFunction*>(s.Color)->GetClamping() != 0;
+  }
+  s.Opacity->GetRange(orr);
+  double flo = std::min(cr[0], orr[0]);
+  double fhi = std::max(cr[1], orr[1]);
+  if (s.Importance && s.Importance->GetSize() > 0)
+  {
+    // Importance at values beyond the colour and opacity points must not
+    // be clamped away.
+    double ir[2];
+    s.Importance->GetRange(ir);
+    flo = std::min(flo, ir[0]);
+    fhi = std::max(fhi, ir[1]);
+    clamped = clamped && s.Importance->GetClamping() != 0;
+  }
+  const bool usable = std::isfinite(flo) && std::isfinite(fhi) && flo < fhi;
+  if (functionRange && usable)
+  {
+    s.Range[0] = flo;
+    s.Range[1] = fhi;
+  }
+  else if (!functionRange && usable && clamped)
+  {
+    // The data's range, clipped to the functions': below and above the
+    // functions the table would hold only their end values, so the 1024
+    // entries go where the functions change. The same values at every
+    // voxel, at a finer resolution where the data reach far beyond the
+    // functions (a few outliers in 16-bit data: 65535 / 1024 = 64 units
+    // per entry otherwise). Unclamped functions are 0 beyond their points,
+    // and keep the whole data range.
+    const double clo = std::max(lo, flo), chi = std::min(hi, fhi);
+    if (clo < chi)
     {
-      static_cast<vtkPiecewiseFunction*>(s.Color)->GetRange(cr);
-    }
-    else
-    {
-      static_cast<vtkColorTransferFunction*>(s.Color)->GetRange(cr);
-    }
-    s.Opacity->GetRange(orr);
-    const double flo = std::min(cr[0], orr[0]);
-    const double fhi = std::max(cr[1], orr[1]);
-    if (std::isfinite(flo) && std::isfinite(fhi) && flo < fhi)
-    {
-      s.Range[0] = flo;
-      s.Range[1] = fhi;
+      s.Range[0] = clo;
+      s.Range[1] = chi;
     }
   }
   if (s == this->Functions[c])

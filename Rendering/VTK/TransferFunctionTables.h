@@ -49,6 +49,11 @@ struct ChannelFunctions
   vtkMTimeType OpacityMTime = 0;
   double UnitDistance = 0.0;
   double Range[2] = { 0.0, 0.0 };
+  /// With the visibility optimization on: the channel's importance function,
+  /// whose range joins the functions' range in FUNCTION_RANGE mode (the
+  /// importance table shares the colour table's range). Not compared: a
+  /// change that matters shows in Range.
+  vtkPiecewiseFunction* Importance = nullptr;
 
   bool operator==(const ChannelFunctions& o) const
   {

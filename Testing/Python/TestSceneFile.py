@@ -97,7 +97,6 @@ BAD_SCENES = [
      "channels[0].unit_distance:"),
     ("bad-mix-weight", {"input": {"demo": "figure3"}, "channels": [{"component": 0, "mix_weight": "heavy"}]},
      "channels[0].mix_weight:"),
-    ("file-needs-channels", {"input": "../../Data/figure3.vti"}, "channels: required for a file input"),
     ("file-needs-opacity", {"input": "../../Data/figure3.vti", "channels": [{"component": 0, "color": [[0, 1, 0, 0]]}]},
      "channels[0]: missing key 'opacity'"),
 ]
@@ -168,6 +167,24 @@ def main():
             outs.append(read_png(out))
         if outs[0] is not None and outs[1] is not None:
             t.check(np.array_equal(outs[0], outs[1]), "two renders of %s differ" % scenes[0])
+
+    # Data files instead of a scene: default channels, one per array, each
+    # visible; several files are several channels; a scene and a data file
+    # together are refused.
+    micro = os.path.join(SOURCE, "Data", "microscopy.vti")
+    if os.path.exists(micro):
+        out = os.path.join(work, "datafile.png")
+        r = run(program, [micro, "-o", out, "--spp", "4", "--size", "48x48", "--backend", "cpu"])
+        t.check(r.returncode == 0 and "3 channel(s)" in r.stderr, "a data file as the scene: %d %r" % (r.returncode, r.stderr))
+        img = read_png(out) if r.returncode == 0 else None
+        t.check(img is not None and float(img.reshape(-1, 3).astype(float).std(axis=0).max()) > 2.0,
+                "a data file with default channels is not blank")
+        r = run(program, [micro, "-o", os.path.join(work, "datafile2.png"), "--spp", "2", "--size", "32x32",
+                          "--backend", "cpu", "--blend", "max"])
+        t.check(r.returncode == 0 and "max blend" in r.stderr, "--blend: %d %r" % (r.returncode, r.stderr))
+        r = run(program, [scenes[0] if scenes else micro, micro, "-o", os.path.join(work, "mixed.png")])
+        t.check(r.returncode == 2 and not os.path.exists(os.path.join(work, "mixed.png")),
+                "a scene file and a data file together are refused: %d %r" % (r.returncode, r.stderr))
 
     # mix_color: a channel alone is dimmed by Eq. 10 (3 equal weights: 1/3 of
     # its colour) and not by the default weighted average.

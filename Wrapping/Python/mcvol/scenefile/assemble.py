@@ -39,14 +39,55 @@ def load_input(spec, errors, need_arrays=True):
     return read_inputs(spec, errors), None
 
 
+# Colours of the default channels of a file input, in channel order: one
+# channel alone is warm white; several get fluorescence-like hues.
+DEFAULT_COLORS = [(0.2, 1.0, 0.3), (1.0, 0.25, 0.9), (0.25, 0.7, 1.0), (1.0, 0.85, 0.2), (1.0, 0.35, 0.2),
+                  (0.6, 0.4, 1.0), (0.3, 1.0, 0.9), (1.0, 1.0, 1.0)]
+DEFAULT_ALONE = (1.0, 0.92, 0.82)
+
+
+def default_channels(image):
+    """The channels of a file input whose scene names none: every point array
+    of the mapper's types (each component of a multi-component one), in
+    order, each a ramp of its colour and of opacity (0 below 15 % of its
+    "auto" range, 0.3 at its top per 4 voxels) over its robust range."""
+    from .parse import parse_channel
+
+    pd = image.GetPointData()
+    picks = []
+    for k in range(pd.GetNumberOfArrays()):
+        a = pd.GetArray(k)
+        if a is None or not a.GetName() or a.GetDataTypeAsString() not in SUPPORTED_TYPES:
+            continue
+        for c in range(a.GetNumberOfComponents()):
+            picks.append((a.GetName(), c, a.GetNumberOfComponents()))
+    if not picks:
+        raise SceneError("input", "no point array that the mapper reads (%s): give \"channels\""
+                         % ", ".join(SUPPORTED_TYPES))
+    if len(picks) > MAX_CHANNELS:
+        raise SceneError("channels", "the input has %d arrays and components, more than %d channels: give "
+                                     "\"channels\"" % (len(picks), MAX_CHANNELS))
+    unit = 4.0 * min(image.GetSpacing())
+    out = []
+    for i, (name, comp, ncomp) in enumerate(picks):
+        rgb = DEFAULT_ALONE if len(picks) == 1 else DEFAULT_COLORS[i % len(DEFAULT_COLORS)]
+        raw = {"array": name, "normalized": True, "unit_distance": unit,
+               "color": [[0.0] + [0.35 * v for v in rgb], [1.0] + list(rgb)],
+               "opacity": [[0.0, 0.0], [0.15, 0.0], [1.0, 0.3]]}
+        if ncomp > 1:
+            raw["component"] = comp
+        out.append(parse_channel(raw, "channels[%d] (default)" % i, ".", None))
+    return out
+
+
 def resolve_channels(scene, image, demo):
     """Finds each channel's array, component and data range."""
     pd = image.GetPointData()
     scalars = pd.GetScalars()
     entries = scene.get("channels")
+    if entries is None and demo is None:
+        entries = default_channels(image)
     if entries is None:
-        if demo is None:
-            raise SceneError("channels", "required for a file input (only demo inputs have suggested transfer functions)")
         if scalars is None:
             raise SceneError("input", "the demo has no point scalars")
         entries = [{"path": "channels[%d]" % i, "normalized": False} for i in range(scalars.GetNumberOfComponents())]
@@ -121,6 +162,68 @@ def resolve_channels(scene, image, demo):
     return resolved
 
 
+# "range": "auto": the [0.1, 99.9] percentiles of the channel's finite
+# values, or min..max for data of at most this many distinct values (labels,
+# masks), whose rare labels percentiles would cut off.
+AUTO_PERCENTILES = (0.1, 99.9)
+AUTO_MAX_DISTINCT = 256
+
+
+def few_distinct(values, lo, hi, limit=AUTO_MAX_DISTINCT):
+    """True when the 1-D numpy array `values` (finite, min `lo`, max `hi`)
+    holds at most `limit` distinct values. Exact, and fast for the usual
+    answer "no": a strided sample of a million values decides it first."""
+    import numpy
+
+    if numpy.issubdtype(values.dtype, numpy.integer) and hi - lo < limit:
+        return True  # uint8, or integers over a short span
+    step = max(1, values.size // 1000000)
+    seen = numpy.unique(values[::step])
+    if seen.size > limit:
+        return False
+    rest = values[~numpy.isin(values, seen)]
+    return rest.size == 0 or seen.size + numpy.unique(rest).size <= limit
+
+
+def auto_range(array, comp):
+    """The robust range of component `comp` of vtkDataArray `array`: [lo, hi]
+    of its finite values at the AUTO_PERCENTILES, or their min..max when
+    they take few distinct values or the percentiles coincide; None when no
+    value is finite. A handful of extreme voxels (a 16-bit volume whose
+    tissue lies in 0..2000 with a few voxels at 65535) then does not squash
+    normalised transfer functions into the first few per cent of the range."""
+    import numpy
+    from vtkmodules.util.numpy_support import vtk_to_numpy
+
+    values = vtk_to_numpy(array).reshape(array.GetNumberOfTuples(), array.GetNumberOfComponents())[:, comp]
+    if numpy.issubdtype(values.dtype, numpy.floating):
+        finite = numpy.isfinite(values)
+        if not finite.all():
+            values = values[finite]
+    if values.size == 0:
+        return None
+    lo, hi = float(values.min()), float(values.max())
+    if lo == hi or few_distinct(values, lo, hi):
+        return [lo, hi]
+    plo, phi = (float(p) for p in numpy.percentile(values, AUTO_PERCENTILES))
+    if not plo < phi:
+        return [lo, hi]  # a constant majority (sparse data): the percentiles say nothing
+    return [plo, phi]
+
+
+def channel_range(ch):
+    """The range normalised points and presets of channel `ch` are spread
+    over: its "range" ([min, max], "data" or "auto"), computed once."""
+    r = ch.get("range", "auto")
+    if isinstance(r, list):
+        return r
+    if r == "data":
+        return ch["data_range"]
+    if ch.get("auto_range") is None:
+        ch["auto_range"] = auto_range(ch["array_obj"], ch["comp"]) or list(ch["data_range"])
+    return ch["auto_range"]
+
+
 def build_transfer_functions(channels, demo):
     from vtkmodules.vtkCommonDataModel import vtkPiecewiseFunction
     from vtkmodules.vtkRenderingCore import vtkColorTransferFunction
@@ -138,12 +241,19 @@ def build_transfer_functions(channels, demo):
         for key in ("color", "opacity"):
             if key not in ch and dc is None:
                 raise SceneError(path, "missing key '%s' (required unless the channel is a demo channel)" % key)
-        lo, hi = ch.get("range", ch["data_range"])
-        if not hi > lo:
-            hi = lo + 1.0  # constant channel: keep the points apart
+        def span(ch=ch):
+            # Only normalised points and presets need the range ("auto"
+            # reads the whole channel).
+            lo, hi = channel_range(ch)
+            if not hi > lo:
+                hi = lo + 1.0  # constant channel: keep the points apart
+            return lo, hi
 
         def place(x, normalized):
-            return lo + x * (hi - lo) if normalized else x
+            if not normalized:
+                return x
+            lo, hi = span()
+            return lo + x * (hi - lo)
 
         if "color" in ch:
             c = ch["color"]
@@ -154,6 +264,7 @@ def build_transfer_functions(channels, demo):
             elif c["normalized"]:  # a preset: its span onto the range
                 x0 = min(p[0] for p in pts)
                 x1 = max(p[0] for p in pts)
+                lo, hi = span()
                 xs = [lo + ((p[0] - x0) / (x1 - x0) if x1 > x0 else 0.0) * (hi - lo) for p in pts]
             else:
                 xs = [p[0] for p in pts]
@@ -292,7 +403,10 @@ class Pipeline:
 
 def setup_mapper(mapper, prop, scene, channels, tfs, render_image, reference):
     """Transfer functions and per-channel settings, blend mode, sampling.
-    Returns (total, per_render) samples per pixel."""
+    The mapper tabulates the functions over the data's range clipped to the
+    functions' (its default, DATA_RANGE), so a percentile "range" over data
+    with outliers keeps the table's resolution. Returns (total, per_render)
+    samples per pixel."""
     for i, (color, opacity, unit, importance) in enumerate(tfs):
         if i < VTK_MAX_VRCOMP:
             prop.SetColor(i, color)
@@ -425,4 +539,5 @@ def assemble(scene, errors, prog):
     window.SetSize(*scene["image_size"])
     window.AddRenderer(renderer)
     setup_camera(renderer, scene["camera"])
-    return Pipeline(image, demo, channels, mapper, volume, renderer, window, reference, total, per_render)
+    pipeline = Pipeline(image, demo, channels, mapper, volume, renderer, window, reference, total, per_render)
+    return pipeline

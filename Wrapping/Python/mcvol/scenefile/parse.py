@@ -15,6 +15,7 @@ from .schema import (
     BLEND_MODES,
     MIX_COLORS,
     INTERPOLATIONS,
+    RANGE_MODES,
     CAMERA_KEYS,
     CHANNEL_KEYS,
     COMPOSITING,

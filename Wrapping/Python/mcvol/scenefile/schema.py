@@ -16,6 +16,7 @@ DEMO_NAMES = ("figure3", "microscopy", "cosmology", "weather")
 BLEND_MODES = ("density", "max", "mix", "composite")
 MIX_COLORS = ("average", "equation10")
 INTERPOLATIONS = ("linear", "nearest")
+RANGE_MODES = ("auto", "data")  # a channel's "range" as a word
 TRACKING = ("1-dda", "n-dda")
 BACKENDS = ("auto", "cpu", "cuda")
 RENDERERS = ("montecarlo", "raymarch")
