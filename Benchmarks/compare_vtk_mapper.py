@@ -109,6 +109,8 @@ def main():
     ap.add_argument("-o", "--output", required=True)
     ap.add_argument("--size", default=None, help="WxH (default: the scene's)")
     ap.add_argument("--spp", type=int, default=None, help="mcvol samples per pixel (default: the scene's)")
+    ap.add_argument("--unlit", action="store_true", help="drop the scene's lighting (VTK's shading model differs)")
+    ap.add_argument("--blend", default=None, help="override the scene's blend mode")
     args = ap.parse_args()
 
     import vtkmodules.vtkRenderingOpenGL2  # noqa: F401
@@ -131,6 +133,10 @@ def main():
         scene["image_size"] = [int(v) for v in args.size.lower().split("x")]
     if args.spp:
         scene["samples_per_pixel"] = args.spp
+    if args.unlit:
+        scene["lighting"] = None
+    if args.blend:
+        scene["blend"] = args.blend
     size = scene["image_size"]
     errors = ErrorCollector()
     pipeline = assemble(scene, errors, "compare_vtk_mapper")
