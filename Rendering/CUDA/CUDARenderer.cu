@@ -10,6 +10,7 @@
 #include "CUDAInternal.h"
 
 #include <algorithm>
+#include <dlfcn.h>
 #include <iterator>
 #include <sstream>
 #include <stdexcept>
@@ -21,6 +22,18 @@ namespace mcvol
 namespace
 {
 __global__ void probeKernel() {}
+
+/// Whether the NVIDIA driver's user-space library is on this machine.
+bool driverInstalled()
+{
+  void* lib = dlopen("libcuda.so.1", RTLD_LAZY | RTLD_LOCAL);
+  if (!lib)
+  {
+    return false;
+  }
+  dlclose(lib);
+  return true;
+}
 } // namespace
 
 bool CUDARenderer::deviceUsable(std::string* why, int device)
@@ -32,7 +45,21 @@ bool CUDARenderer::deviceUsable(std::string* why, int device)
     (void)cudaGetLastError();
     if (why)
     {
-      *why = std::string("no usable CUDA device (") + cudaGetErrorString(e) + ")";
+      if ((e == cudaErrorInsufficientDriver || e == cudaErrorNoDevice) && !driverInstalled())
+      {
+        // The runtime says "driver version is insufficient" also when there
+        // is no driver at all, which misleads.
+        *why = "no NVIDIA driver found (libcuda.so.1 is not installed)";
+      }
+      else if (e == cudaErrorInsufficientDriver)
+      {
+        *why = std::string("the NVIDIA driver is older than this build's CUDA runtime needs (") +
+          cudaGetErrorString(e) + ")";
+      }
+      else
+      {
+        *why = std::string("no usable CUDA device (") + cudaGetErrorString(e) + ")";
+      }
     }
     return false;
   }
