@@ -26,6 +26,7 @@
 
 #include <algorithm>
 #include <array>
+#include <chrono>
 #include <cmath>
 #include <exception>
 #include <string>
@@ -64,6 +65,7 @@ struct vtkMultiChannelVolumeMapper::vtkInternals
 
   // Samples per pixel of the batch being traced (0: SamplesPerPixel).
   int BatchSamples = 0;
+  mcvol::adapter::SampleCost Cost; // seconds per sample, for InteractiveFrameTime
 
   // Backing store for GetActiveBackendName and GetBackendReport.
   std::string BackendName = "none";
@@ -801,16 +803,25 @@ bool vtkMultiChannelVolumeMapper::TraceBatch(RenderPass& pass)
   // the image is traced once per change. The ray-marching subclass decides
   // for itself (it traces once per change).
   vtkInternals& in = *this->Internals;
-  const int batch = mcvol::adapter::SamplesThisRender(this->UsesRenderBackend(), this->Progressive,
-    this->SamplesPerPixel, this->MaximumTotalSamples, static_cast<long long>(in.Accum.samples()));
+  const bool budgeted = this->InteractiveFrameTime > 0.0 && this->UsesRenderBackend();
+  const int wanted = budgeted ? in.Cost.Budget(this->InteractiveFrameTime, this->SamplesPerPixel, 4096)
+                              : this->SamplesPerPixel;
+  const int batch = mcvol::adapter::SamplesThisRender(this->UsesRenderBackend(), this->Progressive, wanted,
+    this->MaximumTotalSamples, static_cast<long long>(in.Accum.samples()));
   if (batch <= 0)
   {
     return true;
   }
   std::string error;
   in.BatchSamples = batch;
+  const auto start = std::chrono::steady_clock::now();
   const bool ok = this->TraceImage(in.Scene, pass.Camera, in.Accumulation.Depth(), in.Backend.Get(), in.Accum, error);
+  if (ok && this->UsesRenderBackend())
+  {
+    in.Cost.Record(batch, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  }
   in.BatchSamples = 0;
+  this->LastSamplesPerRender = ok ? batch : 0;
   if (!ok)
   {
     vtkErrorMacro("Rendering failed: " << error);
@@ -840,6 +851,7 @@ void vtkMultiChannelVolumeMapper::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "MixColorMode: " << (this->MixColorMode == MIX_AVERAGE ? "Average" : "Equation10") << "\n";
   os << indent << "TrackingMethod: " << this->GetTrackingMethodAsString() << "\n";
   os << indent << "SamplesPerPixel: " << this->SamplesPerPixel << "\n";
+  os << indent << "InteractiveFrameTime: " << this->InteractiveFrameTime << "\n";
   os << indent << "Progressive: " << this->Progressive << "\n";
   os << indent
      << "TransferFunctionRangeMode: " << (this->TransferFunctionRangeMode == FUNCTION_RANGE ? "function" : "data")

@@ -150,6 +150,24 @@ public:
 
   ///@{
   /**
+   * Time-budgeted progression: with a budget > 0 (seconds), each Render()
+   * traces as many samples per pixel as fit in it, from the measured cost of
+   * the previous batches (a moving average, kept when the image restarts:
+   * a moved camera costs about what the last view did), at least 1 and at
+   * most 4096; the first batch ever has SamplesPerPixel samples. 0 (the
+   * default): SamplesPerPixel every render. MaximumTotalSamples still caps
+   * the total. The image after a given number of samples is the same
+   * whatever the batches (samples are numbered per pixel), up to float
+   * rounding of the running mean. GetLastSamplesPerRender() gives the last
+   * batch. The budget covers tracing, not drawing or uploads.
+   */
+  vtkSetClampMacro(InteractiveFrameTime, double, 0.0, 3600.0);
+  vtkGetMacro(InteractiveFrameTime, double);
+  vtkGetMacro(LastSamplesPerRender, int);
+  ///@}
+
+  ///@{
+  /**
    * Progressive refinement (default on): every Render() with nothing changed
    * adds SamplesPerPixel samples to the running mean. Off, the image is
    * traced once per change, with SamplesPerPixel samples, and redrawn as it
@@ -521,6 +539,8 @@ protected:
   int MixColorMode = MIX_AVERAGE;
   int TrackingMethod = ONE_DDA;
   int SamplesPerPixel = 1;
+  double InteractiveFrameTime = 0.0;
+  int LastSamplesPerRender = 0;
   unsigned int Seed = 0;
   bool PixelJitter = true;
   double AmbientRadiance[3] = { 0.2, 0.2, 0.2 };

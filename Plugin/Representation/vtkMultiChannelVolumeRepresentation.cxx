@@ -209,6 +209,11 @@ void vtkMultiChannelVolumeRepresentation::SetTrackingMethod(int method)
   this->GetMultiChannelMapper()->SetTrackingMethod(method);
 }
 
+void vtkMultiChannelVolumeRepresentation::SetInteractiveFrameTime(double seconds)
+{
+  this->GetMultiChannelMapper()->SetInteractiveFrameTime(seconds);
+}
+
 void vtkMultiChannelVolumeRepresentation::SetSamplesPerRender(int spp)
 {
   this->GetMultiChannelMapper()->SetSamplesPerPixel(spp);

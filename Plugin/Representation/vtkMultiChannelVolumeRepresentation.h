@@ -89,6 +89,7 @@ public:
   void SetMixColorMode(int mode);
   void SetTrackingMethod(int method);
   void SetSamplesPerRender(int spp);
+  void SetInteractiveFrameTime(double seconds);
   void SetProgressiveRefinement(bool on);
   void SetMaximumTotalSamples(int total);
   void SetMacrocellSize(int size);

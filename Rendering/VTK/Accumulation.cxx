@@ -2,6 +2,7 @@
 #include "Accumulation.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <iterator>
 
@@ -44,6 +45,28 @@ bool Accumulation::Update(const AccumulationKey& key, std::vector<float>& depth,
 }
 
 //------------------------------------------------------------------------------
+void SampleCost::Record(int samples, double seconds)
+{
+  if (samples <= 0 || !(seconds > 0.0) || !std::isfinite(seconds))
+  {
+    return;
+  }
+  const double s = seconds / samples;
+  // Half the weight on the newest batch: follows a changed view within a few
+  // renders, and one slow render (the first after an upload) fades quickly.
+  this->SecondsPerSample = this->SecondsPerSample > 0.0 ? 0.5 * (this->SecondsPerSample + s) : s;
+}
+
+int SampleCost::Budget(double frameTime, int first, int cap) const
+{
+  if (!(this->SecondsPerSample > 0.0))
+  {
+    return std::max(1, std::min(first, cap));
+  }
+  const double n = std::floor(frameTime / this->SecondsPerSample);
+  return static_cast<int>(std::max(1.0, std::min(n, double(cap))));
+}
+
 int SamplesThisRender(
   bool usesBackend, bool progressive, int samplesPerPixel, long long maximumTotalSamples, long long traced)
 {

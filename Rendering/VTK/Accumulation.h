@@ -62,6 +62,27 @@ private:
   std::vector<float> LastDepth;
 };
 
+/**
+ * The measured cost of a sample per pixel, for time-budgeted renders
+ * (vtkMultiChannelVolumeMapper::SetInteractiveFrameTime): a moving average
+ * of the last batches' seconds per sample, kept across image restarts (a
+ * moved camera costs about what the last view did).
+ */
+class SampleCost
+{
+public:
+  /// A batch of `samples` samples per pixel took `seconds`.
+  void Record(int samples, double seconds);
+  /// Samples per pixel that fit in `frameTime` seconds: at least 1, at most
+  /// `cap`; `first` before anything was measured.
+  int Budget(double frameTime, int first, int cap) const;
+  bool Measured() const { return this->SecondsPerSample > 0.0; }
+  void Forget() { this->SecondsPerSample = 0.0; }
+
+private:
+  double SecondsPerSample = 0.0;
+};
+
 /// Samples per pixel this render traces: a batch of `samplesPerPixel`, none
 /// more once a non-progressive image exists, and no more than what is left of
 /// `maximumTotalSamples` (0: no limit). A mapper that traces without a

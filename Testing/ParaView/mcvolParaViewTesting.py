@@ -123,6 +123,7 @@ def show(source, view):
     rep.Backend = "CPU"
     rep.Seed = 7
     rep.SamplesPerRender = 8
+    rep.InteractiveFrameTime = 0  # fixed batches: the tests count samples
     rep.MaximumTotalSamples = 32
     return rep
 

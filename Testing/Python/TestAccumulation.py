@@ -140,4 +140,46 @@ render_and_expect(4, "geometry moved")
 render_and_expect(8, "re-render after moving the geometry")
 render_and_expect(12, "another re-render")
 
+# Time-budgeted progression (SetInteractiveFrameTime): the first batch has
+# SamplesPerPixel samples, later ones as many as the measured cost fits in
+# the budget (this 96x96 view costs well under 10 ms per sample, so a 0.5 s
+# budget gives more than 4); MaximumTotalSamples cuts the last one; the image
+# after 48 samples equals the one traced in batches of 4, up to the running
+# mean's float rounding.
+import numpy as np  # noqa: E402
+from vtkmodules.util.numpy_support import vtk_to_numpy  # noqa: E402
+
+
+def accumulated():
+    out = vtkFloatArray()
+    mapper.GetAccumulatedImage(out)
+    return vtk_to_numpy(out).copy()
+
+
+renderer.RemoveActor(actor)
+mapper.SetMaximumTotalSamples(48)
+mapper.ResetAccumulation()
+while not mapper.IsConverged():
+    window.Render()
+fixed = accumulated()
+t.check(mapper.GetLastSamplesPerRender() == 4, "fixed batches of SamplesPerPixel (%d)" % mapper.GetLastSamplesPerRender())
+mapper.SetInteractiveFrameTime(0.5)
+batches = []
+while True:  # (IsConverged() notices the change only at the next Render())
+    window.Render()
+    batches.append(mapper.GetLastSamplesPerRender())
+    if mapper.IsConverged() or len(batches) > 48:
+        break
+t.check(sum(batches) == 48 and mapper.GetTotalSamples() == 48,
+        "budgeted batches %s add up to MaximumTotalSamples" % batches)
+t.check(max(batches) > 4, "a 0.5 s budget takes more than SamplesPerPixel samples per render (%s)" % batches)
+d = float(np.abs(accumulated() - fixed).max())
+t.check(d < 1e-5, "48 samples in budgeted batches give the image of 48 in batches of 4 (max |diff| %.2g)" % d)
+mapper.SetInteractiveFrameTime(1e-9)
+mapper.SetMaximumTotalSamples(0)
+window.Render()
+t.check(mapper.GetLastSamplesPerRender() == 1, "a budget below one sample's cost still takes 1 (%d)"
+        % mapper.GetLastSamplesPerRender())
+mapper.SetInteractiveFrameTime(0.0)
+
 t.finish()
