@@ -141,6 +141,12 @@ void RayMarcher::render(const Scene& scene, const Camera& camera, const MarchSet
       throw std::invalid_argument("mcvol: the lit reference supports the extinction model and density, max and "
                                   "mix blending");
     }
+    if (s.lighting.maxDepth > 1)
+    {
+      throw std::invalid_argument("mcvol: the lit reference is single scattering: it does not render a maximum "
+                                  "scattering depth of " +
+        std::to_string(s.lighting.maxDepth) + " (set it to 1 to compare)");
+    }
     setLightingFrame(s, camera);
   }
   if (s.importance.enabled)

@@ -407,9 +407,31 @@ MCVOL_HOT float marchTransmittanceOptimized(
  * the light each channel scatters towards the eye: sum over lights of the
  * scattering function (Henyey-Greenstein of g_n, plus the gradient term
  * when on) times the marched transmittance to the light times its radiance.
- * This is the expectation of the Monte Carlo mapper's lit samples with one
- * scattering event (maxDepth 1) and no ambient radiance.
+ * Ambient radiance (an environment of constant radiance L_a) adds
+ * L_a sum_k q_k T(x, w_k) to S_n: a fixed quadrature over kAmbientDirections
+ * spherical-Fibonacci directions w_k, weighted by the channel's phase
+ * function (q_k = p(w, w_k) / sum_j p(w, w_j), so without shadows the term is
+ * exactly L_a), each transmittance marched with the camera step. This is the
+ * expectation of the Monte Carlo mapper's lit samples with one scattering
+ * event (maxDepth 1), which estimates the same integral with one
+ * phase-sampled direction per vertex, up to the quadrature's error (measured
+ * in Testing/Python/TestLitDefaults.py). It costs kAmbientDirections
+ * transmittance marches per visible sample: set the ambient radiance to 0 for
+ * a fast lit reference.
  */
+/// Directions of the ray marcher's ambient quadrature (marchLit).
+constexpr int kAmbientDirections = 32;
+
+/// Direction k of kAmbientDirections on the unit sphere (spherical Fibonacci
+/// lattice: equal areas, no preferred axis).
+MCVOL_FUNC Vec3f ambientDirection(int k)
+{
+  const float z = 1.f - (2.f * float(k) + 1.f) / float(kAmbientDirections);
+  const float r = sqrtf(fmaxf(0.f, 1.f - z * z));
+  const float phi = 2.39996322972865332f * float(k); // the golden angle
+  return Vec3f(r * cosf(phi), r * sinf(phi), z);
+}
+
 template <BlendMode Mode>
 MCVOL_HOT Vec4f marchLit(
   const SceneView& s, const MarchParams& mp, Vec3f o, Vec3f d, Vec3f w, float tmax, float phase, MarchCounters& mc)
@@ -474,12 +496,49 @@ MCVOL_HOT Vec4f marchLit(
       grad = extinctionGradient<Mode>(s, s.active, s.numActive, x, rc);
       gradLen = length(grad);
     }
+    // Ambient: the transmittance towards each quadrature direction, marched
+    // once per sample and only where a channel scatters.
+    float ambientT[kAmbientDirections];
+    bool haveAmbientT = false;
+    auto ambientIn = [&](int n)
+    {
+      if (!haveAmbientT)
+      {
+        for (int k = 0; k < kAmbientDirections; ++k)
+        {
+          float Tk = 1.f;
+          if (L.shadows)
+          {
+            const Vec3f dk = mul3(L.toIndex, ambientDirection(k));
+            const float tk = boxExit(s.volume, x, dk);
+            Tk = optimized && s.importance.lightRays
+              ? marchTransmittanceOptimized<Mode>(s, s.active, s.numActive, x, dk, tk, mp.step)
+              : marchTransmittance<Mode>(s, s.active, s.numActive, x, dk, tk, mp.step);
+          }
+          ambientT[k] = Tk;
+        }
+        haveAmbientT = true;
+      }
+      float num = 0.f, den = 0.f;
+      for (int k = 0; k < kAmbientDirections; ++k)
+      {
+        const float p = hgPhase(dot(w, ambientDirection(k)), L.anisotropy[n]);
+        num += p * ambientT[k];
+        den += p;
+      }
+      return den > 0.f ? num / den : 0.f;
+    };
+    const bool ambient = L.ambient.x > 0.f || L.ambient.y > 0.f || L.ambient.z > 0.f;
     auto scattered = [&](int n)
     {
       Vec3f S;
       for (int l = 0; l < L.numLights; ++l)
       {
         S += arriving[l] * scatterFunction(L, L.anisotropy[n], w, wl[l], L.gradientShading, grad, gradLen);
+      }
+      if (ambient && L.albedo[n] > 0.f)
+      {
+        S += L.ambient * ambientIn(n);
       }
       return S;
     };
