@@ -76,8 +76,6 @@ public:
   /// Samples per pixel that fit in `frameTime` seconds: at least 1, at most
   /// `cap`; `first` before anything was measured.
   int Budget(double frameTime, int first, int cap) const;
-  bool Measured() const { return this->SecondsPerSample > 0.0; }
-  void Forget() { this->SecondsPerSample = 0.0; }
 
 private:
   double SecondsPerSample = 0.0;

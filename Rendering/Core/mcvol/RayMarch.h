@@ -448,6 +448,16 @@ MCVOL_HOT Vec4f marchLit(
   {
     mi = marchImportanceStart(s, mp, o, d, tmax, phase, mc);
   }
+  // The ambient quadrature's directions (world), once per ray.
+  const bool ambient = L.ambient.x > 0.f || L.ambient.y > 0.f || L.ambient.z > 0.f;
+  Vec3f ambientDirs[kAmbientDirections];
+  if (ambient)
+  {
+    for (int k = 0; k < kAmbientDirections; ++k)
+    {
+      ambientDirs[k] = ambientDirection(k);
+    }
+  }
   for (int64_t k = 0;; ++k)
   {
     const float t = float((double(k) + double(phase)) * double(mp.step));
@@ -509,7 +519,7 @@ MCVOL_HOT Vec4f marchLit(
           float Tk = 1.f;
           if (L.shadows)
           {
-            const Vec3f dk = mul3(L.toIndex, ambientDirection(k));
+            const Vec3f dk = mul3(L.toIndex, ambientDirs[k]);
             const float tk = boxExit(s.volume, x, dk);
             Tk = optimized && s.importance.lightRays
               ? marchTransmittanceOptimized<Mode>(s, s.active, s.numActive, x, dk, tk, mp.step)
@@ -522,13 +532,12 @@ MCVOL_HOT Vec4f marchLit(
       float num = 0.f, den = 0.f;
       for (int k = 0; k < kAmbientDirections; ++k)
       {
-        const float p = hgPhase(dot(w, ambientDirection(k)), L.anisotropy[n]);
+        const float p = hgPhase(dot(w, ambientDirs[k]), L.anisotropy[n]);
         num += p * ambientT[k];
         den += p;
       }
       return den > 0.f ? num / den : 0.f;
     };
-    const bool ambient = L.ambient.x > 0.f || L.ambient.y > 0.f || L.ambient.z > 0.f;
     auto scattered = [&](int n)
     {
       Vec3f S;
