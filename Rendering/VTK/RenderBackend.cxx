@@ -3,6 +3,8 @@
 
 #include "mcvol/Types.h"
 
+#include <cstdlib>
+#include <cstring>
 #include <exception>
 
 namespace mcvol
@@ -26,6 +28,29 @@ const char* BackendLabel(int backend)
 } // namespace
 
 //------------------------------------------------------------------------------
+int RenderBackend::Effective(int backend)
+{
+  // The environment decides only what Auto means, never an explicit choice:
+  // MCVOL_BACKEND=cuda makes Auto demand CUDA (an error without a device,
+  // instead of a quiet fall-back to the CPU), so a test run on a GPU machine
+  // proves that it ran on the GPU; MCVOL_BACKEND=cpu keeps Auto off the GPU.
+  if (static_cast<Backend>(backend) != Backend::Auto)
+  {
+    return backend;
+  }
+  const char* env = std::getenv("MCVOL_BACKEND");
+  if (env && (std::strcmp(env, "cuda") == 0 || std::strcmp(env, "CUDA") == 0))
+  {
+    return static_cast<int>(Backend::CUDA);
+  }
+  if (env && (std::strcmp(env, "cpu") == 0 || std::strcmp(env, "CPU") == 0))
+  {
+    return static_cast<int>(Backend::CPU);
+  }
+  return backend;
+}
+
+//------------------------------------------------------------------------------
 bool RenderBackend::Ensure(bool uses, int backend, std::string& error)
 {
   if (!uses)
@@ -42,12 +67,17 @@ bool RenderBackend::Ensure(bool uses, int backend, std::string& error)
   this->InstanceBackend = backend;
   try
   {
-    this->Instance = Renderer::create(static_cast<Backend>(backend), &this->Why);
+    this->Instance = Renderer::create(static_cast<Backend>(Effective(backend)), &this->Why);
+    if (Effective(backend) != backend)
+    {
+      this->Why = "MCVOL_BACKEND set for Auto: " + this->Why;
+    }
   }
   catch (const std::exception& e)
   {
     this->Why = e.what();
-    error = std::string("Backend ") + BackendLabel(backend) + " is not available: " + e.what();
+    error = std::string("Backend ") + BackendLabel(Effective(backend)) +
+      (Effective(backend) != backend ? " (from MCVOL_BACKEND)" : "") + " is not available: " + e.what();
     return false;
   }
   if (!this->Instance)
@@ -69,9 +99,10 @@ std::string RenderBackend::ActiveName(bool uses, int backend) const
   {
     // Not rendered with this setting yet: say what create() would pick.
     std::string why;
-    if (static_cast<Backend>(backend) == Backend::CPU || !Renderer::cudaAvailable(&why))
+    const Backend effective = static_cast<Backend>(Effective(backend));
+    if (effective == Backend::CPU || !Renderer::cudaAvailable(&why))
     {
-      return static_cast<Backend>(backend) == Backend::CUDA ? "none" : "cpu";
+      return effective == Backend::CUDA ? "none" : "cpu";
     }
     return "cuda";
   }
@@ -93,12 +124,15 @@ std::string RenderBackend::Report(bool uses, int backend) const
   // creating a renderer).
   std::string why;
   const bool cuda = Renderer::cudaAvailable(&why);
-  switch (static_cast<Backend>(backend))
+  const bool fromEnv = Effective(backend) != backend;
+  switch (static_cast<Backend>(Effective(backend)))
   {
     case Backend::CPU:
-      return "CPU backend (requested)";
+      return fromEnv ? "CPU backend (auto, MCVOL_BACKEND=cpu)" : "CPU backend (requested)";
     case Backend::CUDA:
-      return cuda ? "CUDA backend (requested; " + why + ")" : "unavailable: the CUDA backend was requested but " + why;
+      return cuda ? std::string("CUDA backend (") + (fromEnv ? "auto, MCVOL_BACKEND=cuda" : "requested") + "; " + why + ")"
+                  : std::string("unavailable: the CUDA backend was requested") +
+          (fromEnv ? " (auto, MCVOL_BACKEND=cuda)" : "") + " but " + why;
     default:
       return cuda ? "CUDA backend (auto: " + why + ")" : "CPU backend (auto: " + why + ")";
   }

@@ -24,6 +24,11 @@ public:
   /// False, with `error`, when that backend cannot be had.
   bool Ensure(bool uses, int backend, std::string& error);
 
+  /// The backend that `backend` means here: Auto follows the environment
+  /// variable MCVOL_BACKEND (cuda or cpu) when it is set; an explicit choice
+  /// is kept.
+  static int Effective(int backend);
+
   /// The renderer (nullptr when none is used or it could not be created).
   Renderer* Get() const { return this->Instance.get(); }
 

@@ -225,6 +225,26 @@ if auto_name == "cpu":
     expect_message(render(make_image((6, 6, 6), components=1), "CUDA without a device"), "CUDA")
 else:
     t.check(name == "cuda", "CUDA backend: %s" % name)
+# MCVOL_BACKEND decides what Auto means (the GPU machine's test runs force
+# CUDA with it, so a missing device fails instead of falling back quietly);
+# an explicit choice ignores it.
+saved_env = os.environ.get("MCVOL_BACKEND")
+mapper.SetBackendToAuto()
+os.environ["MCVOL_BACKEND"] = "cpu"
+t.check(mapper.GetActiveBackendName() == "cpu", "MCVOL_BACKEND=cpu: Auto takes the CPU")
+t.check("MCVOL_BACKEND=cpu" in mapper.GetBackendReport(), "the report names the variable: %s" % mapper.GetBackendReport())
+os.environ["MCVOL_BACKEND"] = "cuda"
+t.check(mapper.GetActiveBackendName() == ("none" if auto_name == "cpu" else "cuda"),
+        "MCVOL_BACKEND=cuda: Auto demands CUDA (%s)" % mapper.GetActiveBackendName())
+t.check("MCVOL_BACKEND=cuda" in mapper.GetBackendReport(), "the report names the variable: %s" % mapper.GetBackendReport())
+if auto_name == "cpu":
+    expect_message(render(make_image((6, 6, 6), components=1), "MCVOL_BACKEND=cuda without a device"), "CUDA",
+                   "MCVOL_BACKEND")
 mapper.SetBackendToCPU()
+t.check(mapper.GetActiveBackendName() == "cpu", "an explicit CPU choice ignores MCVOL_BACKEND")
+if saved_env is None:
+    del os.environ["MCVOL_BACKEND"]
+else:
+    os.environ["MCVOL_BACKEND"] = saved_env
 
 t.finish()

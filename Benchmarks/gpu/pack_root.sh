@@ -1,0 +1,125 @@
+#!/usr/bin/env bash
+# Here (Debian bookworm, the CI image): packs what the real VTK module, the
+# Python package and the ParaView plugin need at run time into chunks that
+# the `device` tool can carry to the GPU machine (Ubuntu 24.04, no VTK, no
+# apt, no network). The GPU machine unpacks them into a bookworm root and
+# runs the tests there with chroot (Benchmarks/gpu/vtk.sh).
+#
+# Two archives, each split into chunks of $CHUNK_MB MiB:
+#   .gpuroot/root.tar.zst.*   bookworm files: every Debian package that owns
+#                             a library the product loads (ldd closure of
+#                             pvpython, pvbatch, Python's VTK/ParaView
+#                             modules, our module, plugin and test
+#                             programs, Xvfb and Mesa), plus Python 3.11,
+#                             numpy, tifffile, Xvfb, xkb data, ctest, MPI and
+#                             the test data packages; docs, man pages,
+#                             locales, headers and static libraries left out.
+#   .gpuroot/build.tar.zst.*  the build tree's run-time files (programs,
+#                             libraries, Python package, plugin, CTest files);
+#                             object files and the VTK-free core's test
+#                             programs (check.sh builds those there) left out.
+# The working tree itself travels with every call.
+#
+# Usage: bash Benchmarks/gpu/pack_root.sh [--build-only] [build-dir]
+#   (default build-dir: build). --build-only re-packs the build tree alone
+#   (after a rebuild), keeping the bookworm root's chunks.
+# Then carry the .gpuroot/root-N and build-N folders in back-to-back calls
+# (see README.md).
+set -euo pipefail
+build_only=0
+if [ "${1:-}" = "--build-only" ]; then build_only=1; shift; fi
+top="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
+b="$(cd "${1:-$top/build}" && pwd)"
+out="$top/.gpuroot"
+# A call carries 64 MiB with the working tree (about 25 MiB) included.
+chunk_mb="${CHUNK_MB:-38}"
+work="$(mktemp -d)"
+trap 'rm -rf "$work"' EXIT
+grep -qxF '/.gpuroot/' "$top/.git/info/exclude" 2>/dev/null || {
+  mkdir -p "$top/.git/info"; echo '/.gpuroot/' >> "$top/.git/info/exclude"; }
+
+mkdir -p "$out"
+if [ "$build_only" = 0 ]; then
+# --- 1. the programs and modules whose libraries we need --------------------
+roots=(/usr/bin/pvpython /usr/bin/pvbatch /usr/bin/Xvfb /usr/bin/xkbcomp
+  /usr/bin/xauth /usr/bin/ctest /usr/bin/python3.11 /usr/bin/bash
+  /usr/bin/mpiexec /usr/bin/orted /usr/lib/x86_64-linux-gnu/dri/swrast_dri.so)
+mapfile -t pyso < <(find /usr/lib/python3/dist-packages/paraview \
+  /usr/lib/python3/dist-packages/vtkmodules /usr/lib/python3/dist-packages/numpy \
+  -name '*.so' 2>/dev/null)
+mapfile -t ours < <(find "$b/lib" "$b/bin" -maxdepth 4 -type f \
+  \( -name '*.so' -o -name '*.so.*' -o -perm -u+x \) ! -name '*.a' 2>/dev/null)
+for f in "${roots[@]}" "${pyso[@]}" "${ours[@]}"; do
+  ldd "$f" 2>/dev/null | awk '/=> \//{print $3}' || true
+done | sort -u > "$work/libs"
+
+# --- 2. the Debian packages that own them, and the ones needed as a whole ---
+explicit=(libc6 libc-bin dash bash coreutils sed grep findutils procps
+  util-linux python3 python3.11 python3.11-minimal libpython3.11-minimal
+  libpython3.11-stdlib python3-minimal python3-numpy python3-tifffile
+  python3-paraview paraview cmake cmake-data xvfb xauth xkb-data x11-xkb-utils
+  libgl1-mesa-dri libglx-mesa0 libegl-mesa0 openmpi-bin openmpi-common
+  libopenmpi3 mricron-data)
+{
+  printf '%s\n' "${explicit[@]}"
+  # dpkg knows a file by the path its package installed (/lib/... or
+  # /usr/lib/...): ask for the normalised path, its /usr-less twin and the
+  # symbolic link's target, all in one call.
+  while read -r f; do
+    n="$(realpath -s "$f")"; echo "$n"; echo "${n#/usr}"; readlink -f "$f"
+  done < "$work/libs" | sort -u | xargs dpkg -S 2>/dev/null |
+    cut -d: -f1 | tr ',' '\n' | sed 's/ //g' || true
+} | sort -u > "$work/pkgs"
+
+# --- 3. their files, with /bin, /lib... resolved (bookworm merges /usr) -----
+while read -r p; do dpkg -L "$p" 2>/dev/null || true; done < "$work/pkgs" |
+  grep -vE '^/usr/share/(doc|man|info|locale|lintian|bug|doc-base)/|^/usr/include/|\.a$|/__pycache__/|^/\.$' |
+  sort -u | while read -r f; do
+    [ -e "$f" ] || [ -L "$f" ] || continue
+    [ -d "$f" ] && [ ! -L "$f" ] && continue
+    d="$(readlink -f "$(dirname "$f")")"
+    echo "${d#/}/$(basename "$f")"
+  done | sort -u > "$work/files"
+# The /usr merge links, the loader cache's configuration and a minimal /etc.
+for e in etc/passwd etc/group etc/hosts etc/nsswitch.conf etc/ld.so.conf \
+  etc/ld.so.conf.d etc/alternatives etc/openmpi etc/python3.11 etc/X11/xkb; do
+  [ -e "/$e" ] && echo "$e"
+done >> "$work/files"
+printf '%s\n' bin lib lib64 sbin >> "$work/files"
+
+rm -rf "$out"/root.tar.zst "$out"/root-*
+tar -C / --no-recursion -cf - -T <(grep -vE '^etc/(ld.so.conf.d|alternatives|openmpi|python3.11|X11/xkb)$' "$work/files") \
+  etc/ld.so.conf.d etc/alternatives etc/openmpi etc/python3.11 |
+  zstd -q -T0 -19 -o "$out/root.tar.zst"
+echo "root: $(wc -l < "$work/pkgs") packages, $(wc -l < "$work/files") files," \
+  "$(du -m "$out/root.tar.zst" | cut -f1) MiB compressed"
+
+fi
+
+# --- 4. the build tree's run-time part ---------------------------------------
+rm -rf "$out"/build.tar.zst "$out"/build-*
+(cd / && find "${b#/}" \( -name CMakeFiles -o -name '_deps' \) -prune -o -type f \
+  ! -name '*.o' ! -name '*.a' ! -name '*.d' ! -name 'mcvol_*_test' -print) |
+  tar -C / -cf - -T - | zstd -q -T0 -19 -o "$out/build.tar.zst"
+echo "build: $(du -m "$out/build.tar.zst" | cut -f1) MiB compressed"
+
+# --- 5. chunks: one folder per call, NAME-N/NAME.NN plus its checksum --------
+for name in root build; do
+  [ -f "$out/$name.tar.zst" ] || continue
+  (cd "$out" && split -b "${chunk_mb}M" -d -a 2 "$name.tar.zst" "$name." &&
+    sha256sum "$name.tar.zst" > "$name.sha256")
+  n=0
+  for c in "$out/$name".[0-9][0-9]; do
+    mkdir -p "$out/$name-$n"; mv "$c" "$out/$name-$n/"; n=$((n + 1))
+  done
+  mv "$out/$name.sha256" "$out/$name-0/"
+  if [ "$name" = root ]; then
+    # zstd for a GPU machine without one (vtk.sh setup uses it), in the
+    # last, smallest folder
+    mkdir -p "$out/root-$((n - 1))/tools"
+    cp /usr/bin/zstd "$out/root-$((n - 1))/tools/"
+    cp -L /usr/lib/x86_64-linux-gnu/libzstd.so.1 "$out/root-$((n - 1))/tools/"
+  fi
+  rm -f "$out/$name.tar.zst"
+  echo "$name: $n chunks of at most $chunk_mb MiB in $out/$name-0 .. $name-$((n - 1))"
+done
