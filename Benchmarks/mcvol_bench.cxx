@@ -21,6 +21,8 @@
 //              unlit image and 1-spp noise (issue 6)
 //   visibility the visibility optimization (paper 004): frame time against
 //              the unoptimized frame, refining renders, segment-list memory
+//   estimate   the error estimate against the true error (--reference-spp)
+//              at 16, 64, 256 spp, and the frame time with and without it
 //
 // On the CUDA backend frames are timed as render() + finish() with the image
 // left on the device (RenderSettings::readBack = false); a separate column
@@ -60,6 +62,7 @@ const Section sections[] = {
   { "effects", runEffects },
   { "converge", runConverge },
   { "visibility", runVisibility },
+  { "estimate", runEstimate },
 };
 } // namespace
 

@@ -211,11 +211,53 @@ public:
   vtkGetMacro(TransferFunctionRangeMode, int);
   ///@}
 
+  enum ErrorEstimateLimits
+  {
+    /// Samples per pixel the image must have before TargetError can stop
+    /// it: with fewer, the halves of the estimate are too short for a lucky
+    /// start (all early samples alike) not to stop it too soon.
+    TARGET_ERROR_MINIMUM_SAMPLES = 16
+  };
+
+  ///@{
+  /**
+   * Estimated error of the current image: the root mean square, over pixels
+   * and the premultiplied linear R, G and B in [0, 1] (as
+   * GetAccumulatedImage() gives them, before 8-bit quantisation; alpha is
+   * left out), of the difference between the image and the converged one it
+   * estimates. Computed without a reference from two interleaved halves of
+   * the samples (even and odd sample index; see mcvol::Accumulator::
+   * estimatedMSE), it falls like 1/sqrt(GetTotalSamples()). -1 when there
+   * is no estimate: fewer than 2 samples, no image yet, or the ray-marching
+   * subclass (its image is traced once, deterministically). The mapper always
+   * keeps the halves: one more float RGBA image and a few additions per
+   * sample (see Benchmarks/RESULTS.md for the measured cost).
+   * GetEstimatedPSNR() is 20 log10(1 / RMSE) in dB (peak 1), 300 when the
+   * estimate is exactly 0 (nothing visible), -1 when there is none.
+   */
+  double GetEstimatedError();
+  double GetEstimatedPSNR();
+  ///@}
+
+  ///@{
+  /**
+   * Adaptive stopping: with a target > 0 (an RMSE, as GetEstimatedError),
+   * the image is converged, and Render() redraws it without tracing, once
+   * its estimated error is at most the target and it has at least
+   * TARGET_ERROR_MINIMUM_SAMPLES samples per pixel. MaximumTotalSamples
+   * still caps the total (whichever comes first). 0 (the default): off.
+   * Like every mapper parameter, a new value restarts the image.
+   */
+  vtkSetClampMacro(TargetError, double, 0.0, VTK_DOUBLE_MAX);
+  vtkGetMacro(TargetError, double);
+  ///@}
+
   /**
    * True when another Render() would not trace: MaximumTotalSamples is
-   * reached, or progressive refinement is off and the image is traced, and
-   * nothing that resets the image has changed since the last Render() (a
-   * change is only noticed at the next Render()).
+   * reached, the estimated error reached TargetError, or progressive
+   * refinement is off and the image is traced, and nothing that resets the
+   * image has changed since the last Render() (a change is only noticed at
+   * the next Render()).
    */
   bool IsConverged();
 
@@ -552,6 +594,7 @@ protected:
   bool Progressive = true;
   int TransferFunctionRangeMode = DATA_RANGE;
   int MaximumTotalSamples = 0;
+  double TargetError = 0.0;
   int Backend = BACKEND_AUTO;
   bool VisibilityOptimization = false;
   double DeviationWeight = 1.0;
@@ -582,6 +625,8 @@ private:
   bool SetUpView(RenderPass& pass);
   void UpdateAccumulation(RenderPass& pass);
   bool TraceBatch(RenderPass& pass);
+  /// Whether TargetError stops the current image (estimate at most the target).
+  bool ReachedTargetError();
   void DrawImage(RenderPass& pass);
 };
 

@@ -3,7 +3,8 @@
 """mcvol-render: renders a scene file with vtkMultiChannelVolumeMapper.
 
     mcvol-render SCENE.json -o out.png [--raw out.pfm] [--raw-alpha alpha.pfm]
-                 [--spp N] [--size WxH] [--backend cpu|cuda|auto] [--quiet]
+                 [--spp N] [--target-error E] [--size WxH] [--backend cpu|cuda|auto]
+                 [--quiet]
 
 The scene format is documented in Documentation/scene-format.md. Errors in the
 scene (unknown keys, bad values, missing files) are reported with the key that
@@ -69,6 +70,16 @@ def parse_spp(text):
     return n
 
 
+def parse_target_error(text):
+    try:
+        e = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError("expected a number in [0, 1], got '%s'" % text)
+    if not (0.0 <= e <= 1.0):
+        raise argparse.ArgumentTypeError("expected a number in [0, 1], got '%s'" % text)
+    return e
+
+
 def default_presets_file():
     env = os.environ.get("MCVOL_PRESETS")
     if env:
@@ -98,6 +109,13 @@ def main(argv=None):
     )
     parser.add_argument("--raw-alpha", metavar="FILE.pfm", help="also write the alpha as a 1-channel float PFM")
     parser.add_argument("--spp", type=parse_spp, help="total samples per pixel (overrides samples_per_pixel)")
+    parser.add_argument(
+        "--target-error",
+        type=parse_target_error,
+        metavar="E",
+        help="stop once the estimated RMSE of the image reaches E (linear RGB in [0, 1]; overrides target_error; "
+        "the samples per pixel are then the cap; 0 = off)",
+    )
     parser.add_argument("--size", type=parse_size, metavar="WxH", help="image size (overrides image_size)")
     parser.add_argument("--backend", choices=BACKENDS, help="overrides backend")
     parser.add_argument(
@@ -165,6 +183,8 @@ def main(argv=None):
             scene["blend"] = args.blend
         if args.spp is not None:
             scene["samples_per_pixel"] = args.spp
+        if args.target_error is not None:
+            scene["target_error"] = args.target_error
         if args.size is not None:
             scene["image_size"] = args.size
         if args.backend is not None:

@@ -48,7 +48,7 @@ void usage()
             "                   [--channel-counts 1,2,4] [--macrocell-sizes 4,8,16] [--csv FILE]\n"
             "                   [--label TEXT] [--sampling texture|global] [--block X Y]\n"
             "                   [--psnr DB] [--reference-spp N] [--density F]\n"
-            "sections: trackers channels macrocell rebuild memory paper converge sampling effects visibility");
+            "sections: trackers channels macrocell rebuild memory paper converge sampling effects visibility estimate");
 }
 
 Options parse(int argc, char** argv)

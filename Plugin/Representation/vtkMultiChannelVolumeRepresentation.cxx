@@ -229,6 +229,11 @@ void vtkMultiChannelVolumeRepresentation::SetMaximumTotalSamples(int total)
   this->GetMultiChannelMapper()->SetMaximumTotalSamples(total);
 }
 
+void vtkMultiChannelVolumeRepresentation::SetTargetError(double rmse)
+{
+  this->GetMultiChannelMapper()->SetTargetError(rmse);
+}
+
 void vtkMultiChannelVolumeRepresentation::SetMacrocellSize(int size)
 {
   this->GetMultiChannelMapper()->SetMacrocellSize(size);
@@ -385,6 +390,26 @@ int vtkMultiChannelVolumeRepresentation::GetTotalSamples()
   }
   // Nothing is drawn while the channels are incomplete (ChannelStatus).
   return this->ChannelStatus.empty() ? this->GetMultiChannelMapper()->GetTotalSamples() : 0;
+}
+
+double vtkMultiChannelVolumeRepresentation::GetEstimatedError()
+{
+  // As GetTotalSamples: nothing known without data, nothing drawn while the
+  // channels are incomplete.
+  if (!this->Cache || !this->ChannelStatus.empty())
+  {
+    return -1.0;
+  }
+  return this->GetMultiChannelMapper()->GetEstimatedError();
+}
+
+double vtkMultiChannelVolumeRepresentation::GetEstimatedPSNR()
+{
+  if (!this->Cache || !this->ChannelStatus.empty())
+  {
+    return -1.0;
+  }
+  return this->GetMultiChannelMapper()->GetEstimatedPSNR();
 }
 
 int vtkMultiChannelVolumeRepresentation::GetConverged()

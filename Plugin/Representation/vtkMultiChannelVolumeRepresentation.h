@@ -92,6 +92,7 @@ public:
   void SetInteractiveFrameTime(double seconds);
   void SetProgressiveRefinement(bool on);
   void SetMaximumTotalSamples(int total);
+  void SetTargetError(double rmse);
   void SetMacrocellSize(int size);
   void SetBackend(int backend);
   void SetSeed(int seed);
@@ -159,6 +160,10 @@ public:
    * Read back by the client (information properties).
    */
   int GetTotalSamples();
+  /// The mapper's estimated RMSE and PSNR of the current image; -1 where
+  /// there is none (no samples yet, or no data on this process).
+  double GetEstimatedError();
+  double GetEstimatedPSNR();
   int GetConverged();
   int GetNumberOfChannels();
   const char* GetBackendReport();

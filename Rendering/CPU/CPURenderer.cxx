@@ -26,7 +26,7 @@ struct ImportanceFrame
 /// none of the optimization's code (its off state costs nothing).
 template <BlendMode Mode, bool Lit, bool Optimized>
 void renderRows(const SceneView& s, const CameraView& cam, const FrameParams& fp, const float* depth, float* rgba,
-  uint32_t previous, int threads, const ImportanceFrame& imp, RenderCounters* counters)
+  float* even, uint32_t previous, int threads, const ImportanceFrame& imp, RenderCounters* counters)
 {
   uint64_t dda = 0, tentative = 0, real = 0, samples = 0, scattering = 0, shadowRays = 0, gradients = 0;
   uint64_t importance = 0, overflows = 0;
@@ -45,7 +45,8 @@ void renderRows(const SceneView& s, const CameraView& cam, const FrameParams& fp
       {
         const size_t p = size_t(y) * size_t(W) + size_t(x);
         const float z = depth ? depth[p] : 1.f;
-        Vec4f sum;
+        Vec4f sum, evenSum;
+        Vec4f* evenOut = even ? &evenSum : nullptr;
         if (Optimized)
         {
           ImportanceSegment* seg = pool->segments.data() + p * size_t(kImportanceCapacity);
@@ -61,13 +62,17 @@ void renderRows(const SceneView& s, const CameraView& cam, const FrameParams& fp
           ri.segments = seg;
           ri.count = count;
           ri.total = pool->totals[p];
-          sum = renderPixel<Mode, Lit, true>(s, cam, fp, x, y, z, c, &ri);
+          sum = renderPixel<Mode, Lit, true>(s, cam, fp, x, y, z, c, &ri, evenOut);
         }
         else
         {
-          sum = renderPixel<Mode, Lit>(s, cam, fp, x, y, z, c);
+          sum = renderPixel<Mode, Lit>(s, cam, fp, x, y, z, c, nullptr, evenOut);
         }
         accumulate(rgba + 4 * p, sum, previous, fp.samplesPerPixel);
+        if (even)
+        {
+          accumulateEven(even + 4 * p, evenSum, previous, fp.samplesPerPixel);
+        }
       }
       dda += c.ddaSteps;
       tentative += c.tentative;
@@ -105,18 +110,18 @@ void renderRows(const SceneView& s, const CameraView& cam, const FrameParams& fp
 /// the unlit kernel contains none of the lighting code).
 template <BlendMode Mode>
 void rows(bool lit, const SceneView& s, const CameraView& cam, const FrameParams& fp, const float* depth, float* rgba,
-  uint32_t previous, int threads, const ImportanceFrame& imp, RenderCounters* counters)
+  float* even, uint32_t previous, int threads, const ImportanceFrame& imp, RenderCounters* counters)
 {
   const bool optimized = imp.pool != nullptr;
   if (lit)
   {
-    optimized ? renderRows<Mode, true, true>(s, cam, fp, depth, rgba, previous, threads, imp, counters)
-              : renderRows<Mode, true, false>(s, cam, fp, depth, rgba, previous, threads, imp, counters);
+    optimized ? renderRows<Mode, true, true>(s, cam, fp, depth, rgba, even, previous, threads, imp, counters)
+              : renderRows<Mode, true, false>(s, cam, fp, depth, rgba, even, previous, threads, imp, counters);
   }
   else
   {
-    optimized ? renderRows<Mode, false, true>(s, cam, fp, depth, rgba, previous, threads, imp, counters)
-              : renderRows<Mode, false, false>(s, cam, fp, depth, rgba, previous, threads, imp, counters);
+    optimized ? renderRows<Mode, false, true>(s, cam, fp, depth, rgba, even, previous, threads, imp, counters)
+              : renderRows<Mode, false, false>(s, cam, fp, depth, rgba, even, previous, threads, imp, counters);
   }
 }
 } // namespace
@@ -157,21 +162,22 @@ void CPURenderer::render(const Scene& scene, const Camera& camera, const RenderS
     imp.seed = settings.seed;
   }
   float* rgba = accum.rgba();
+  float* even = accum.evenRGBA(); // null: no error estimate wanted
   const uint32_t previous = accum.samples();
   switch (s.blend.mode)
   {
     case BlendMode::Max:
-      rows<BlendMode::Max>(lit, s, cam, fp, depth, rgba, previous, this->Threads, imp, counters);
+      rows<BlendMode::Max>(lit, s, cam, fp, depth, rgba, even, previous, this->Threads, imp, counters);
       break;
     case BlendMode::Mix:
-      rows<BlendMode::Mix>(lit, s, cam, fp, depth, rgba, previous, this->Threads, imp, counters);
+      rows<BlendMode::Mix>(lit, s, cam, fp, depth, rgba, even, previous, this->Threads, imp, counters);
       break;
     case BlendMode::Composite:
-      rows<BlendMode::Composite>(lit, s, cam, fp, depth, rgba, previous, this->Threads, imp, counters);
+      rows<BlendMode::Composite>(lit, s, cam, fp, depth, rgba, even, previous, this->Threads, imp, counters);
       break;
     case BlendMode::Density:
     default:
-      rows<BlendMode::Density>(lit, s, cam, fp, depth, rgba, previous, this->Threads, imp, counters);
+      rows<BlendMode::Density>(lit, s, cam, fp, depth, rgba, even, previous, this->Threads, imp, counters);
       break;
   }
   accum.addSamples(uint32_t(settings.samplesPerPixel));

@@ -155,6 +155,10 @@ struct CUDARenderer::Internal
   DeviceBuffer<float4> Accum;
   uint64_t AccumId = 0; ///< Accumulator::id() of the image in Accum (0: none)
   uint32_t AccumSamples = 0;
+  /// Running mean of the even samples (Accumulator::evenRGBA), for the
+  /// error estimate; AccumEven: it is in step with Accum.
+  DeviceBuffer<float4> Even;
+  bool AccumEven = false;
   DeviceBuffer<float> Depth;
   std::vector<float> LastDepth;
   bool HaveDepth = false;

@@ -37,13 +37,28 @@ __device__ MCVOL_FORCE_INLINE void accumulatePixel(float4* pixel, const Vec4f& s
   *pixel = make_float4(v[0], v[1], v[2], v[3]);
 }
 
+/// The even half of the error estimate (accumulateEven()) on one pixel of
+/// the device's even-sample image.
+__device__ MCVOL_FORCE_INLINE void accumulateEvenPixel(float4* pixel, const Vec4f& sum, uint32_t previous, int added)
+{
+  if (addedEvenSamples(previous, added) == 0u)
+  {
+    return; // no sample of even index in this render: leave the pixel unread
+  }
+  const float4 old = *pixel;
+  float v[4] = { old.x, old.y, old.z, old.w };
+  accumulateEven(v, sum, previous, added);
+  *pixel = make_float4(v[0], v[1], v[2], v[3]);
+}
+
 /// One thread per pixel: renderPixel() from the core, folded into the
-/// running mean in `accum`. Count adds the work counters (warp sums, one
+/// running mean in `accum` (and the even samples into `even`, when not
+/// null: the error estimate). Count adds the work counters (warp sums, one
 /// atomic per warp and counter).
 template <BlendMode Mode, bool Count, bool Lit>
 __global__ void renderKernel(const __grid_constant__ SceneView s, const __grid_constant__ CameraView cam,
   const __grid_constant__ FrameParams fp, const float* __restrict__ depth, float4* __restrict__ accum,
-  uint32_t previous, unsigned long long* __restrict__ counters)
+  float4* __restrict__ even, uint32_t previous, unsigned long long* __restrict__ counters)
 {
   const int x = int(blockIdx.x * blockDim.x + threadIdx.x);
   const int y = int(blockIdx.y * blockDim.y + threadIdx.y);
@@ -52,8 +67,13 @@ __global__ void renderKernel(const __grid_constant__ SceneView s, const __grid_c
   {
     const size_t p = size_t(y) * size_t(cam.width) + size_t(x);
     const float z = depth ? depth[p] : 1.f;
-    const Vec4f sum = renderPixel<Mode, Lit>(s, cam, fp, x, y, z, c);
+    Vec4f evenSum;
+    const Vec4f sum = renderPixel<Mode, Lit>(s, cam, fp, x, y, z, c, nullptr, even ? &evenSum : nullptr);
     accumulatePixel(accum + p, sum, previous, fp.samplesPerPixel);
+    if (even)
+    {
+      accumulateEvenPixel(even + p, evenSum, previous, fp.samplesPerPixel);
+    }
   }
   if (Count)
   {
@@ -90,8 +110,8 @@ __global__ void renderKernel(const __grid_constant__ SceneView s, const __grid_c
 template <BlendMode Mode, bool Lit>
 __global__ void renderOptimizedKernel(const __grid_constant__ SceneView s, const __grid_constant__ CameraView cam,
   const __grid_constant__ FrameParams fp, const float* __restrict__ depth, float4* __restrict__ accum,
-  uint32_t previous, unsigned long long* __restrict__ counters, ImportanceSegment* __restrict__ segments,
-  uint8_t* __restrict__ counts, float* __restrict__ totals, int refinePass)
+  float4* __restrict__ even, uint32_t previous, unsigned long long* __restrict__ counters,
+  ImportanceSegment* __restrict__ segments, uint8_t* __restrict__ counts, float* __restrict__ totals, int refinePass)
 {
   const int x = int(blockIdx.x * blockDim.x + threadIdx.x);
   const int y = int(blockIdx.y * blockDim.y + threadIdx.y);
@@ -116,8 +136,13 @@ __global__ void renderOptimizedKernel(const __grid_constant__ SceneView s, const
     ri.segments = seg;
     ri.count = count;
     ri.total = total;
-    const Vec4f sum = renderPixel<Mode, Lit, true>(s, cam, fp, x, y, z, c, &ri);
+    Vec4f evenSum;
+    const Vec4f sum = renderPixel<Mode, Lit, true>(s, cam, fp, x, y, z, c, &ri, even ? &evenSum : nullptr);
     accumulatePixel(accum + p, sum, previous, fp.samplesPerPixel);
+    if (even)
+    {
+      accumulateEvenPixel(even + p, evenSum, previous, fp.samplesPerPixel);
+    }
   }
   // Always counted (one atomic per warp and counter): the overflow count is
   // needed whatever the caller asked for.
@@ -156,43 +181,45 @@ struct OptimizedLaunch
 
 template <BlendMode Mode>
 void launchOptimized(bool lit, dim3 grid, dim3 block, const SceneView& s, const CameraView& cam, const FrameParams& fp,
-  const float* depth, float4* accum, uint32_t previous, unsigned long long* counters, const OptimizedLaunch& o)
+  const float* depth, float4* accum, float4* even, uint32_t previous, unsigned long long* counters,
+  const OptimizedLaunch& o)
 {
   if (lit)
   {
-    renderOptimizedKernel<Mode, true>
-      <<<grid, block>>>(s, cam, fp, depth, accum, previous, counters, o.segments, o.counts, o.totals, o.refinePass);
+    renderOptimizedKernel<Mode, true><<<grid, block>>>(
+      s, cam, fp, depth, accum, even, previous, counters, o.segments, o.counts, o.totals, o.refinePass);
   }
   else
   {
-    renderOptimizedKernel<Mode, false>
-      <<<grid, block>>>(s, cam, fp, depth, accum, previous, counters, o.segments, o.counts, o.totals, o.refinePass);
+    renderOptimizedKernel<Mode, false><<<grid, block>>>(
+      s, cam, fp, depth, accum, even, previous, counters, o.segments, o.counts, o.totals, o.refinePass);
   }
 }
 
 template <BlendMode Mode>
 void launchRender(bool count, bool lit, dim3 grid, dim3 block, const SceneView& s, const CameraView& cam,
-  const FrameParams& fp, const float* depth, float4* accum, uint32_t previous, unsigned long long* counters)
+  const FrameParams& fp, const float* depth, float4* accum, float4* even, uint32_t previous,
+  unsigned long long* counters)
 {
   // The unlit kernels contain none of the lighting code.
   if (lit)
   {
     if (count)
     {
-      renderKernel<Mode, true, true><<<grid, block>>>(s, cam, fp, depth, accum, previous, counters);
+      renderKernel<Mode, true, true><<<grid, block>>>(s, cam, fp, depth, accum, even, previous, counters);
     }
     else
     {
-      renderKernel<Mode, false, true><<<grid, block>>>(s, cam, fp, depth, accum, previous, counters);
+      renderKernel<Mode, false, true><<<grid, block>>>(s, cam, fp, depth, accum, even, previous, counters);
     }
   }
   else if (count)
   {
-    renderKernel<Mode, true, false><<<grid, block>>>(s, cam, fp, depth, accum, previous, counters);
+    renderKernel<Mode, true, false><<<grid, block>>>(s, cam, fp, depth, accum, even, previous, counters);
   }
   else
   {
-    renderKernel<Mode, false, false><<<grid, block>>>(s, cam, fp, depth, accum, previous, counters);
+    renderKernel<Mode, false, false><<<grid, block>>>(s, cam, fp, depth, accum, even, previous, counters);
   }
 }
 } // namespace
@@ -242,7 +269,10 @@ void CUDARenderer::render(const Scene& scene, const Camera& camera, const Render
 
   // Accumulation buffer: continue the device mean only if it is this
   // Accumulator's, at its sample count; otherwise start from the host's.
+  // The even-sample mean of the error estimate goes with it, when the
+  // Accumulator keeps one (AccumEven: the device copy is in step).
   const size_t P = size_t(camera.width) * size_t(camera.height);
+  const bool wantEven = accum.evenRGBA() != nullptr;
   if (accum.pendingOnDevice() && in.AccumId != accum.id())
   {
     throw std::logic_error("mcvol: this Accumulator's image was left on the device (RenderSettings::readBack = "
@@ -254,18 +284,34 @@ void CUDARenderer::render(const Scene& scene, const Camera& camera, const Render
     in.Accum.resize(P);
     in.AccumId = 0;
   }
-  if (in.AccumId != accum.id() || in.AccumSamples != accum.samples())
+  if (wantEven && in.Even.count != P)
+  {
+    in.Even.resize(P);
+    in.AccumEven = false;
+  }
+  if (in.AccumId != accum.id() || in.AccumSamples != accum.samples() || (wantEven && !in.AccumEven))
   {
     if (accum.samples() == 0)
     {
       MCVOL_CUDA(cudaMemsetAsync(in.Accum.ptr, 0, in.Accum.bytes()));
+      if (wantEven)
+      {
+        MCVOL_CUDA(cudaMemsetAsync(in.Even.ptr, 0, in.Even.bytes()));
+      }
     }
     else
     {
       MCVOL_CUDA(cudaMemcpy(in.Accum.ptr, accum.rgba(), in.Accum.bytes(), cudaMemcpyHostToDevice));
+      if (wantEven)
+      {
+        MCVOL_CUDA(cudaMemcpy(in.Even.ptr, accum.evenRGBA(), in.Even.bytes(), cudaMemcpyHostToDevice));
+      }
     }
     in.AccumId = accum.id();
   }
+  // Renders without the split leave the device's even image behind.
+  in.AccumEven = wantEven;
+  float4* devEven = wantEven ? in.Even.ptr : nullptr;
 
   // Depth: uploaded when it changes (geometry or view), else reused.
   const float* devDepth = nullptr;
@@ -339,20 +385,20 @@ void CUDARenderer::render(const Scene& scene, const Camera& camera, const Render
       {
         case BlendMode::Max:
           launchOptimized<BlendMode::Max>(
-            lit, grid, block, s, cam, fp, devDepth, in.Accum.ptr, previous, in.Counters.ptr, opt);
+            lit, grid, block, s, cam, fp, devDepth, in.Accum.ptr, devEven, previous, in.Counters.ptr, opt);
           break;
         case BlendMode::Mix:
           launchOptimized<BlendMode::Mix>(
-            lit, grid, block, s, cam, fp, devDepth, in.Accum.ptr, previous, in.Counters.ptr, opt);
+            lit, grid, block, s, cam, fp, devDepth, in.Accum.ptr, devEven, previous, in.Counters.ptr, opt);
           break;
         case BlendMode::Composite:
           launchOptimized<BlendMode::Composite>(
-            lit, grid, block, s, cam, fp, devDepth, in.Accum.ptr, previous, in.Counters.ptr, opt);
+            lit, grid, block, s, cam, fp, devDepth, in.Accum.ptr, devEven, previous, in.Counters.ptr, opt);
           break;
         case BlendMode::Density:
         default:
           launchOptimized<BlendMode::Density>(
-            lit, grid, block, s, cam, fp, devDepth, in.Accum.ptr, previous, in.Counters.ptr, opt);
+            lit, grid, block, s, cam, fp, devDepth, in.Accum.ptr, devEven, previous, in.Counters.ptr, opt);
           break;
       }
     }
@@ -361,20 +407,20 @@ void CUDARenderer::render(const Scene& scene, const Camera& camera, const Render
       {
         case BlendMode::Max:
           launchRender<BlendMode::Max>(
-            count, lit, grid, block, s, cam, fp, devDepth, in.Accum.ptr, previous, in.Counters.ptr);
+            count, lit, grid, block, s, cam, fp, devDepth, in.Accum.ptr, devEven, previous, in.Counters.ptr);
           break;
         case BlendMode::Mix:
           launchRender<BlendMode::Mix>(
-            count, lit, grid, block, s, cam, fp, devDepth, in.Accum.ptr, previous, in.Counters.ptr);
+            count, lit, grid, block, s, cam, fp, devDepth, in.Accum.ptr, devEven, previous, in.Counters.ptr);
           break;
         case BlendMode::Composite:
           launchRender<BlendMode::Composite>(
-            count, lit, grid, block, s, cam, fp, devDepth, in.Accum.ptr, previous, in.Counters.ptr);
+            count, lit, grid, block, s, cam, fp, devDepth, in.Accum.ptr, devEven, previous, in.Counters.ptr);
           break;
         case BlendMode::Density:
         default:
           launchRender<BlendMode::Density>(
-            count, lit, grid, block, s, cam, fp, devDepth, in.Accum.ptr, previous, in.Counters.ptr);
+            count, lit, grid, block, s, cam, fp, devDepth, in.Accum.ptr, devEven, previous, in.Counters.ptr);
           break;
       }
     MCVOL_CUDA(cudaGetLastError());
@@ -429,6 +475,12 @@ void CUDARenderer::readBack(Accumulator& accum)
   }
   MCVOL_CUDA(cudaSetDevice(in.Device));
   MCVOL_CUDA(cudaMemcpy(accum.rgba(), in.Accum.ptr, in.Accum.bytes(), cudaMemcpyDeviceToHost));
+  // The error estimate is computed on the host from both images: one more
+  // copy of the image's size, only while the Accumulator keeps the estimate.
+  if (accum.evenRGBA() && in.AccumEven && in.Even.count == in.Accum.count)
+  {
+    MCVOL_CUDA(cudaMemcpy(accum.evenRGBA(), in.Even.ptr, in.Even.bytes(), cudaMemcpyDeviceToHost));
+  }
   accum.setPendingOnDevice(false);
   ++in.Updates.imageDownloads;
 }

@@ -180,7 +180,7 @@ CudaMemoryStats CUDARenderer::memory() const
   }
   m.macrocellBytes = this->In->Ranges.bytes();
   m.majorantBytes = this->In->Majorants.bytes();
-  m.imageBytes = this->In->Accum.bytes() + this->In->Depth.bytes();
+  m.imageBytes = this->In->Accum.bytes() + this->In->Even.bytes() + this->In->Depth.bytes();
   return m;
 }
 

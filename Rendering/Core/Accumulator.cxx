@@ -17,6 +17,11 @@ void Accumulator::resize(int width, int height)
     this->Width = width;
     this->Height = height;
     this->RGBA.assign(size_t(width) * size_t(height) * 4, 0.f);
+    if (this->EstimateError)
+    {
+      this->Even.assign(this->RGBA.size(), 0.f);
+    }
+    this->EvenValid = this->EstimateError;
     this->Samples = 0;
     this->Pending = false;
     this->Importance = ImportancePool();
@@ -26,12 +31,65 @@ void Accumulator::resize(int width, int height)
 void Accumulator::reset()
 {
   std::fill(this->RGBA.begin(), this->RGBA.end(), 0.f);
+  if (this->EstimateError)
+  {
+    this->Even.assign(this->RGBA.size(), 0.f);
+  }
+  this->EvenValid = this->EstimateError;
   this->Samples = 0;
   this->Pending = false;
   // The segment lists belong to the image: a new image refines anew.
   std::fill(this->Importance.counts.begin(), this->Importance.counts.end(), uint8_t(0));
   this->Importance.passes = 0;
   this->Importance.overflows = 0;
+}
+
+void Accumulator::setErrorEstimation(bool on)
+{
+  if (on == this->EstimateError)
+  {
+    return;
+  }
+  this->EstimateError = on;
+  if (on)
+  {
+    this->Even.assign(this->RGBA.size(), 0.f);
+    // Samples already taken were not split into halves.
+    this->EvenValid = this->Samples == 0;
+  }
+  else
+  {
+    std::vector<float>().swap(this->Even);
+    this->EvenValid = false;
+  }
+}
+
+double Accumulator::estimatedMSE() const
+{
+  const uint32_t n = this->Samples;
+  if (n < 2 || !this->EvenValid || this->Pending || this->Even.size() != this->RGBA.size())
+  {
+    return -1.0;
+  }
+  const size_t pixels = size_t(this->Width) * size_t(this->Height);
+  if (pixels == 0)
+  {
+    return -1.0;
+  }
+  const double nA = double(evenSamples(n));
+  const double nB = double(n) - nA;
+  const float* m = this->RGBA.data();
+  const float* a = this->Even.data();
+  double sum = 0.0;
+  for (size_t p = 0; p < pixels; ++p)
+  {
+    for (int c = 0; c < 3; ++c)
+    {
+      const double d = double(a[4 * p + c]) - double(m[4 * p + c]);
+      sum += d * d;
+    }
+  }
+  return (nA / nB) * sum / double(3 * pixels);
 }
 
 Accumulator::ImportancePool& Accumulator::importancePool(bool hostLists)

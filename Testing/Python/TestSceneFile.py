@@ -13,6 +13,7 @@ import argparse
 import glob
 import json
 import os
+import re
 import subprocess
 import sys
 import tempfile
@@ -75,6 +76,7 @@ BAD_SCENES = [
     ("bad-interpolation", {"input": {"demo": "figure3"}, "interpolation": "cubic"}, "interpolation:"),
     ("bad-spp-type", {"input": {"demo": "figure3"}, "samples_per_pixel": "many"}, "samples_per_pixel:"),
     ("bad-spp-range", {"input": {"demo": "figure3"}, "samples_per_pixel": 0}, "samples_per_pixel:"),
+    ("bad-target-error", {"input": {"demo": "figure3"}, "target_error": -0.1}, "target_error:"),
     ("bad-size", {"input": {"demo": "figure3"}, "image_size": [64]}, "image_size:"),
     ("bad-background", {"input": {"demo": "figure3"}, "background": [0, 0, 2]}, "background[2]:"),
     ("bad-zoom", {"input": {"demo": "figure3"}, "camera": {"zoom": 0}}, "camera.zoom:"),
@@ -239,6 +241,18 @@ def main():
             json.dump(data, f)
         r = run(program, [fn, "-o", os.path.join(work, "ref-bad.png"), "--size", "32x32"])
         t.check(r.returncode == 2 and "renderer:" in r.stderr, "bad renderer: %d %r" % (r.returncode, r.stderr))
+
+        # target_error: stops at the estimate, the samples per pixel a cap;
+        # the summary prints the estimate.
+        r = run(program, [scenes[0], "-o", os.path.join(work, "target.png"), "--size", "48x48", "--spp", "1024",
+                          "--target-error", "0.02", "--backend", "cpu"])
+        m = re.search(r"(\d+) spp .*target error 0.02 reached, estimated RMSE ([0-9.e-]+)", r.stderr)
+        t.check(r.returncode == 0 and m is not None and 16 <= int(m.group(1)) < 1024 and float(m.group(2)) <= 0.02,
+                "--target-error 0.02: %d %r" % (r.returncode, r.stderr))
+        r = run(program, [scenes[0], "-o", os.path.join(work, "target-cap.png"), "--size", "32x32", "--spp", "32",
+                          "--target-error", "1e-6", "--backend", "cpu"])
+        t.check(r.returncode == 0 and "32 spp" in r.stderr and "not reached (capped)" in r.stderr,
+                "an unreachable target stops at the cap: %d %r" % (r.returncode, r.stderr))
 
     # Bad scenes: status 2, the key named, no traceback, no image.
     bad_dir = os.path.join(work, "bad")

@@ -24,7 +24,7 @@ struct CudaMemoryStats
   size_t textureBytes = 0;   ///< 3D texture arrays (a second copy, when texture sampling is on)
   size_t macrocellBytes = 0; ///< per-cell per-channel scalar ranges
   size_t majorantBytes = 0;  ///< per-cell per-channel majorants
-  size_t imageBytes = 0;     ///< accumulation and depth buffers
+  size_t imageBytes = 0;     ///< accumulation (with the error estimate's even half) and depth buffers
 };
 
 /// What the renderer did to keep its device copies current (for tests).

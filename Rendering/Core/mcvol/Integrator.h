@@ -25,11 +25,13 @@ struct FrameParams
  * the result depends on nothing but the pixel, the sample indices and the seed.
  * Optimized (a compile-time choice, as Lit) tracks through the visibility
  * optimization with the pixel's list `imp`; without it the tracking code is
- * exactly the unoptimized one (the null list folds away).
+ * exactly the unoptimized one (the null list folds away). `even` (optional)
+ * receives the sum of the samples of even index firstSample + k, the half
+ * the error estimate keeps (Accumulator::estimatedMSE).
  */
 template <BlendMode Mode, bool Lit = false, bool Optimized = false>
 MCVOL_FUNC Vec4f renderPixel(const SceneView& s, const CameraView& cam, const FrameParams& fp, int x, int y,
-  float depth, RayCounters& c, const RayImportance* imp = nullptr)
+  float depth, RayCounters& c, const RayImportance* imp = nullptr, Vec4f* even = nullptr)
 {
   const RayImportance* ri = Optimized ? imp : nullptr;
   ShadowCounters sc;
@@ -51,6 +53,13 @@ MCVOL_FUNC Vec4f renderPixel(const SceneView& s, const CameraView& cam, const Fr
     sum.g += v.g;
     sum.b += v.b;
     sum.a += v.a;
+    if (even && ((fp.firstSample + uint32_t(k)) & 1u) == 0u)
+    {
+      even->r += v.r;
+      even->g += v.g;
+      even->b += v.b;
+      even->a += v.a;
+    }
   }
   return sum;
 }
@@ -105,6 +114,12 @@ MCVOL_FUNC int refineImportance(const SceneView& s, const CameraView& cam, int x
   return merged;
 }
 
+/// Samples of even index a render adds to a pixel that had `previous`.
+MCVOL_FUNC uint32_t addedEvenSamples(uint32_t previous, int added)
+{
+  return (previous + uint32_t(added) + 1u) / 2u - (previous + 1u) / 2u;
+}
+
 /// Folds a render's per-pixel sum into the running mean of `previous` samples.
 MCVOL_FUNC void accumulate(float* rgba, const Vec4f& sum, uint32_t previous, int added)
 {
@@ -114,5 +129,16 @@ MCVOL_FUNC void accumulate(float* rgba, const Vec4f& sum, uint32_t previous, int
   rgba[1] = rgba[1] * keep + sum.g * inv;
   rgba[2] = rgba[2] * keep + sum.b * inv;
   rgba[3] = rgba[3] * keep + sum.a * inv;
+}
+
+/// Folds a render's even-sample sum into the even half's running mean
+/// (nothing when the render added no sample of even index).
+MCVOL_FUNC void accumulateEven(float* even, const Vec4f& sum, uint32_t previous, int added)
+{
+  const uint32_t addedEven = addedEvenSamples(previous, added);
+  if (addedEven > 0u)
+  {
+    accumulate(even, sum, (previous + 1u) / 2u, int(addedEven));
+  }
 }
 } // namespace mcvol

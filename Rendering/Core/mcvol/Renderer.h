@@ -61,6 +61,14 @@ struct RenderCounters
 /**
  * Running mean of premultiplied RGBA per pixel. Each render adds K samples
  * per pixel; reset() starts over (the caller resets when the image changes).
+ *
+ * Error estimate (on by default, errorEstimation()): a second running mean
+ * holds only the samples of even per-pixel index (half A; the odd ones, half
+ * B, are what the full mean holds beside them). Both halves are unbiased
+ * estimates of the pixel with independent noise, so their difference
+ * measures the noise of the full mean without any reference; see
+ * estimatedMSE(). Samples are numbered per pixel, so, like the image, the
+ * halves do not depend on how the samples were batched.
  */
 class Accumulator
 {
@@ -75,6 +83,46 @@ public:
   float* rgba() { return this->RGBA.data(); }
   /// Called by backends after adding `k` samples per pixel.
   void addSamples(uint32_t k) { this->Samples += k; }
+
+  /**
+   * Keep the even-sample mean the error estimate needs (default on: one more
+   * RGBA float image, and four additions per even sample). Turned on while
+   * an image holds samples, the estimate is unavailable until reset() or
+   * resize() (the earlier samples were not split); off frees the buffer.
+   */
+  void setErrorEstimation(bool on);
+  bool errorEstimation() const { return this->EstimateError; }
+  /// Running mean of the samples of even per-pixel index (RGBA as rgba()),
+  /// or nullptr when the estimate is off or unavailable for this image:
+  /// backends then skip the split.
+  float* evenRGBA() { return this->EvenValid ? this->Even.data() : nullptr; }
+  const float* evenRGBA() const { return this->EvenValid ? this->Even.data() : nullptr; }
+  /// Samples of even index among the first n of a pixel: 0, 2, 4, ... < n.
+  static uint32_t evenSamples(uint32_t n) { return (n + 1u) / 2u; }
+
+  /**
+   * Estimated mean squared error of the image against its expectation (the
+   * converged image), averaged over pixels and the premultiplied R, G and B
+   * (alpha is left out, as the accuracy benchmarks score images: it is the
+   * coverage, not a colour, and would dilute the estimate with the often
+   * noiseless background). Negative when it cannot be estimated: fewer than
+   * 2 samples, estimation off or turned on mid-image, or the latest image
+   * still on a device (readBack off). Exactly 0 for an image whose samples
+   * all agree (e.g. nothing visible).
+   *
+   * Derivation, per pixel and colour channel: with N samples of variance
+   * s^2, half A holds nA = ceil(N/2) of them (mean mA) and half B the
+   * nB = floor(N/2) others (mB). The halves are independent, so
+   * E[(mA - mB)^2] = s^2 (1/nA + 1/nB) = s^2 N / (nA nB), and the full mean
+   * m = (nA mA + nB mB) / N has variance s^2 / N = E[(mA - mB)^2] nA nB / N^2
+   * (a quarter of it when nA = nB). mB is not stored: it follows from m, and
+   * mA - mB = N (mA - m) / nB, so the estimate is (nA / nB) (mA - m)^2:
+   * no cancellation of large sums, only of two means of float rounding
+   * (~1e-7 relative), far below any noise worth measuring. The per-pixel
+   * estimate has few degrees of freedom, but the average over the image has
+   * many: it is a good estimate of the image's MSE.
+   */
+  double estimatedMSE() const;
   /// Unique per Accumulator object (copies get their own): device backends
   /// key their copy of the image on it.
   uint64_t id() const { return this->Id.value; }
@@ -115,6 +163,9 @@ private:
   bool Pending = false;
   ObjectId Id;
   std::vector<float> RGBA;
+  bool EstimateError = true;
+  bool EvenValid = false; ///< Even holds the even samples of this image
+  std::vector<float> Even;
   ImportancePool Importance;
 };
 

@@ -453,6 +453,11 @@ def setup_mapper(mapper, prop, scene, channels, tfs, render_image, reference):
     total = scene["samples_per_pixel"]
     per_render = samples_per_render(total, scene["samples_per_render"])
     mapper.SetSamplesPerPixel(per_render)
+    if not reference and scene.get("target_error", 0.0) > 0.0:
+        # Adaptive stopping: the mapper stops tracing once its estimated RMSE
+        # reaches the target, samples_per_pixel still capping the total.
+        mapper.SetTargetError(scene["target_error"])
+        mapper.SetMaximumTotalSamples(total)
     if reference:
         # One deterministic image: the ray march through pixel centres.
         total = per_render = 1

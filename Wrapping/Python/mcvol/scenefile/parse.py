@@ -366,6 +366,11 @@ def parse_scene(data, scene_dir, presets):
         if "samples_per_render" in data
         else 16
     )
+    # 0: off; else stop once the estimated RMSE reaches it (samples_per_pixel
+    # is then the cap).
+    s["target_error"] = (
+        get_number(data["target_error"], "target_error", lo=0.0, hi=1.0) if "target_error" in data else 0.0
+    )
     s["image_size"] = (
         get_vector(data["image_size"], "image_size", 2, "[width, height]", lo=1, hi=16384, integer=True)
         if "image_size" in data

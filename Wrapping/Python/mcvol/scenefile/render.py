@@ -9,9 +9,10 @@ from .errors import ErrorCollector, RenderError
 from .output import write_png, write_raw
 
 
-def accumulate(pipeline, errors):
-    """Renders until the mapper holds the pipeline's total samples per pixel;
-    returns the seconds it took."""
+def accumulate(pipeline, errors, adaptive=False):
+    """Renders until the mapper holds the pipeline's total samples per pixel,
+    or, `adaptive` (a target_error), until the mapper says the image is
+    converged; returns the seconds it took."""
     mapper, total = pipeline.mapper, pipeline.total
     start = time.perf_counter()
     last = -1
@@ -20,7 +21,7 @@ def accumulate(pipeline, errors):
         if errors.messages:
             raise RenderError(errors.messages[-1])
         done = mapper.GetTotalSamples()
-        if done >= total:
+        if done >= total or (adaptive and mapper.IsConverged()):
             break
         if done <= last:
             raise RenderError("the mapper stopped accumulating at %d samples per pixel" % done)
@@ -40,10 +41,12 @@ def render(scene, output, raw=None, raw_alpha=None, errors=None, prog="mcvol-ren
         errors = ErrorCollector()
     pipeline = assemble(scene, errors, prog)
     mapper, total, per_render = pipeline.mapper, pipeline.total, pipeline.per_render
-    seconds = accumulate(pipeline, errors)
+    target = 0.0 if pipeline.reference else scene.get("target_error", 0.0)
+    seconds = accumulate(pipeline, errors, adaptive=target > 0.0)
     backend = mapper.GetBackendReport()
-    if mapper.GetTotalSamples() != total:
-        raise RenderError("accumulated %d samples per pixel, not %d" % (mapper.GetTotalSamples(), total))
+    done = mapper.GetTotalSamples()
+    if done != total and not (target > 0.0 and mapper.IsConverged() and done < total):
+        raise RenderError("accumulated %d samples per pixel, not %d" % (done, total))
 
     write_png(pipeline.window, output, errors)
     w, h = scene["image_size"]
@@ -54,6 +57,12 @@ def render(scene, output, raw=None, raw_alpha=None, errors=None, prog="mcvol-ren
             mapper.GetLastStepSize(), scene["compositing"], mapper.GetLastSampleCount())
         backend = "CPU"
     else:
-        method = "%d spp (%d per render), %s" % (total, per_render, scene["tracking"])
+        method = "%d spp (%d per render), %s" % (done, per_render, scene["tracking"])
+        rmse = mapper.GetEstimatedError()
+        if target > 0.0:
+            reached = 0.0 <= rmse <= target and done >= mapper.TARGET_ERROR_MINIMUM_SAMPLES
+            method += ", target error %g %s" % (target, "reached" if reached else "not reached (capped)")
+        if rmse >= 0.0:
+            method += ", estimated RMSE %.4g (PSNR %.1f dB)" % (rmse, mapper.GetEstimatedPSNR())
     return "%s at %dx%d, %d channel(s), %s blend, %s: %.2f s -> %s" % (
         method, w, h, len(pipeline.channels), scene["blend"], backend, seconds, output)

@@ -54,6 +54,7 @@ TOP_KEYS = {
     "backend",
     "samples_per_pixel",
     "samples_per_render",
+    "target_error",
     "image_size",
     "camera",
     "background",

@@ -1,0 +1,215 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// The error estimate of the progressive image (issue 14, item 4):
+// Accumulator::estimatedMSE() from the even-sample half against the true
+// error measured with a reference. Backend-generic (testRenderer(): the CPU,
+// or the CUDA backend with MCVOL_TEST_BACKEND=cuda). Seeds are fixed; the
+// agreement factor is stated in each test.
+#include "TestUtil.h"
+
+#include <cstdio>
+
+using namespace mcvol;
+using namespace mcvol::test;
+
+namespace
+{
+/// The estimated RMSE must be within this factor of the true RMSE (either
+/// way). The estimate averages ~5000 pixel-channel values of a few degrees of
+/// freedom each, so it is typically within a few percent; 1.25 leaves room
+/// for the heavy tails of Monte Carlo noise while failing a missing factor
+/// such as the 1/4 of equal halves (which would make the ratio exactly 2)
+/// or a wrong split of odd sample counts.
+constexpr double kFactor = 1.25;
+
+Camera demoCam(const DemoVolume& v, int W, int H)
+{
+  return orbitCamera(v.dims, v.spacing, W, H, 30, 20);
+}
+
+std::vector<float> image(const Accumulator& a)
+{
+  return std::vector<float>(a.rgba(), a.rgba() + size_t(4) * size_t(a.width()) * size_t(a.height()));
+}
+
+/// MSE over premultiplied R, G, B (alpha left out, as estimatedMSE does).
+double mseRGB(const std::vector<float>& a, const std::vector<float>& b)
+{
+  double s = 0;
+  size_t n = 0;
+  for (size_t i = 0; i < a.size(); ++i)
+  {
+    if (i % 4 == 3)
+    {
+      continue;
+    }
+    const double d = double(a[i]) - double(b[i]);
+    s += d * d;
+    ++n;
+  }
+  return s / double(n);
+}
+
+void renderBatches(
+  Renderer& r, const Scene& scene, const Camera& cam, Accumulator& acc, int total, int batch, uint32_t seed)
+{
+  RenderSettings rs;
+  rs.seed = seed;
+  for (int done = 0; done < total; done += batch)
+  {
+    rs.samplesPerPixel = std::min(batch, total - done);
+    r.render(scene, cam, rs, nullptr, acc);
+  }
+}
+} // namespace
+
+// After N samples (16, 33, 64, 256: an odd count splits into unequal
+// halves) the estimated RMSE is within kFactor of the true RMSE, measured
+// against an independent 4096-spp reference whose own (estimated, 16 to 256
+// times smaller) MSE is subtracted. Two datasets and blend modes.
+TEST(ErrorEstimate, MatchesTheTrueErrorWithinAFactor)
+{
+  std::unique_ptr<Renderer> r = testRenderer();
+  struct Case
+  {
+    const char* demo;
+    BlendMode mode;
+  };
+  for (const Case& cs : { Case{ "cosmology", BlendMode::Density }, Case{ "figure3", BlendMode::Max } })
+  {
+    const DemoVolume v = makeDemo(cs.demo, { 24, 24, 24 });
+    Scene scene;
+    configureDemo(scene, v, 4, 128, 1.0, cs.mode);
+    const Camera cam = demoCam(v, 40, 40);
+    Accumulator ref;
+    renderBatches(*r, scene, cam, ref, 4096, 512, 999);
+    const double refMSE = ref.estimatedMSE();
+    ASSERT_GE(refMSE, 0.0);
+    const std::vector<float> refImg = image(ref);
+    for (int n : { 16, 33, 64, 256 })
+    {
+      Accumulator acc;
+      renderBatches(*r, scene, cam, acc, n, 8, 7);
+      const double est = std::sqrt(acc.estimatedMSE());
+      const double truth = std::sqrt(std::max(0.0, mseRGB(image(acc), refImg) - refMSE));
+      std::printf("%s %s, %3d spp: estimated RMSE %.5f, true RMSE %.5f (ratio %.3f)\n", cs.demo, toString(cs.mode), n,
+        est, truth, est / truth);
+      EXPECT_GT(truth, 0.0);
+      EXPECT_LE(est, kFactor * truth) << cs.demo << " " << n << " spp";
+      EXPECT_GE(est, truth / kFactor) << cs.demo << " " << n << " spp";
+    }
+  }
+}
+
+// Nothing visible: every sample is 0, the estimate exactly 0. One sample:
+// no estimate (negative), for any scene; two samples: a finite estimate.
+TEST(ErrorEstimate, DeterministicImageAndFewSamples)
+{
+  std::unique_ptr<Renderer> r = testRenderer();
+  const DemoVolume v = makeDemo("cosmology", { 16, 16, 16 });
+  {
+    Scene scene;
+    configureDemo(scene, v, 4);
+    for (int n = 0; n < v.numChannels(); ++n)
+    {
+      const std::array<float, 2> range = v.range(n);
+      TransferFunctionDesc tf = sampleTransferFunction(v.transferFunctions[size_t(n)], range[0], range[1], 128, 1.0);
+      std::fill(tf.opacity.begin(), tf.opacity.end(), 0.f);
+      scene.setTransferFunction(n, tf);
+    }
+    scene.update();
+    Accumulator acc;
+    renderBatches(*r, scene, demoCam(v, 24, 24), acc, 16, 4, 3);
+    EXPECT_EQ(acc.estimatedMSE(), 0.0);
+  }
+  Scene scene;
+  configureDemo(scene, v, 4);
+  Accumulator acc;
+  EXPECT_LT(acc.estimatedMSE(), 0.0); // no image at all
+  renderBatches(*r, scene, demoCam(v, 24, 24), acc, 1, 1, 3);
+  EXPECT_LT(acc.estimatedMSE(), 0.0);
+  renderBatches(*r, scene, demoCam(v, 24, 24), acc, 1, 1, 3);
+  EXPECT_EQ(acc.samples(), 2u);
+  EXPECT_GT(acc.estimatedMSE(), 0.0);
+  EXPECT_TRUE(std::isfinite(acc.estimatedMSE()));
+  acc.reset();
+  EXPECT_LT(acc.estimatedMSE(), 0.0);
+}
+
+// Samples are numbered per pixel: 64 samples give the same estimate (and
+// image) in batches of 1, 16 or 64, up to float rounding of the running means.
+TEST(ErrorEstimate, IndependentOfBatching)
+{
+  std::unique_ptr<Renderer> r = testRenderer();
+  const DemoVolume v = makeDemo("cosmology", { 20, 20, 20 });
+  Scene scene;
+  configureDemo(scene, v, 4);
+  const Camera cam = demoCam(v, 24, 24);
+  double first = -1;
+  std::vector<float> firstImg;
+  for (int batch : { 1, 16, 64, 5 })
+  {
+    Accumulator acc;
+    renderBatches(*r, scene, cam, acc, 64, batch, 11);
+    const double e = acc.estimatedMSE();
+    ASSERT_GT(e, 0.0) << "batch " << batch;
+    if (first < 0)
+    {
+      first = e;
+      firstImg = image(acc);
+      continue;
+    }
+    EXPECT_NEAR(e, first, 1e-4 * first) << "batch " << batch;
+    EXPECT_LT(mseRGB(image(acc), firstImg), 1e-10) << "batch " << batch;
+  }
+}
+
+// The split changes nothing in the image; off, there is no estimate; turned
+// on mid-image there is none until the image restarts.
+TEST(ErrorEstimate, OffChangesNothingElse)
+{
+  std::unique_ptr<Renderer> r = testRenderer();
+  const DemoVolume v = makeDemo("figure3", { 20, 20, 20 });
+  Scene scene;
+  configureDemo(scene, v, 4);
+  const Camera cam = demoCam(v, 24, 24);
+  Accumulator on, off;
+  off.setErrorEstimation(false);
+  EXPECT_FALSE(off.errorEstimation());
+  renderBatches(*r, scene, cam, on, 12, 3, 5);
+  renderBatches(*r, scene, cam, off, 12, 3, 5);
+  EXPECT_EQ(image(on), image(off));
+  EXPECT_GT(on.estimatedMSE(), 0.0);
+  EXPECT_LT(off.estimatedMSE(), 0.0);
+  EXPECT_EQ(off.evenRGBA(), nullptr);
+  off.setErrorEstimation(true);
+  renderBatches(*r, scene, cam, off, 4, 4, 5);
+  EXPECT_LT(off.estimatedMSE(), 0.0);
+  off.reset();
+  renderBatches(*r, scene, cam, off, 12, 3, 5);
+  EXPECT_EQ(off.estimatedMSE(), on.estimatedMSE());
+}
+
+// Device backends: with readBack off the estimate waits for the image
+// (negative while it is on the device) and then equals the read-back one.
+TEST(ErrorEstimate, FollowsReadBack)
+{
+  std::unique_ptr<Renderer> r = testRenderer();
+  const DemoVolume v = makeDemo("figure3", { 20, 20, 20 });
+  Scene scene;
+  configureDemo(scene, v, 4);
+  const Camera cam = demoCam(v, 24, 24);
+  Accumulator eager, lazy;
+  renderBatches(*r, scene, cam, eager, 8, 4, 5);
+  RenderSettings rs;
+  rs.seed = 5;
+  rs.samplesPerPixel = 4;
+  rs.readBack = false;
+  r->render(scene, cam, rs, nullptr, lazy);
+  r->render(scene, cam, rs, nullptr, lazy);
+  if (lazy.pendingOnDevice())
+  {
+    EXPECT_LT(lazy.estimatedMSE(), 0.0);
+  }
+  r->readBack(lazy);
+  EXPECT_EQ(lazy.estimatedMSE(), eager.estimatedMSE());
+}
