@@ -190,6 +190,12 @@ bool vtkMultiChannelVolumeMapper::UsesRenderBackend()
 }
 
 //------------------------------------------------------------------------------
+bool vtkMultiChannelVolumeMapper::AddsSamples()
+{
+  return true;
+}
+
+//------------------------------------------------------------------------------
 const char* vtkMultiChannelVolumeMapper::GetActiveBackendName()
 {
   vtkInternals& in = *this->Internals;
@@ -803,10 +809,10 @@ bool vtkMultiChannelVolumeMapper::TraceBatch(RenderPass& pass)
   // the image is traced once per change. The ray-marching subclass decides
   // for itself (it traces once per change).
   vtkInternals& in = *this->Internals;
-  const bool budgeted = this->InteractiveFrameTime > 0.0 && this->UsesRenderBackend();
+  const bool budgeted = this->InteractiveFrameTime > 0.0 && this->AddsSamples();
   const int wanted = budgeted ? in.Cost.Budget(this->InteractiveFrameTime, this->SamplesPerPixel, 4096)
                               : this->SamplesPerPixel;
-  const int batch = mcvol::adapter::SamplesThisRender(this->UsesRenderBackend(), this->Progressive, wanted,
+  const int batch = mcvol::adapter::SamplesThisRender(this->AddsSamples(), this->Progressive, wanted,
     this->MaximumTotalSamples, static_cast<long long>(in.Accum.samples()));
   if (batch <= 0)
   {
@@ -816,7 +822,7 @@ bool vtkMultiChannelVolumeMapper::TraceBatch(RenderPass& pass)
   in.BatchSamples = batch;
   const auto start = std::chrono::steady_clock::now();
   const bool ok = this->TraceImage(in.Scene, pass.Camera, in.Accumulation.Depth(), in.Backend.Get(), in.Accum, error);
-  if (ok && this->UsesRenderBackend())
+  if (ok && this->AddsSamples())
   {
     in.Cost.Record(batch, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
   }

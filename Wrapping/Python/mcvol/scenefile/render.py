@@ -52,7 +52,6 @@ def render(scene, output, raw=None, raw_alpha=None, errors=None, prog="mcvol-ren
     if pipeline.reference:
         method = "ray march, step %g (%s compositing, %d samples)" % (
             mapper.GetLastStepSize(), scene["compositing"], mapper.GetLastSampleCount())
-        backend = "CPU"
     else:
         method = "%d spp (%d per render), %s" % (total, per_render, scene["tracking"])
     return "%s at %dx%d, %d channel(s), %s blend, %s: %.2f s -> %s" % (
