@@ -64,7 +64,7 @@ struct Options
   mcvol::Backend backend = mcvol::Backend::CPU;
   int marchBackend = -1;      ///< a mcvol::Backend; -1: the same as backend
   bool marchTextures = false; ///< CUDA march: hardware texture filtering (not for the reference)
-  bool scoreOnly = false; ///< no image files: RMSE and PSNR in the CSV instead
+  bool scoreOnly = false;     ///< no image files: RMSE and PSNR in the CSV instead
 };
 
 std::vector<double> splitDoubles(const std::string& s)
@@ -398,8 +398,8 @@ int main(int argc, char** argv)
     std::ofstream m(o.out + "/meta.txt");
     m << "dataset " << o.dataset << "\ndims " << v.dims[0] << " " << v.dims[1] << " " << v.dims[2] << "\nchannels "
       << v.numChannels() << "\nblend " << o.blend << "\nsize " << o.width << " " << o.height << "\nthreads " << threads
-      << "\nbackend " << r->name() << "\nmarch_backend " << marcher->name()
-      << (o.marchTextures ? " (textures)" : "") << "\nvoxel " << voxel << "\n";
+      << "\nbackend " << r->name() << "\nmarch_backend " << marcher->name() << (o.marchTextures ? " (textures)" : "")
+      << "\nvoxel " << voxel << "\n";
   }
   catch (const std::exception& e)
   {

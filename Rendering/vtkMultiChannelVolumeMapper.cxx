@@ -810,8 +810,8 @@ bool vtkMultiChannelVolumeMapper::TraceBatch(RenderPass& pass)
   // for itself (it traces once per change).
   vtkInternals& in = *this->Internals;
   const bool budgeted = this->InteractiveFrameTime > 0.0 && this->AddsSamples();
-  const int wanted = budgeted ? in.Cost.Budget(this->InteractiveFrameTime, this->SamplesPerPixel, 4096)
-                              : this->SamplesPerPixel;
+  const int wanted =
+    budgeted ? in.Cost.Budget(this->InteractiveFrameTime, this->SamplesPerPixel, 4096) : this->SamplesPerPixel;
   const int batch = mcvol::adapter::SamplesThisRender(this->AddsSamples(), this->Progressive, wanted,
     this->MaximumTotalSamples, static_cast<long long>(in.Accum.samples()));
   if (batch <= 0)

@@ -59,8 +59,7 @@ __global__ void marchKernel(const __grid_constant__ SceneView s, const __grid_co
 
 template <BlendMode Mode>
 void launchMarch(bool lit, bool count, dim3 grid, dim3 block, const SceneView& s, const CameraView& cam,
-  const MarchParams& mp, bool jitter, uint32_t seed, const float* depth, float4* image,
-  unsigned long long* counters)
+  const MarchParams& mp, bool jitter, uint32_t seed, const float* depth, float4* image, unsigned long long* counters)
 {
   // Post-render composite is never lit (prepareMarch() refuses it): no lit
   // kernel is compiled for it.

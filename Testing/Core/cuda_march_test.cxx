@@ -33,8 +33,8 @@ struct Marched
   MarchCounters counters;
 };
 
-Marched marchOn(Renderer& r, const Scene& scene, const Camera& cam, const MarchSettings& ms,
-  const float* depth = nullptr)
+Marched marchOn(
+  Renderer& r, const Scene& scene, const Camera& cam, const MarchSettings& ms, const float* depth = nullptr)
 {
   Marched m;
   Accumulator acc;
@@ -67,8 +67,8 @@ double expectClose(const Marched& a, const Marched& b, double tol, const std::st
     sum += v;
   }
   std::printf("%-44s max |CPU - CUDA| %.3g (value %zu), image sum %.4g\n", what.c_str(), worst, at, sum);
-  EXPECT_LE(worst, tol) << what << ": value " << at << " (pixel " << at / 4 << ", component " << at % 4
-                        << "): CPU " << a.rgba[at] << ", CUDA " << b.rgba[at];
+  EXPECT_LE(worst, tol) << what << ": value " << at << " (pixel " << at / 4 << ", component " << at % 4 << "): CPU "
+                        << a.rgba[at] << ", CUDA " << b.rgba[at];
   return worst;
 }
 
@@ -82,10 +82,9 @@ void expectSameMarch(CUDARenderer& gpu, const Scene& scene, const Camera& cam, c
   const Marched a = marchOn(cpu, scene, cam, ms, depth);
   const Marched b = marchOn(gpu, scene, cam, ms, depth);
   expectClose(a, b, tol, what);
-  EXPECT_NEAR(double(b.counters.samples), double(a.counters.samples), 1e-3 * double(a.counters.samples) + 8)
-    << what;
-  EXPECT_NEAR(double(b.counters.skippedCells), double(a.counters.skippedCells),
-    1e-3 * double(a.counters.skippedCells) + 8)
+  EXPECT_NEAR(double(b.counters.samples), double(a.counters.samples), 1e-3 * double(a.counters.samples) + 8) << what;
+  EXPECT_NEAR(
+    double(b.counters.skippedCells), double(a.counters.skippedCells), 1e-3 * double(a.counters.skippedCells) + 8)
     << what;
 }
 
@@ -247,8 +246,7 @@ TEST(CudaMarch, HardCasesEqualCPU)
       for (Compositing model : { Compositing::Extinction, Compositing::Opacity })
       {
         ms.compositing = model;
-        expectSameMarch(
-          gpu, scene, cam, ms, std::string("NaN voxels, ") + toString(mode) + ", " + modelName(model));
+        expectSameMarch(gpu, scene, cam, ms, std::string("NaN voxels, ") + toString(mode) + ", " + modelName(model));
       }
     }
   }
