@@ -44,7 +44,8 @@ MODES = ["density", "max", "mix", "composite"]
 STEPS = [4, 2, 1, 0.5, 0.25, 0.125]
 METHODS = [("montecarlo", "1dda", "MC 1-DDA"), ("montecarlo", "ndda", "MC N-DDA"),
            ("raymarch", "extinction", "RM extinction"), ("raymarch", "opacity", "RM opacity")]
-GPU_METHODS = [("montecarlo-cuda", "1dda", "MC 1-DDA (CUDA)"), ("montecarlo-cuda", "ndda", "MC N-DDA (CUDA)")]
+GPU_METHODS = [("montecarlo-cuda", "1dda", "MC 1-DDA (CUDA)"), ("montecarlo-cuda", "ndda", "MC N-DDA (CUDA)"),
+               ("raymarch-cuda", "extinction", "RM extinction (CUDA)"), ("raymarch-cuda", "opacity", "RM opacity (CUDA)")]
 COLOURS = {"1dda": "tab:green", "ndda": "tab:olive", "extinction": "tab:blue", "opacity": "tab:red"}
 GPU_LABEL = "GPU"
 QUALITY = [30.0, 35.0, 40.0]   # PSNR targets (dB)
@@ -103,9 +104,11 @@ def analyse(folder, dataset, mode, size):
 
 
 def load_gpu(folder, datasets):
-    """Monte Carlo series measured with the CUDA backend (mcvol-accuracy
-    --backend cuda --score-only; Benchmarks/gpu/bench.sh accuracy): RMSE and
-    PSNR against the same ray-marched reference, computed by the tool."""
+    """Series measured with the CUDA backend (mcvol-accuracy --backend cuda
+    --score-only; Benchmarks/gpu/bench.sh accuracy): RMSE and PSNR against
+    the same ray-marched reference, computed by the tool. Monte Carlo rows,
+    and ray-march rows whose backend column says the march ran on CUDA too
+    (older files have no such column: their marches ran on the CPU)."""
     rows = []
     for ds in datasets:
         for mode in MODES:
@@ -114,9 +117,13 @@ def load_gpu(folder, datasets):
                 continue
             with open(path) as f:
                 for r in csv.DictReader(f):
-                    if r["method"] != "montecarlo":
+                    if r["method"] == "montecarlo":
+                        method = "montecarlo-cuda"
+                    elif r["method"] == "raymarch" and r.get("backend") == "cuda":
+                        method = "raymarch-cuda"
+                    else:
                         continue
-                    rows.append(dict(dataset=ds, mode=mode, method="montecarlo-cuda", variant=r["variant"],
+                    rows.append(dict(dataset=ds, mode=mode, method=method, variant=r["variant"],
                                      param=float(r["param"]), ms=float(r["ms"]), rmse=float(r["rmse"]),
                                      psnr=float(r["psnr"]), ssim=float("nan"), file=None))
     return rows
@@ -135,14 +142,19 @@ def plot_dataset(rows, dataset, out):
             s = series(rs, method, variant)
             if not s:
                 continue
-            gpu = method == "montecarlo-cuda"
-            ax.plot([r["ms"] for r in s], [r["psnr"] for r in s], marker="^" if gpu else ("o" if method ==
-                    "montecarlo" else "s"), color="black" if gpu and variant == "1dda" else ("gray" if gpu else
-                    COLOURS[variant]), label=label + (" " + GPU_LABEL if gpu else ""),
+            gpu = method.endswith("-cuda")
+            marker = {"montecarlo": "o", "raymarch": "s", "montecarlo-cuda": "^", "raymarch-cuda": "v"}[method]
+            colour = COLOURS[variant]
+            if method == "montecarlo-cuda":
+                colour = "black" if variant == "1dda" else "gray"
+            elif method == "raymarch-cuda":
+                colour = "navy" if variant == "extinction" else "darkred"
+            ax.plot([r["ms"] for r in s], [r["psnr"] for r in s], marker=marker, color=colour,
+                    label=label + (" " + GPU_LABEL if gpu else ""),
                     linestyle="-" if variant in ("1dda", "extinction") else "--", markersize=4)
             for r in s:
                 tag = ("%d" % r["param"]) if method == "montecarlo" else ("%g" % r["param"])
-                if method == "raymarch" or (method == "montecarlo" and int(r["param"]) in (1, 16, 256, 1024)):
+                if method.startswith("raymarch") or (method == "montecarlo" and int(r["param"]) in (1, 16, 256, 1024)):
                     ax.annotate(tag, (r["ms"], r["psnr"]), fontsize=6, xytext=(2, 2), textcoords="offset points")
         cross = [r for r in rs if r["method"] == "reference" and r["variant"] == "montecarlo"]
         if cross:
@@ -339,8 +351,9 @@ def write_summary(rows, peers, datasets, args, started):
     if args.gpu:
         lines += ["Rows marked (CUDA) were measured on the %s with the CUDA backend (`Benchmarks/gpu/bench.sh "
                   "accuracy`: `mcvol-accuracy --backend cuda --score-only`, same datasets, camera, size and "
-                  "reference, which the tool renders on that machine's CPU and scores against itself); they have "
-                  "RMSE and PSNR but no SSIM. Raw series: `gpu/`." % args.gpu_label, ""]
+                  "reference, which the tool renders on that machine and scores against itself; the ray marches "
+                  "run on CUDA too, with software interpolation, when the series says so in its backend column); "
+                  "they have RMSE and PSNR but no SSIM. Raw series: `gpu/`." % args.gpu_label, ""]
     lines += ["## Cross-check of the reference", "",
               "| dataset | mode | MC spp | PSNR of MC against the reference | SSIM |", "|---|---|---|---|---|"]
     for ds in datasets:

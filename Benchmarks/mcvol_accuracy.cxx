@@ -7,14 +7,20 @@
 //   reference_mc.f32     Monte Carlo (1-DDA) at --ref-spp, the cross-check
 //   mc_<tracker>_<spp>.f32  progressive Monte Carlo, spp = 1, 2, 4, ... --spp-max
 //   rm_<model>_<step>.f32   ray march at each --steps (voxels), both models
-//   timings.csv          method,variant,param,ms (MC: cumulative render time)
+//   timings.csv          method,variant,param,ms[,rmse,psnr],backend (MC:
+//                        cumulative render time; backend: where it ran)
 // Images are W x H premultiplied RGBA float32, rows from the bottom. Monte
 // Carlo samples pixel centres (no pixel jitter) like the ray marcher, so both
-// estimate the same image.
+// estimate the same image. --backend picks where Monte Carlo runs and
+// --march-backend (default: the same) where the ray marches run, so that
+// both are timed on the same hardware; --march-textures makes the CUDA march
+// read voxels through the hardware texture filter, as the Monte Carlo
+// renders do (the reference march never does).
 
 #include "mcvol/CameraMath.h"
 #include "mcvol/DemoData.h"
-#include "mcvol/RayMarcher.h"
+#include "mcvol/MarchSetup.h"
+#include "mcvol/RayMarch.h"
 #include "mcvol/Renderer.h"
 
 #include <algorithm>
@@ -56,7 +62,9 @@ struct Options
   int macrocell = 8;
   int reps = 3;
   mcvol::Backend backend = mcvol::Backend::CPU;
-  bool scoreOnly = false; ///< no image files: RMSE and PSNR in the CSV instead
+  int marchBackend = -1;      ///< a mcvol::Backend; -1: the same as backend
+  bool marchTextures = false; ///< CUDA march: hardware texture filtering (not for the reference)
+  bool scoreOnly = false;     ///< no image files: RMSE and PSNR in the CSV instead
 };
 
 std::vector<double> splitDoubles(const std::string& s)
@@ -155,6 +163,20 @@ Options parse(int argc, char** argv)
       }
       o.backend = b == "cuda" ? mcvol::Backend::CUDA : mcvol::Backend::CPU;
     }
+    else if (a == "--march-backend")
+    {
+      need(1);
+      const std::string b = argv[++i];
+      if (b != "cuda" && b != "cpu")
+      {
+        throw std::invalid_argument("--march-backend takes cpu or cuda, not " + b);
+      }
+      o.marchBackend = int(b == "cuda" ? mcvol::Backend::CUDA : mcvol::Backend::CPU);
+    }
+    else if (a == "--march-textures")
+    {
+      o.marchTextures = true;
+    }
     else
     {
       throw std::invalid_argument("unknown option " + a);
@@ -245,8 +267,20 @@ int main(int argc, char** argv)
     scene.setBlendMode(blendOf(o.blend));
     scene.update();
     const mcvol::Camera cam = mcvol::orbitCamera(v.dims, v.spacing, o.width, o.height, 30, 20);
-    const double voxel = 2.0 * mcvol::RayMarcher::nyquistStep(cam); // smallest spacing
-    std::vector<std::string> rows = { o.scoreOnly ? "method,variant,param,ms,rmse,psnr" : "method,variant,param,ms" };
+    const double voxel = 2.0 * mcvol::marchNyquistStep(cam); // smallest spacing
+    // Monte Carlo's backend, and the march's: the same renderer when both
+    // are the same backend (the march then reads the device copies the
+    // Monte Carlo renders use, as vtkMultiChannelRayMarchMapper does).
+    std::unique_ptr<mcvol::Renderer> r = mcvol::Renderer::create(o.backend);
+    const mcvol::Backend marchBackend = o.marchBackend < 0 ? o.backend : mcvol::Backend(o.marchBackend);
+    std::unique_ptr<mcvol::Renderer> ownMarcher;
+    if (marchBackend != o.backend)
+    {
+      ownMarcher = mcvol::Renderer::create(marchBackend);
+    }
+    mcvol::Renderer* marcher = ownMarcher ? ownMarcher.get() : r.get();
+    std::vector<std::string> rows = { o.scoreOnly ? "method,variant,param,ms,rmse,psnr,backend"
+                                                  : "method,variant,param,ms,backend" };
     std::vector<float> refImage;
     // Writes the image (or, with --score-only, scores it) and adds its row.
     auto emit = [&](const std::string& m, const std::string& var, double p, double ms, const std::string& file,
@@ -263,6 +297,9 @@ int main(int argc, char** argv)
       {
         writeImage(o.out + "/" + file, a);
       }
+      const bool mc = m == "montecarlo" || var == "montecarlo";
+      const bool textures = m == "raymarch" && o.marchTextures && std::string(marcher->name()) == "cuda";
+      s << "," << (mc ? r->name() : marcher->name()) << (textures ? "+textures" : "");
       rows.push_back(s.str());
     };
     int threads = 1;
@@ -272,20 +309,21 @@ int main(int argc, char** argv)
     std::fprintf(stderr, "mcvol-accuracy: %s %dx%dx%d, %s, %dx%d, %d threads\n", o.dataset.c_str(), v.dims[0],
       v.dims[1], v.dims[2], o.blend.c_str(), o.width, o.height, threads);
 
-    // Reference: fine-step ray march (no early termination).
-    mcvol::RayMarcher marcher;
+    // Reference: fine-step ray march (no early termination), after an
+    // untimed coarse march (threads, device upload and kernel loading).
     mcvol::Accumulator img;
     mcvol::MarchSettings ms;
     ms.terminateTransmittance = 0.f;
+    ms.step = 4 * voxel;
+    marcher->march(scene, cam, ms, nullptr, img);
     ms.step = o.refStep * voxel;
     auto t0 = Clock::now();
-    marcher.render(scene, cam, ms, nullptr, img);
+    marcher->march(scene, cam, ms, nullptr, img);
     const double refMs = msSince(t0);
     refImage.assign(img.rgba(), img.rgba() + size_t(4) * img.width() * img.height());
     emit("reference", "raymarch", o.refStep, refMs, "reference.f32", img);
 
     // Monte Carlo: cross-check at refSpp, then the progressive series.
-    std::unique_ptr<mcvol::Renderer> r = mcvol::Renderer::create(o.backend);
     mcvol::RenderSettings rs;
     rs.jitterPixels = false;
     rs.readBack = false; // device backends: the copy-back is not part of the timed render
@@ -329,7 +367,10 @@ int main(int argc, char** argv)
     }
 
     // Ray marching at each step, both models (early termination at 1e-4, the
-    // mapper's default); the median of --reps runs.
+    // mapper's default); the median of --reps runs. A march always copies its
+    // image back to the host: on a device that copy (W x H x 16 bytes) is
+    // part of its time, where the Monte Carlo times above leave it out.
+    ms.deviceTextures = o.marchTextures;
     for (auto model : { mcvol::Compositing::Extinction, mcvol::Compositing::Opacity })
     {
       const std::string name = model == mcvol::Compositing::Extinction ? "extinction" : "opacity";
@@ -342,7 +383,7 @@ int main(int argc, char** argv)
         for (int k = 0; k < std::max(1, o.reps); ++k)
         {
           t0 = Clock::now();
-          marcher.render(scene, cam, ms, nullptr, img);
+          marcher->march(scene, cam, ms, nullptr, img);
           t.push_back(msSince(t0));
         }
         std::sort(t.begin(), t.end());
@@ -357,7 +398,8 @@ int main(int argc, char** argv)
     std::ofstream m(o.out + "/meta.txt");
     m << "dataset " << o.dataset << "\ndims " << v.dims[0] << " " << v.dims[1] << " " << v.dims[2] << "\nchannels "
       << v.numChannels() << "\nblend " << o.blend << "\nsize " << o.width << " " << o.height << "\nthreads " << threads
-      << "\nbackend " << r->name() << "\nvoxel " << voxel << "\n";
+      << "\nbackend " << r->name() << "\nmarch_backend " << marcher->name() << (o.marchTextures ? " (textures)" : "")
+      << "\nvoxel " << voxel << "\n";
   }
   catch (const std::exception& e)
   {

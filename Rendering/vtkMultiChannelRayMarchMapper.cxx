@@ -3,7 +3,8 @@
 
 #include "vtkObjectFactory.h"
 
-#include "mcvol/RayMarcher.h"
+#include "mcvol/MarchSetup.h"
+#include "mcvol/RayMarch.h"
 #include "mcvol/Renderer.h"
 #include "mcvol/Scene.h"
 
@@ -25,15 +26,20 @@ const char* vtkMultiChannelRayMarchMapper::GetCompositingModelAsString()
 }
 
 //------------------------------------------------------------------------------
-bool vtkMultiChannelRayMarchMapper::UsesRenderBackend()
+bool vtkMultiChannelRayMarchMapper::AddsSamples()
 {
-  return false; // the march runs on the CPU with the Scene's host grids
+  return false; // one deterministic image per change
 }
 
 //------------------------------------------------------------------------------
 bool vtkMultiChannelRayMarchMapper::TraceImage(const mcvol::Scene& scene, const mcvol::Camera& camera,
-  const float* depth, mcvol::Renderer*, mcvol::Accumulator& accum, std::string& error)
+  const float* depth, mcvol::Renderer* renderer, mcvol::Accumulator& accum, std::string& error)
 {
+  if (!renderer)
+  {
+    error = "no rendering backend";
+    return false;
+  }
   if (accum.samples() > 0)
   {
     // Nothing changed since the image was traced: draw it again.
@@ -51,10 +57,12 @@ bool vtkMultiChannelRayMarchMapper::TraceImage(const mcvol::Scene& scene, const 
   try
   {
     const auto t0 = std::chrono::steady_clock::now();
-    mcvol::RayMarcher marcher;
     mcvol::MarchCounters counters;
-    this->LastStepSize = mcvol::RayMarcher::effectiveStep(camera, ms);
-    marcher.render(scene, camera, ms, depth, accum, &counters);
+    this->LastStepSize = mcvol::marchEffectiveStep(camera, ms);
+    // The chosen backend's march (CPU: the OpenMP RayMarcher with the
+    // Scene's host grids; CUDA: the same per-ray code over the device copies
+    // the backend keeps).
+    renderer->march(scene, camera, ms, depth, accum, &counters);
     this->LastSampleCount = static_cast<double>(counters.samples);
     this->LastSkippedCells = static_cast<double>(counters.skippedCells);
     this->LastTraceSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

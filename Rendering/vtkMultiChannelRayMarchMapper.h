@@ -6,8 +6,8 @@
  * Renders the same channels, transfer functions, extinction model and blend
  * modes as vtkMultiChannelVolumeMapper (it is one: everything about inputs,
  * channels, transfer functions, camera, depth and drawing is inherited), but
- * by marching each ray through the pixel centre at a fixed step on the CPU
- * (OpenMP) instead of Monte Carlo tracking. Each Monte Carlo blend mode
+ * by marching each ray through the pixel centre at a fixed step instead of
+ * Monte Carlo tracking. Each Monte Carlo blend mode
  * converges to the image this mapper gives for the same mode as its step
  * goes to zero, which makes it the reference of the image-regression tests
  * and of the accuracy-versus-time study (Benchmarks/RESULTS.md).
@@ -15,8 +15,24 @@
  * The image is computed once per change (anything that would reset the Monte
  * Carlo mapper's accumulation) and drawn again unchanged otherwise;
  * GetTotalSamples() is 1 once it exists. SamplesPerPixel, TrackingMethod,
- * PixelJitter and Backend do not apply (the march always runs on the CPU and
- * no Monte Carlo backend is created); Seed sets the jitter pattern.
+ * PixelJitter, Progressive and InteractiveFrameTime do not apply; Seed sets
+ * the jitter pattern.
+ *
+ * Backend (inherited: SetBackendToAuto/CPU/CUDA, GetActiveBackendName,
+ * GetBackendReport) picks where the march runs, exactly as for the Monte
+ * Carlo mapper: the CPU (OpenMP) or the GPU (CUDA), both running the same
+ * per-ray code (RayMarch.h). BACKEND_AUTO (default) takes CUDA when a usable
+ * device exists, like the Monte Carlo mapper, so that both are timed on the
+ * same hardware; this is safe for a reference because the CUDA march reads
+ * voxels with the core's software interpolation (not the hardware texture
+ * filter the Monte Carlo renders use by default): its image equals the CPU
+ * march's to float rounding (at most 1e-4 per component in the tests,
+ * Testing/Core/cuda_march_test.cxx). BACKEND_CUDA without a device is an
+ * error, nothing is drawn, and GetBackendReport() says why. Both backends
+ * refuse the same settings (lit composite blending or opacity compositing,
+ * a scattering depth above 1, the visibility optimization with opacity
+ * compositing), with the same error.
+ * GetLastTraceSeconds() includes the copy of the image back to the host.
  *
  * Two compositing models (Kraus and Buerger 2008):
  * - EXTINCTION_COMPOSITING (default): the channels' extinctions are
@@ -119,7 +135,7 @@ protected:
 #ifndef __VTK_WRAP__
   bool TraceImage(const mcvol::Scene& scene, const mcvol::Camera& camera, const float* depth, mcvol::Renderer* renderer,
     mcvol::Accumulator& accum, std::string& error) override;
-  bool UsesRenderBackend() override;
+  bool AddsSamples() override;
 #endif
 
   double StepSize = 0.0;

@@ -194,6 +194,12 @@ bool vtkMultiChannelVolumeMapper::UsesRenderBackend()
 }
 
 //------------------------------------------------------------------------------
+bool vtkMultiChannelVolumeMapper::AddsSamples()
+{
+  return true;
+}
+
+//------------------------------------------------------------------------------
 const char* vtkMultiChannelVolumeMapper::GetActiveBackendName()
 {
   vtkInternals& in = *this->Internals;
@@ -370,7 +376,7 @@ bool vtkMultiChannelVolumeMapper::IsConverged()
   {
     return true;
   }
-  if (this->UsesRenderBackend() && this->ReachedTargetError())
+  if (this->AddsSamples() && this->ReachedTargetError())
   {
     return true;
   }
@@ -850,13 +856,13 @@ bool vtkMultiChannelVolumeMapper::TraceBatch(RenderPass& pass)
   // the image is traced once per change. The ray-marching subclass decides
   // for itself (it traces once per change).
   vtkInternals& in = *this->Internals;
-  const bool budgeted = this->InteractiveFrameTime > 0.0 && this->UsesRenderBackend();
+  const bool budgeted = this->InteractiveFrameTime > 0.0 && this->AddsSamples();
   const int wanted =
     budgeted ? in.Cost.Budget(this->InteractiveFrameTime, this->SamplesPerPixel, 4096) : this->SamplesPerPixel;
-  int batch = mcvol::adapter::SamplesThisRender(this->UsesRenderBackend(), this->Progressive, wanted,
+  int batch = mcvol::adapter::SamplesThisRender(this->AddsSamples(), this->Progressive, wanted,
     this->MaximumTotalSamples, static_cast<long long>(in.Accum.samples()));
   // Adaptive stopping: once the estimate reached TargetError, redraw only.
-  if (batch > 0 && this->UsesRenderBackend() && this->ReachedTargetError())
+  if (batch > 0 && this->AddsSamples() && this->ReachedTargetError())
   {
     batch = 0;
   }
@@ -869,7 +875,7 @@ bool vtkMultiChannelVolumeMapper::TraceBatch(RenderPass& pass)
   const auto start = std::chrono::steady_clock::now();
   const bool ok = this->TraceImage(in.Scene, pass.Camera, in.Accumulation.Depth(), in.Backend.Get(), in.Accum, error);
   in.EstimateCurrent = false;
-  if (ok && this->UsesRenderBackend())
+  if (ok && this->AddsSamples())
   {
     in.Cost.Record(batch, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
   }

@@ -572,9 +572,13 @@ protected:
    */
   virtual bool TraceImage(const mcvol::Scene& scene, const mcvol::Camera& camera, const float* depth,
     mcvol::Renderer* renderer, mcvol::Accumulator& accum, std::string& error);
-  /// Whether rendering needs a Monte Carlo backend (Backend); without one,
-  /// TraceImage gets nullptr and the Scene keeps its host grids.
+  /// Whether rendering needs a backend (Backend); without one, TraceImage
+  /// gets nullptr and the Scene keeps its host grids. Both mappers use one.
   virtual bool UsesRenderBackend();
+  /// Whether each render adds Monte Carlo samples (batches, progressive
+  /// refinement, the frame-time budget); false: the image is traced once
+  /// per change (the ray-marching reference).
+  virtual bool AddsSamples();
 #endif
 
   int ChannelBlendMode = MC_DENSITY_BLEND;

@@ -70,8 +70,10 @@ for stage in "$@"; do
         --warmup 1 --frames 3 --channel-counts 1,2,4,8,12,16 --sections channels
       ;;
     accuracy)
-      # The accuracy study's Monte Carlo series on the GPU (scores only; the
-      # reference is the same CPU ray march): merged by accuracy_study.py --gpu.
+      # The accuracy study's series on the GPU (scores only): Monte Carlo and
+      # the ray marches both on CUDA (--march-backend follows --backend; the
+      # reference march interpolates in software, so it is the CPU's image to
+      # float rounding): merged by accuracy_study.py --gpu.
       # Writes accuracy/<dataset>-<mode>.csv, the layout accuracy_study.py --gpu reads.
       mkdir -p "$out/accuracy"
       for ds in figure3 microscopy cosmology weather; do

@@ -123,7 +123,8 @@ struct DeviceChannel
  *   and queries;
  * - CUDAUpload.cu: uploadChannels(), buildTextures();
  * - CUDAAcceleration.cu: buildRanges(), buildMajorants();
- * - CUDALaunch.cu: render() and readBack() use Accum, Depth and Counters.
+ * - CUDALaunch.cu: render() and readBack() use Accum, Depth and Counters;
+ * - CUDAMarch.cu: march(), the ray-marching reference, on the same copies.
  */
 struct CUDARenderer::Internal
 {
@@ -197,6 +198,15 @@ struct CUDARenderer::Internal
   void buildRanges(int macrocell);
   void buildMajorants(const Scene& scene, const bool* which);
   void sync(const Scene& scene);
+  // CUDALaunch.cu: what a Monte Carlo render and a march both need.
+  /// The per-render device view (after sync()): blend, interpolation,
+  /// channels (textures built first when `textures`) and lighting; no
+  /// importance, no per-camera fields.
+  SceneView renderView(const Scene& scene, bool textures);
+  /// The depth image on the device (uploaded when it changed), or nullptr.
+  const float* deviceDepth(const float* depth, size_t pixels);
+  /// The Scene's importance tables on the device (uploaded when they changed).
+  const float* deviceImportanceTables(const Scene& scene);
   double elapsedMs()
   {
     float ms = 0.f;

@@ -224,28 +224,22 @@ void launchRender(bool count, bool lit, dim3 grid, dim3 block, const SceneView& 
 }
 } // namespace
 
-void CUDARenderer::render(const Scene& scene, const Camera& camera, const RenderSettings& settings, const float* depth,
-  Accumulator& accum, RenderCounters* counters)
+SceneView CUDARenderer::Internal::renderView(const Scene& scene, bool textures)
 {
-  Internal& in = *this->In;
-  checkRenderArguments(camera, settings, accum);
-  MCVOL_CUDA(cudaSetDevice(in.Device));
-  in.sync(scene);
-
-  // Per-render view: blend parameters, interpolation and sampling path.
-  SceneView s = in.View;
+  // Per-render view: blend parameters, interpolation, sampling path and
+  // lighting over the device copies that sync() keeps current.
+  SceneView s = this->View;
   s.importance = ImportanceView(); // host pointers: never on the device
   const SceneView& hv = scene.view();
   s.blend = hv.blend;
   s.volume.nearest = hv.volume.nearest;
-  const bool textures = in.Sampling == CudaSampling::Texture;
-  if (textures && !in.TexturesBuilt)
+  if (textures && !this->TexturesBuilt)
   {
-    in.buildTextures();
+    this->buildTextures();
   }
-  for (int n = 0; n < in.NumChannels; ++n)
+  for (int n = 0; n < this->NumChannels; ++n)
   {
-    const DeviceChannel& dc = in.Channels[n];
+    const DeviceChannel& dc = this->Channels[n];
     ChannelView& c = s.volume.channels[n];
     c.data = dc.bytes.ptr;
     c.stride = 1;
@@ -254,9 +248,54 @@ void CUDARenderer::render(const Scene& scene, const Camera& camera, const Render
     c.texture = textures && !dc.nonFinite && dc.array ? (hv.volume.nearest ? dc.point : dc.linear) : 0;
     c.textureScale = dc.textureScale;
   }
+  s.lighting = hv.lighting;
+  return s;
+}
+
+const float* CUDARenderer::Internal::deviceDepth(const float* depth, size_t pixels)
+{
+  // Uploaded when it changes (geometry or view), else reused.
+  if (!depth)
+  {
+    return nullptr;
+  }
+  const size_t P = pixels;
+  if (!this->HaveDepth || this->LastDepth.size() != P ||
+    std::memcmp(this->LastDepth.data(), depth, P * sizeof(float)) != 0)
+  {
+    this->Depth.resize(P);
+    MCVOL_CUDA(cudaMemcpy(this->Depth.ptr, depth, P * sizeof(float), cudaMemcpyHostToDevice));
+    this->LastDepth.assign(depth, depth + P);
+    this->HaveDepth = true;
+  }
+  return this->Depth.ptr;
+}
+
+const float* CUDARenderer::Internal::deviceImportanceTables(const Scene& scene)
+{
+  const std::vector<float>& tables = scene.importanceTables();
+  if (tables != this->LastImportanceTables)
+  {
+    this->ImportanceTables.resize(tables.size());
+    MCVOL_CUDA(
+      cudaMemcpy(this->ImportanceTables.ptr, tables.data(), tables.size() * sizeof(float), cudaMemcpyHostToDevice));
+    this->LastImportanceTables = tables;
+  }
+  return this->ImportanceTables.ptr;
+}
+
+void CUDARenderer::render(const Scene& scene, const Camera& camera, const RenderSettings& settings, const float* depth,
+  Accumulator& accum, RenderCounters* counters)
+{
+  Internal& in = *this->In;
+  checkRenderArguments(camera, settings, accum);
+  MCVOL_CUDA(cudaSetDevice(in.Device));
+  in.sync(scene);
+
+  SceneView s = in.renderView(scene, in.Sampling == CudaSampling::Texture);
+  const SceneView& hv = scene.view();
   const CameraView cam = toView(camera);
   s.sigmaLimit = extinctionLimit(cam);
-  s.lighting = hv.lighting;
   const bool lit = s.lighting.enabled;
   if (lit)
   {
@@ -313,19 +352,7 @@ void CUDARenderer::render(const Scene& scene, const Camera& camera, const Render
   in.AccumEven = wantEven;
   float4* devEven = wantEven ? in.Even.ptr : nullptr;
 
-  // Depth: uploaded when it changes (geometry or view), else reused.
-  const float* devDepth = nullptr;
-  if (depth)
-  {
-    if (!in.HaveDepth || in.LastDepth.size() != P || std::memcmp(in.LastDepth.data(), depth, P * sizeof(float)) != 0)
-    {
-      in.Depth.resize(P);
-      MCVOL_CUDA(cudaMemcpy(in.Depth.ptr, depth, P * sizeof(float), cudaMemcpyHostToDevice));
-      in.LastDepth.assign(depth, depth + P);
-      in.HaveDepth = true;
-    }
-    devDepth = in.Depth.ptr;
-  }
+  const float* devDepth = in.deviceDepth(depth, P);
 
   const FrameParams fp = frameParams(settings, accum.samples());
   // Visibility optimization: tables uploaded when they change; the segment
@@ -338,15 +365,7 @@ void CUDARenderer::render(const Scene& scene, const Camera& camera, const Render
   {
     s.importance = hv.importance;
     setImportanceFrame(s, camera);
-    const std::vector<float>& tables = scene.importanceTables();
-    if (tables != in.LastImportanceTables)
-    {
-      in.ImportanceTables.resize(tables.size());
-      MCVOL_CUDA(
-        cudaMemcpy(in.ImportanceTables.ptr, tables.data(), tables.size() * sizeof(float), cudaMemcpyHostToDevice));
-      in.LastImportanceTables = tables;
-    }
-    s.importance.table = in.ImportanceTables.ptr;
+    s.importance.table = in.deviceImportanceTables(scene);
     pool = &accum.importancePool(false);
     if (in.Segments.count != P * size_t(kImportanceCapacity))
     {

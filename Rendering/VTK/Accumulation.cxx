@@ -68,10 +68,10 @@ int SampleCost::Budget(double frameTime, int first, int cap) const
 }
 
 int SamplesThisRender(
-  bool usesBackend, bool progressive, int samplesPerPixel, long long maximumTotalSamples, long long traced)
+  bool addsSamples, bool progressive, int samplesPerPixel, long long maximumTotalSamples, long long traced)
 {
   int batch = samplesPerPixel;
-  if (usesBackend)
+  if (addsSamples)
   {
     if (!progressive && traced > 0)
     {

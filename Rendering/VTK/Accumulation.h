@@ -83,9 +83,9 @@ private:
 
 /// Samples per pixel this render traces: a batch of `samplesPerPixel`, none
 /// more once a non-progressive image exists, and no more than what is left of
-/// `maximumTotalSamples` (0: no limit). A mapper that traces without a
-/// Monte Carlo backend (`usesBackend` false) decides for itself.
+/// `maximumTotalSamples` (0: no limit). A mapper that does not add Monte
+/// Carlo samples (`addsSamples` false: the ray march) decides for itself.
 int SamplesThisRender(
-  bool usesBackend, bool progressive, int samplesPerPixel, long long maximumTotalSamples, long long traced);
+  bool addsSamples, bool progressive, int samplesPerPixel, long long maximumTotalSamples, long long traced);
 } // namespace adapter
 } // namespace mcvol

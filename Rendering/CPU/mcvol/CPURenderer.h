@@ -13,6 +13,9 @@ class CPURenderer final : public Renderer
 public:
   void render(const Scene& scene, const Camera& camera, const RenderSettings& settings, const float* depth,
     Accumulator& accum, RenderCounters* counters = nullptr) override;
+  /// The OpenMP ray marcher (RayMarcher) with this renderer's thread count.
+  void march(const Scene& scene, const Camera& camera, const MarchSettings& settings, const float* depth,
+    Accumulator& accum, MarchCounters* counters = nullptr) override;
   const char* name() const override { return "cpu"; }
   /// 0 = OpenMP's default.
   void setThreads(int n) { this->Threads = n; }

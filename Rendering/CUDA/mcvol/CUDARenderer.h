@@ -63,6 +63,12 @@ public:
 
   void render(const Scene& scene, const Camera& camera, const RenderSettings& settings, const float* depth,
     Accumulator& accum, RenderCounters* counters = nullptr) override;
+  /// The ray-marching reference on the GPU (RayMarch.h, the per-ray code
+  /// of the CPU march) over the same device copies as render(): nothing is
+  /// uploaded twice. MarchSettings::deviceTextures picks the sampling path
+  /// (software interpolation by default, whatever setSampling() says).
+  void march(const Scene& scene, const Camera& camera, const MarchSettings& settings, const float* depth,
+    Accumulator& accum, MarchCounters* counters = nullptr) override;
   const char* name() const override { return "cuda"; }
   void readBack(Accumulator& accum) override;
   void finish() override;

@@ -624,8 +624,11 @@ MCVOL_FUNC float marchPhase(bool jitter, uint32_t pixel, uint32_t seed)
  * The reference image of one pixel (ray through its centre): premultiplied
  * RGBA. Post-render composite marches each channel alone and adds the
  * results (alpha 1 - prod(1 - alpha_n)), as the Monte Carlo composite does.
+ * MayBeLit false compiles marchLit out, for callers that know lighting is
+ * off (the CUDA backend's unlit kernels, which then spend no registers or
+ * local memory on it); the image is the same.
  */
-template <BlendMode Mode>
+template <BlendMode Mode, bool MayBeLit = true>
 MCVOL_FUNC Vec4f marchPixel(const SceneView& s, const CameraView& cam, const MarchParams& mp, int x, int y, float depth,
   float phase, MarchCounters& mc)
 {
@@ -634,7 +637,7 @@ MCVOL_FUNC Vec4f marchPixel(const SceneView& s, const CameraView& cam, const Mar
   {
     return Vec4f();
   }
-  if (Mode != BlendMode::Composite && s.lighting.enabled)
+  if (MayBeLit && Mode != BlendMode::Composite && s.lighting.enabled)
   {
     return marchLit<Mode>(s, mp, ray.o, ray.d, ray.world, ray.tmax, phase, mc);
   }

@@ -12,6 +12,9 @@
 
 namespace mcvol
 {
+struct MarchSettings; // MarchSetup.h
+struct MarchCounters; // RayMarch.h
+
 /**
  * Camera of one render. Rays are built by unprojecting pixel positions with
  * invViewProj (row-major, normalised device coordinates in [-1,1]^3 to world,
@@ -185,6 +188,17 @@ public:
   virtual void render(const Scene& scene, const Camera& camera, const RenderSettings& settings, const float* depth,
     Accumulator& accum, RenderCounters* counters = nullptr) = 0;
   virtual const char* name() const = 0;
+
+  /**
+   * The deterministic ray-marching reference (RayMarch.h) on this backend:
+   * one ray through each pixel centre, the same per-ray code on every
+   * backend. Replaces `accum`'s image (sized to the camera; its sample count
+   * becomes 1) and copies it to the host before returning. Throws
+   * std::invalid_argument for settings the reference does not render (the
+   * same refusals on every backend: prepareMarch()).
+   */
+  virtual void march(const Scene& scene, const Camera& camera, const MarchSettings& settings, const float* depth,
+    Accumulator& accum, MarchCounters* counters = nullptr) = 0;
 
   /// Device backends: waits for the renders issued so far and copies the
   /// accumulated image into `accum` (see RenderSettings::readBack).

@@ -443,10 +443,11 @@ def setup_mapper(mapper, prop, scene, channels, tfs, render_image, reference):
     }[scene["blend"]]()
     mapper.SetTrackingMethod(mapper.N_DDA if scene["tracking"] == "n-dda" else mapper.ONE_DDA)
     mapper.SetMixColorMode(mapper.MIX_EQUATION_10 if scene["mix_color"] == "equation10" else mapper.MIX_AVERAGE)
-    if not reference:  # the reference always marches on the CPU
-        {"auto": mapper.SetBackendToAuto, "cpu": mapper.SetBackendToCPU, "cuda": mapper.SetBackendToCUDA}[
-            scene["backend"]
-        ]()
+    # Both mappers: the reference marches on the backend chosen (the same
+    # per-ray code on the CPU and on CUDA).
+    {"auto": mapper.SetBackendToAuto, "cpu": mapper.SetBackendToCPU, "cuda": mapper.SetBackendToCUDA}[
+        scene["backend"]
+    ]()
     mapper.SetSeed(scene["seed"])
     mapper.SetMacrocellSize(scene["macrocell_size"])
     mapper.SetPixelJitter(scene["pixel_jitter"])

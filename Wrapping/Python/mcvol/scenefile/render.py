@@ -55,7 +55,6 @@ def render(scene, output, raw=None, raw_alpha=None, errors=None, prog="mcvol-ren
     if pipeline.reference:
         method = "ray march, step %g (%s compositing, %d samples)" % (
             mapper.GetLastStepSize(), scene["compositing"], mapper.GetLastSampleCount())
-        backend = "CPU"
     else:
         method = "%d spp (%d per render), %s" % (done, per_render, scene["tracking"])
         rmse = mapper.GetEstimatedError()
