@@ -322,6 +322,20 @@ double vtkMultiChannelVolumeMapper::GetImportanceOverflows()
 }
 
 //------------------------------------------------------------------------------
+double vtkMultiChannelVolumeMapper::GetDeviceMemory()
+{
+  const mcvol::Renderer* renderer = this->Internals->Backend.Get();
+  return renderer ? static_cast<double>(renderer->deviceBytes()) : 0.0;
+}
+
+//------------------------------------------------------------------------------
+int vtkMultiChannelVolumeMapper::GetNumberOfDataUploads()
+{
+  const mcvol::Renderer* renderer = this->Internals->Backend.Get();
+  return renderer ? static_cast<int>(renderer->dataUploads()) : 0;
+}
+
+//------------------------------------------------------------------------------
 int vtkMultiChannelVolumeMapper::GetTotalSamples()
 {
   return static_cast<int>(this->Internals->Accum.samples());
@@ -715,6 +729,7 @@ bool vtkMultiChannelVolumeMapper::ResolveTransferFunctions(RenderPass& pass)
 bool vtkMultiChannelVolumeMapper::EnsureBackend()
 {
   std::string error;
+  this->Internals->Backend.SetCudaDevice(this->CUDADevice);
   if (!this->Internals->Backend.Ensure(this->UsesRenderBackend(), this->Backend, error))
   {
     vtkErrorMacro(<< error);
@@ -868,12 +883,14 @@ bool vtkMultiChannelVolumeMapper::TraceBatch(RenderPass& pass)
   }
   if (batch <= 0)
   {
+    this->LastTraceTime = 0.0;
     return true;
   }
   std::string error;
   in.BatchSamples = batch;
   const auto start = std::chrono::steady_clock::now();
   const bool ok = this->TraceImage(in.Scene, pass.Camera, in.Accumulation.Depth(), in.Backend.Get(), in.Accum, error);
+  this->LastTraceTime = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   in.EstimateCurrent = false;
   if (ok && this->AddsSamples())
   {
@@ -893,12 +910,14 @@ bool vtkMultiChannelVolumeMapper::TraceBatch(RenderPass& pass)
 //------------------------------------------------------------------------------
 void vtkMultiChannelVolumeMapper::DrawImage(RenderPass& pass)
 {
+  const auto start = std::chrono::steady_clock::now();
   std::string error;
   if (!this->Internals->Compositor.Draw(
         pass.Window, pass.Viewport.Width, pass.Viewport.Height, this->Internals->Accum.rgba(), error))
   {
     vtkErrorMacro(<< error);
   }
+  this->LastDrawTime = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
 //------------------------------------------------------------------------------
@@ -921,8 +940,13 @@ void vtkMultiChannelVolumeMapper::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "PixelJitter: " << this->PixelJitter << "\n";
   os << indent << "MacrocellSize: " << this->MacrocellSize << "\n";
   os << indent << "Backend: " << this->GetBackendAsString() << "\n";
+  os << indent << "CUDADevice: " << this->CUDADevice << (this->CUDADevice < 0 ? " (by local MPI rank)" : "") << "\n";
   os << indent << "ActiveBackend: " << in.Backend.PrintName(this->Backend) << "\n";
   os << indent << "TotalSamples: " << in.Accum.samples() << "\n";
+  os << indent << "DeviceMemory: " << this->GetDeviceMemory() << " bytes\n";
+  os << indent << "NumberOfDataUploads: " << this->GetNumberOfDataUploads() << "\n";
+  os << indent << "LastTraceTime: " << this->LastTraceTime << "\n";
+  os << indent << "LastDrawTime: " << this->LastDrawTime << "\n";
   os << indent << "EstimatedError: " << this->GetEstimatedError() << "\n";
   os << indent << "NumberOfChannels: " << this->NumberOfChannels << "\n";
   os << indent << "LastTransferFunctionUpdates: " << this->LastTransferFunctionUpdates << "\n";

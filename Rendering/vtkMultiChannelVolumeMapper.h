@@ -309,6 +309,19 @@ public:
   void SetBackendToCPU() { this->SetBackend(BACKEND_CPU); }
   void SetBackendToCUDA() { this->SetBackend(BACKEND_CUDA); }
   const char* GetBackendAsString();
+
+  ///@{
+  /**
+   * The CUDA device to render on (default -1: the process's rank on its
+   * node, from OMPI_COMM_WORLD_LOCAL_RANK, MPI_LOCALRANKID, MPI_LOCAL_RANK
+   * or SLURM_LOCALID, modulo the visible devices, so that the ranks of
+   * `mpiexec -n 2 pvbatch` on a two-GPU node take one GPU each; device 0
+   * without MPI). CUDA_VISIBLE_DEVICES decides which devices are visible
+   * and how they are numbered. GetBackendReport() names the device taken.
+   */
+  vtkSetClampMacro(CUDADevice, int, -1, 1023);
+  vtkGetMacro(CUDADevice, int);
+  ///@}
   ///@}
 
   /**
@@ -464,6 +477,31 @@ public:
    */
   int GetTotalSamples();
 
+  ///@{
+  /**
+   * What the backend holds on the GPU. GetDeviceMemory(): bytes of device
+   * memory (channels, textures, grids, tables, images); 0 on the CPU, before
+   * the first render and after ReleaseGraphicsResources().
+   * GetNumberOfDataUploads(): channel copies to the GPU since the backend
+   * was created (one per channel per data change: progressive renders,
+   * camera moves, transfer-function edits and shallow copies of the same
+   * arrays upload nothing); 0 on the CPU, which reads the data in place.
+   */
+  double GetDeviceMemory();
+  int GetNumberOfDataUploads();
+  ///@}
+
+  ///@{
+  /**
+   * Seconds the last Render() spent tracing (on the GPU: the kernels and the
+   * copy of the image back to the host) and drawing the image over the
+   * framebuffer. The rest of a frame is VTK's own work and the stages that
+   * check the input, tables and camera.
+   */
+  vtkGetMacro(LastTraceTime, double);
+  vtkGetMacro(LastDrawTime, double);
+  ///@}
+
   /**
    * Starts the accumulation over at the next Render().
    */
@@ -600,6 +638,9 @@ protected:
   int MaximumTotalSamples = 0;
   double TargetError = 0.0;
   int Backend = BACKEND_AUTO;
+  int CUDADevice = -1;
+  double LastTraceTime = 0.0;
+  double LastDrawTime = 0.0;
   bool VisibilityOptimization = false;
   double DeviationWeight = 1.0;
   double OcclusionWeight = 70.0;

@@ -80,17 +80,21 @@ while read -r p; do dpkg -L "$p" 2>/dev/null || true; done < "$work/pkgs" |
     d="$(readlink -f "$(dirname "$f")")"
     echo "${d#/}/$(basename "$f")"
   done | sort -u > "$work/files"
+# Links that update-alternatives made (libblas.so.3, mpiexec, ...): no package
+# owns them, so add every one in the program and library folders.
+find /usr/bin /usr/sbin /usr/lib/x86_64-linux-gnu -maxdepth 1 -type l \
+  -lname '/etc/alternatives/*' | sed 's#^/##' >> "$work/files"
 # The /usr merge links, the loader cache's configuration and a minimal /etc.
 for e in etc/passwd etc/group etc/hosts etc/nsswitch.conf etc/ld.so.conf \
-  etc/ld.so.conf.d etc/alternatives etc/openmpi etc/python3.11 etc/X11/xkb; do
+  etc/ld.so.conf.d etc/alternatives etc/openmpi etc/python3.11; do
   [ -e "/$e" ] && echo "$e"
 done >> "$work/files"
 printf '%s\n' bin lib lib64 sbin >> "$work/files"
 
 rm -rf "$out"/root.tar.zst "$out"/root-*
-tar -C / --no-recursion -cf - -T <(grep -vE '^etc/(ld.so.conf.d|alternatives|openmpi|python3.11|X11/xkb)$' "$work/files") \
+tar -C / --no-recursion -cf - -T <(grep -vE '^etc/(ld.so.conf.d|alternatives|openmpi|python3.11)$' "$work/files") \
   etc/ld.so.conf.d etc/alternatives etc/openmpi etc/python3.11 |
-  zstd -q -T0 -19 -o "$out/root.tar.zst"
+  zstd -q -T0 -"${ZSTD_LEVEL:-12}" -o "$out/root.tar.zst"
 echo "root: $(wc -l < "$work/pkgs") packages, $(wc -l < "$work/files") files," \
   "$(du -m "$out/root.tar.zst" | cut -f1) MiB compressed"
 
@@ -100,7 +104,7 @@ fi
 rm -rf "$out"/build.tar.zst "$out"/build-*
 (cd / && find "${b#/}" \( -name CMakeFiles -o -name '_deps' \) -prune -o -type f \
   ! -name '*.o' ! -name '*.a' ! -name '*.d' ! -name 'mcvol_*_test' -print) |
-  tar -C / -cf - -T - | zstd -q -T0 -19 -o "$out/build.tar.zst"
+  tar -C / -cf - -T - | zstd -q -T0 -"${ZSTD_LEVEL:-12}" -o "$out/build.tar.zst"
 echo "build: $(du -m "$out/build.tar.zst" | cut -f1) MiB compressed"
 
 # --- 5. chunks: one folder per call, NAME-N/NAME.NN plus its checksum --------

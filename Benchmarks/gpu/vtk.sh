@@ -28,6 +28,7 @@ in_root() {
   # The environment of a clean bookworm shell, with the display and backend.
   chroot "$R" /usr/bin/env -i PATH=/usr/local/bin:/usr/bin:/bin HOME=/root \
     LANG=C.UTF-8 DISPLAY=:99 MCVOL_BACKEND="${MCVOL_BACKEND:-cuda}" \
+    MCVOL_TEST_BACKEND="${MCVOL_TEST_BACKEND:-cuda}" \
     OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 \
     OMPI_MCA_plm_rsh_agent= PYTHONUNBUFFERED=1 ${MCVOL_EXTRA_ENV:-} "$@"
 }
@@ -79,6 +80,11 @@ case "${1:-}" in
       mkdir -p "$R/$d"
       mountpoint -q "$R/$d" || mount --rbind "/$d" "$R/$d" || { echo "cannot mount /$d"; exit 1; }
     done
+    # The host's CUDA toolkit, for compute-sanitizer over the real programs.
+    if [ -d /usr/local/cuda ]; then
+      mkdir -p "$R/usr/local/cuda"
+      mountpoint -q "$R/usr/local/cuda" || mount --bind /usr/local/cuda "$R/usr/local/cuda"
+    fi
     mkdir -p "$R/tmp" "$R/root" "$R/work/main" && chmod 1777 "$R/tmp"
     # This working tree (sources, tests, data) beside the unpacked build.
     tar -C "$top" --exclude=./.gpuroot --exclude=./build --exclude=./third_party -cf - . |
@@ -90,7 +96,7 @@ case "${1:-}" in
   ctest)
     shift
     start_x || exit 1
-    in_root /usr/bin/bash -c "cd /work/main/build && ctest $*"
+    in_root /usr/bin/bash -c "cd /work/main/build && ctest $(printf '%q ' "$@")"
     ;;
   run)
     shift

@@ -244,6 +244,11 @@ void vtkMultiChannelVolumeRepresentation::SetBackend(int backend)
   this->GetMultiChannelMapper()->SetBackend(backend);
 }
 
+void vtkMultiChannelVolumeRepresentation::SetCUDADevice(int device)
+{
+  this->GetMultiChannelMapper()->SetCUDADevice(device);
+}
+
 void vtkMultiChannelVolumeRepresentation::SetSeed(int seed)
 {
   this->Seed = static_cast<unsigned int>(seed);

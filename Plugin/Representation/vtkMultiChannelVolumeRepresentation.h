@@ -95,6 +95,7 @@ public:
   void SetTargetError(double rmse);
   void SetMacrocellSize(int size);
   void SetBackend(int backend);
+  void SetCUDADevice(int device);
   void SetSeed(int seed);
   void SetPixelJitter(bool on);
   void SetShadowMode(int mode);

@@ -10,11 +10,19 @@
 
 namespace mcvol
 {
-bool Renderer::cudaAvailable(std::string* why)
+bool Renderer::cudaAvailable(std::string* why, int cudaDevice)
 {
 #ifdef MCVOL_WITH_CUDA
-  return CUDARenderer::deviceUsable(why);
+  std::string how;
+  const int device = cudaDevice >= 0 ? cudaDevice : CUDARenderer::defaultDevice(&how);
+  const bool usable = CUDARenderer::deviceUsable(why, device);
+  if (usable && why)
+  {
+    *why += cudaDevice >= 0 ? ", device " + std::to_string(device) + " (requested)" : ", " + how;
+  }
+  return usable;
 #else
+  (void)cudaDevice;
   if (why)
   {
     *why = "this build of mcvol has no CUDA backend (no CUDA compiler was found when it was configured)";
@@ -23,7 +31,7 @@ bool Renderer::cudaAvailable(std::string* why)
 #endif
 }
 
-std::unique_ptr<Renderer> Renderer::create(Backend requested, std::string* why)
+std::unique_ptr<Renderer> Renderer::create(Backend requested, std::string* why, int cudaDevice)
 {
   std::string cudaWhy;
   switch (requested)
@@ -35,7 +43,7 @@ std::unique_ptr<Renderer> Renderer::create(Backend requested, std::string* why)
       }
       return std::unique_ptr<Renderer>(new CPURenderer());
     case Backend::CUDA:
-      if (!cudaAvailable(&cudaWhy))
+      if (!cudaAvailable(&cudaWhy, cudaDevice))
       {
         throw std::runtime_error("mcvol: the CUDA backend was requested but " + cudaWhy);
       }
@@ -44,13 +52,13 @@ std::unique_ptr<Renderer> Renderer::create(Backend requested, std::string* why)
       {
         *why = "CUDA backend (requested; " + cudaWhy + ")";
       }
-      return std::unique_ptr<Renderer>(new CUDARenderer());
+      return std::unique_ptr<Renderer>(new CUDARenderer(cudaDevice));
 #else
       break;
 #endif
     case Backend::Auto:
     default:
-      if (!cudaAvailable(&cudaWhy))
+      if (!cudaAvailable(&cudaWhy, cudaDevice))
       {
         if (why)
         {
@@ -63,7 +71,7 @@ std::unique_ptr<Renderer> Renderer::create(Backend requested, std::string* why)
       {
         *why = "CUDA backend (auto: " + cudaWhy + ")";
       }
-      return std::unique_ptr<Renderer>(new CUDARenderer());
+      return std::unique_ptr<Renderer>(new CUDARenderer(cudaDevice));
 #else
       break;
 #endif

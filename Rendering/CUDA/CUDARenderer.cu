@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <dlfcn.h>
 #include <iterator>
+#include <cstdlib>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -113,9 +114,43 @@ bool CUDARenderer::deviceUsable(std::string* why, int device)
   return true;
 }
 
+int CUDARenderer::defaultDevice(std::string* how)
+{
+  int count = 0;
+  if (cudaGetDeviceCount(&count) != cudaSuccess || count < 1)
+  {
+    (void)cudaGetLastError();
+    return 0;
+  }
+  for (const char* var : { "OMPI_COMM_WORLD_LOCAL_RANK", "MPI_LOCALRANKID", "MPI_LOCAL_RANK", "SLURM_LOCALID" })
+  {
+    const char* value = std::getenv(var);
+    char* end = nullptr;
+    const long rank = value ? std::strtol(value, &end, 10) : -1;
+    if (value && end != value && rank >= 0)
+    {
+      const int device = static_cast<int>(rank % count);
+      if (how)
+      {
+        *how = "device " + std::to_string(device) + " of " + std::to_string(count) + " (" + var + "=" + value + ")";
+      }
+      return device;
+    }
+  }
+  if (how)
+  {
+    *how = "device 0 of " + std::to_string(count);
+  }
+  return 0;
+}
+
 CUDARenderer::CUDARenderer(int device)
   : In(new Internal())
 {
+  if (device < 0)
+  {
+    device = defaultDevice();
+  }
   std::string why;
   if (!deviceUsable(&why, device))
   {
@@ -182,6 +217,15 @@ CudaMemoryStats CUDARenderer::memory() const
   m.majorantBytes = this->In->Majorants.bytes();
   m.imageBytes = this->In->Accum.bytes() + this->In->Even.bytes() + this->In->Depth.bytes();
   return m;
+}
+
+size_t CUDARenderer::deviceBytes() const
+{
+  const CudaMemoryStats m = this->memory();
+  const Internal& in = *this->In;
+  return m.dataBytes + m.textureBytes + m.macrocellBytes + m.majorantBytes + m.imageBytes + in.Tables.bytes() +
+    in.Sparse.bytes() + in.ChannelMax.bytes() + in.NaNFlags.bytes() + in.Counters.bytes() +
+    in.ImportanceTables.bytes() + in.Segments.bytes() + in.SegmentCounts.bytes() + in.SegmentTotals.bytes();
 }
 
 std::vector<float> CUDARenderer::downloadMajorants(int channel) const

@@ -51,6 +51,17 @@ int RenderBackend::Effective(int backend)
 }
 
 //------------------------------------------------------------------------------
+void RenderBackend::SetCudaDevice(int device)
+{
+  if (device != this->CudaDevice)
+  {
+    this->CudaDevice = device;
+    this->Instance.reset();
+    this->InstanceBackend = -1;
+  }
+}
+
+//------------------------------------------------------------------------------
 bool RenderBackend::Ensure(bool uses, int backend, std::string& error)
 {
   if (!uses)
@@ -67,7 +78,7 @@ bool RenderBackend::Ensure(bool uses, int backend, std::string& error)
   this->InstanceBackend = backend;
   try
   {
-    this->Instance = Renderer::create(static_cast<Backend>(Effective(backend)), &this->Why);
+    this->Instance = Renderer::create(static_cast<Backend>(Effective(backend)), &this->Why, this->CudaDevice);
     if (Effective(backend) != backend)
     {
       this->Why = "MCVOL_BACKEND set for Auto: " + this->Why;
@@ -100,7 +111,7 @@ std::string RenderBackend::ActiveName(bool uses, int backend) const
     // Not rendered with this setting yet: say what create() would pick.
     std::string why;
     const Backend effective = static_cast<Backend>(Effective(backend));
-    if (effective == Backend::CPU || !Renderer::cudaAvailable(&why))
+    if (effective == Backend::CPU || !Renderer::cudaAvailable(&why, this->CudaDevice))
     {
       return effective == Backend::CUDA ? "none" : "cpu";
     }
@@ -123,7 +134,7 @@ std::string RenderBackend::Report(bool uses, int backend) const
   // Not rendered with this setting yet: what create() would say (without
   // creating a renderer).
   std::string why;
-  const bool cuda = Renderer::cudaAvailable(&why);
+  const bool cuda = Renderer::cudaAvailable(&why, this->CudaDevice);
   const bool fromEnv = Effective(backend) != backend;
   switch (static_cast<Backend>(Effective(backend)))
   {

@@ -29,6 +29,10 @@ public:
   /// is kept.
   static int Effective(int backend);
 
+  /// The CUDA device the next renderer takes (-1: the default, by local MPI
+  /// rank); a change gives the current renderer back.
+  void SetCudaDevice(int device);
+
   /// The renderer (nullptr when none is used or it could not be created).
   Renderer* Get() const { return this->Instance.get(); }
 
@@ -47,6 +51,7 @@ public:
 private:
   std::unique_ptr<Renderer> Instance;
   int InstanceBackend = -1; // the backend value Instance was created for
+  int CudaDevice = -1;      // the CUDA device asked for (-1: by local rank)
   std::string Why;          // from Renderer::create when Instance was made
 };
 } // namespace adapter

@@ -139,6 +139,27 @@ diff = np.abs(image.astype(int) - reference.astype(int))
 checks.check(T.info(srep, "TotalSamples") == 32 and diff.max() <= 2,
              "separate arrays without active scalars render (max |diff| to the split arrays %d)" % diff.max())
 
+# The data stays on the device across ParaView's frames (the representation
+# shallow-copies its input every update): camera moves, refinement and a
+# transfer-function edit upload nothing. On the CPU backend nothing is ever
+# uploaded (the data are read in place).
+mapper = T.local_mapper(rep)
+uploads = mapper.GetNumberOfDataUploads()
+on_gpu = mapper.GetActiveBackendName() == "cuda"
+checks.check(uploads >= 3 if on_gpu else uploads == 0,
+             "%s: %d channel uploads so far" % (mapper.GetActiveBackendName(), uploads))
+for _ in range(30):
+    view.CameraPosition = [p + 0.5 for p in view.CameraPosition]
+    simple.Render(view)
+simple.GetOpacityTransferFunction("green").Points = [0.0, 0.0, 0.5, 0.0, 1.0, 0.8, 0.5, 0.0]
+simple.Render(view)
+checks.check(mapper.GetNumberOfDataUploads() == uploads,
+             "30 ParaView frames and a transfer-function edit upload nothing more (%d, then %d)"
+             % (uploads, mapper.GetNumberOfDataUploads()))
+print("ParaView frames on %s: %d uploads, %.1f MiB on the device" % (
+    mapper.GetActiveBackendName(), mapper.GetNumberOfDataUploads(), mapper.GetDeviceMemory() / 2**20))
+
+
 # Bad input: a clear status, nothing drawn, no crash.
 def status_after_render(r):
     simple.Render(view)

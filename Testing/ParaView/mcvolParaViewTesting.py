@@ -39,6 +39,14 @@ def load_plugin():
         simple.LoadPlugin(path, remote=True, ns=globals())
 
 
+def local_mapper(rep):
+    """The vtkMultiChannelVolumeMapper behind `rep` in this process (builtin
+    session or a pvbatch rank). The plugin's representation class is not
+    wrapped for Python, so go through its volume actor, whose mapper is."""
+    import mcvol  # noqa: F401 (registers the mapper's Python wrapping)
+    return rep.GetClientSideObject().GetActiveRepresentation().GetActor().GetMapper()
+
+
 def info(rep, name):
     """Value of an information property (read from the server)."""
     rep.SMProxy.UpdatePropertyInformation()
@@ -120,7 +128,9 @@ def make_view(size=(200, 200)):
 def show(source, view):
     rep = simple.Show(source, view)
     rep.SetRepresentationType(REPRESENTATION)
-    rep.Backend = "CPU"
+    # The baselines' backend, or CUDA on the GPU machine (Benchmarks/gpu/vtk.sh
+    # sets MCVOL_TEST_BACKEND=cuda, as for the core and Python tests).
+    rep.Backend = "CUDA" if os.environ.get("MCVOL_TEST_BACKEND", "").lower() == "cuda" else "CPU"
     rep.Seed = 7
     rep.SamplesPerRender = 8
     rep.InteractiveFrameTime = 0  # fixed batches: the tests count samples

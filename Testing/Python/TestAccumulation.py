@@ -22,7 +22,7 @@ from vtkmodules.vtkRenderingCore import (
 )
 
 from mcvol import vtkMultiChannelVolumeMapper
-from mcvolTesting import Checker
+from mcvolTesting import Checker, use_test_backend
 
 N = 24
 image = vtkImageData()
@@ -37,7 +37,7 @@ image.GetPointData().SetScalars(scalars)
 
 mapper = vtkMultiChannelVolumeMapper()
 mapper.SetInputData(image)
-mapper.SetBackendToCPU()
+use_test_backend(mapper)
 
 prop = vtkVolumeProperty()
 opacities = []

@@ -25,7 +25,7 @@ from vtkmodules.vtkRenderingCore import (vtkColorTransferFunction, vtkRenderer, 
 from vtkmodules.util.numpy_support import vtk_to_numpy
 
 from mcvol import vtkMultiChannelDemoSource, vtkMultiChannelVolumeMapper
-from mcvolTesting import Checker, read_png_rgb, write_png_rgb
+from mcvolTesting import Checker, read_png_rgb, write_png_rgb, use_test_backend
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 BASELINES = os.path.join(HERE, "..", "Data", "Baseline")
@@ -73,7 +73,7 @@ def render(dataset, mode, tracker, spp=SPP, seed=7):
     mapper.SetTrackingMethod(tracker)
     mapper.SetSamplesPerPixel(spp)
     mapper.SetSeed(seed)
-    mapper.SetBackendToCPU()
+    use_test_backend(mapper)
     if mode in ("Mix", "MixAverage"):
         for c in range(n):
             mapper.SetMixWeight(c, 1.0 + c)  # unequal weights, normalised by the mapper

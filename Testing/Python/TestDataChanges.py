@@ -16,7 +16,7 @@ from vtkmodules.vtkRenderingCore import (vtkColorTransferFunction, vtkRenderer, 
 from vtkmodules.util.numpy_support import vtk_to_numpy
 
 from mcvol import vtkMultiChannelVolumeMapper
-from mcvolTesting import Checker, ErrorCatcher, capture_rgba
+from mcvolTesting import Checker, ErrorCatcher, capture_rgba, use_test_backend
 
 N = 64
 BASE = 1e9
@@ -39,7 +39,7 @@ def main():
     img, arr = make_image()
     mapper = vtkMultiChannelVolumeMapper()
     mapper.SetInputData(img)
-    mapper.SetBackendToCPU()
+    use_test_backend(mapper)
     mapper.SetSamplesPerPixel(4)
     errors = ErrorCatcher(mapper)
     ctf = vtkColorTransferFunction()

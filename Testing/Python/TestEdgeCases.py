@@ -24,7 +24,7 @@ from vtkmodules.vtkRenderingCore import (
 )
 
 from mcvol import vtkMultiChannelVolumeMapper
-from mcvolTesting import Checker, ErrorCatcher, capture_rgba
+from mcvolTesting import Checker, ErrorCatcher, capture_rgba, use_test_backend
 
 t = Checker()
 
@@ -43,7 +43,7 @@ def make_image(dims, components=1, array_type=vtkFloatArray, value=1.0, name="sc
 
 
 mapper = vtkMultiChannelVolumeMapper()
-mapper.SetBackendToCPU()
+use_test_backend(mapper)
 errors = ErrorCatcher(mapper)
 prop = vtkVolumeProperty()
 for c in range(4):

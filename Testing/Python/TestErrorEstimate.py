@@ -26,7 +26,7 @@ from vtkmodules.vtkRenderingCore import (
 from vtkmodules.util.numpy_support import vtk_to_numpy
 
 from mcvol import vtkMultiChannelDemoSource, vtkMultiChannelVolumeMapper
-from mcvolTesting import Checker
+from mcvolTesting import Checker, use_test_backend
 
 FACTOR = 1.25  # estimated vs true RMSE, either way
 
@@ -47,7 +47,7 @@ for c in range(src.GetNumberOfOutputChannels()):
 def make_view(seed):
     mapper = vtkMultiChannelVolumeMapper()
     mapper.SetInputConnection(src.GetOutputPort())
-    mapper.SetBackendToCPU()
+    use_test_backend(mapper)
     mapper.SetSeed(seed)
     volume = vtkVolume()
     volume.SetMapper(mapper)

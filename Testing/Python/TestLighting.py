@@ -16,7 +16,7 @@ from vtkmodules.vtkRenderingCore import (vtkColorTransferFunction, vtkLight, vtk
 from vtkmodules.util.numpy_support import vtk_to_numpy
 
 from mcvol import vtkMultiChannelDemoSource, vtkMultiChannelVolumeMapper
-from mcvolTesting import Checker
+from mcvolTesting import Checker, use_test_backend
 
 t = Checker()
 src = vtkMultiChannelDemoSource()
@@ -33,7 +33,7 @@ for c in range(src.GetNumberOfOutputChannels()):
     prop.SetScalarOpacityUnitDistance(c, u[0])
 mapper = vtkMultiChannelVolumeMapper()
 mapper.SetInputConnection(src.GetOutputPort())
-mapper.SetBackendToCPU()
+use_test_backend(mapper)
 mapper.SetSamplesPerPixel(8)
 mapper.SetSeed(3)
 vol = vtkVolume()

@@ -33,7 +33,7 @@ from vtkmodules.vtkRenderingCore import vtkColorTransferFunction, vtkRenderer, v
 from vtkmodules.util.numpy_support import vtk_to_numpy
 
 from mcvol import vtkMultiChannelDemoSource, vtkMultiChannelRayMarchMapper, vtkMultiChannelVolumeMapper
-from mcvolTesting import Checker
+from mcvolTesting import Checker, use_test_backend
 
 SIZE = 24
 K = 8
@@ -109,7 +109,7 @@ def reference(ambient=True):
 
 def monte_carlo(seed):
     m = vtkMultiChannelVolumeMapper()
-    m.SetBackendToCPU()
+    use_test_backend(m)
     m.SetPixelJitter(False)  # the reference samples pixel centres
     m.SetSeed(seed)
     m.SetSamplesPerPixel(16)

@@ -24,7 +24,7 @@ from vtkmodules.util.numpy_support import vtk_to_numpy
 import vtkmodules.vtkRenderingOpenGL2  # noqa: F401
 
 from mcvol import vtkMultiChannelVolumeMapper
-from mcvolTesting import Checker
+from mcvolTesting import Checker, use_test_backend
 
 import os
 DATA = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "Data")
@@ -40,7 +40,7 @@ reader.Update()
 def render(data, seed, unit=1.0, spp=512):
     m = vtkMultiChannelVolumeMapper()
     m.SetInputData(data)
-    m.SetBackendToCPU()
+    use_test_backend(m)
     m.SetSeed(seed)
     m.SetSamplesPerPixel(spp)
     m.PixelJitterOff()

@@ -21,7 +21,7 @@ from vtkmodules.vtkRenderingCore import (
 )
 
 from mcvol import vtkMultiChannelVolumeMapper
-from mcvolTesting import Checker, capture_rgba, world_to_pixel
+from mcvolTesting import Checker, capture_rgba, world_to_pixel, use_test_backend
 
 extent = (0, 63, 0, 31, 0, 31)
 centres = [(16.0, 16.0, 16.0), (48.0, 16.0, 16.0)]
@@ -41,7 +41,7 @@ for source in sources:
 
 mapper = vtkMultiChannelVolumeMapper()
 mapper.SetInputConnection(append.GetOutputPort())
-mapper.SetBackendToCPU()
+use_test_backend(mapper)
 mapper.SetSamplesPerPixel(4)
 
 prop = vtkVolumeProperty()

@@ -35,7 +35,7 @@ from vtkmodules.vtkRenderingCore import (vtkColorTransferFunction, vtkRenderer, 
 from vtkmodules.util.numpy_support import vtk_to_numpy
 
 from mcvol import vtkMultiChannelDemoSource, vtkMultiChannelRayMarchMapper, vtkMultiChannelVolumeMapper
-from mcvolTesting import Checker, read_png_rgb, write_png_rgb
+from mcvolTesting import Checker, read_png_rgb, write_png_rgb, use_test_backend
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 BASELINES = os.path.join(HERE, "..", "Data", "Baseline")
@@ -132,7 +132,7 @@ def reference(scene, step_voxels=1.0 / 64, compositing="Extinction", skipping=Tr
 
 def monte_carlo(scene):
     m = vtkMultiChannelVolumeMapper()
-    m.SetBackendToCPU()
+    use_test_backend(m)
     m.PixelJitterOff()
     m.SetSamplesPerPixel(SPP)
     ren = scene.setup(m)

@@ -91,7 +91,7 @@ from vtkmodules.vtkRenderingCore import (
 from vtkmodules.util.numpy_support import numpy_to_vtk, vtk_to_numpy
 
 from mcvol import vtkMultiChannelRayMarchMapper, vtkMultiChannelVolumeMapper
-from mcvolTesting import Checker, ErrorCatcher
+from mcvolTesting import Checker, ErrorCatcher, use_test_backend
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SOURCE = os.path.dirname(os.path.dirname(HERE))
@@ -151,7 +151,7 @@ def render(image, functions, kind="rm", size=(48, 48), camera=None, spp=SPP, see
     mapper = vtkMultiChannelRayMarchMapper() if kind == "rm" else vtkMultiChannelVolumeMapper()
     errors = ErrorCatcher(mapper)
     if kind == "mc":
-        mapper.SetBackendToCPU()
+        use_test_backend(mapper)
         mapper.SetSamplesPerPixel(spp)
         mapper.SetSeed(seed)
         mapper.SetPixelJitter(jitter)

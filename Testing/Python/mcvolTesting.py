@@ -1,5 +1,6 @@
 """Helpers shared by the Python tests of the VTK adapter."""
 
+import os
 import sys
 
 from vtkmodules.vtkCommonCore import VTK_STRING
@@ -7,6 +8,16 @@ from vtkmodules.vtkRenderingCore import vtkWindowToImageFilter
 from vtkmodules.util.misc import calldata_type
 from vtkmodules.util.numpy_support import vtk_to_numpy
 
+
+
+def use_test_backend(mapper):
+    """Sets the backend a test renders with: the CPU (the baselines' backend)
+    by default, CUDA when MCVOL_TEST_BACKEND=cuda (the GPU machine's runs,
+    Benchmarks/gpu/vtk.sh), as the core tests do."""
+    if os.environ.get("MCVOL_TEST_BACKEND", "").lower() == "cuda":
+        mapper.SetBackendToCUDA()
+    else:
+        mapper.SetBackendToCPU()
 
 def capture_rgba(window):
     """Renders once more and returns the window as an (H, W, 4) uint8 array,

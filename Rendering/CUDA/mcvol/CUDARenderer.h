@@ -57,7 +57,8 @@ struct CudaUpdateCounters
 class CUDARenderer final : public Renderer
 {
 public:
-  /// Selects device `device` (throws if none is usable).
+  /// Selects device `device`, or defaultDevice() when negative (throws if
+  /// it is not usable).
   explicit CUDARenderer(int device = 0);
   ~CUDARenderer() override;
 
@@ -73,6 +74,8 @@ public:
   void readBack(Accumulator& accum) override;
   void finish() override;
   bool buildsAccelerationOnDevice() const override { return true; }
+  size_t deviceBytes() const override;
+  uint64_t dataUploads() const override { return this->updateCounters().dataUploads; }
 
   /// Texture (default) or global-memory sampling; takes effect at the next render.
   void setSampling(CudaSampling s);
@@ -92,6 +95,14 @@ public:
   /// True if CUDA device `device` can run this build's kernels; `why` gets
   /// the reason when not (or the device's name when it can).
   static bool deviceUsable(std::string* why = nullptr, int device = 0);
+
+  /// The device a process takes when none is named: its rank on this node
+  /// (OMPI_COMM_WORLD_LOCAL_RANK, MPI_LOCALRANKID, MPI_LOCAL_RANK,
+  /// SLURM_LOCALID, in that order) modulo the visible devices, so that the
+  /// ranks of `mpiexec -n 2` on a two-GPU node take one GPU each; 0 without
+  /// a rank. CUDA_VISIBLE_DEVICES decides which devices are visible. `how`
+  /// (optional) says why this one.
+  static int defaultDevice(std::string* how = nullptr);
 
 private:
   struct Internal;

@@ -208,10 +208,19 @@ public:
   /// True if the backend builds macrocells and majorants itself (on the
   /// device), so the Scene can skip its host build (Scene::setHostAcceleration).
   virtual bool buildsAccelerationOnDevice() const { return false; }
+  /// Device backends: bytes this renderer holds in device memory (channels,
+  /// textures, grids, tables, images); 0 for the CPU.
+  virtual size_t deviceBytes() const { return 0; }
+  /// Device backends: channel copies to the device so far (one per channel
+  /// per data change); 0 for the CPU, which reads the data in place.
+  virtual uint64_t dataUploads() const { return 0; }
 
   /// Throws std::runtime_error naming the cause if the requested backend is
   /// unavailable. `why` (optional) receives a sentence on the choice made.
-  static std::unique_ptr<Renderer> create(Backend requested, std::string* why = nullptr);
-  static bool cudaAvailable(std::string* why = nullptr);
+  /// `cudaDevice`: the CUDA device to use, or -1 for the default (the
+  /// process's local MPI rank modulo the visible devices; see
+  /// CUDARenderer::defaultDevice()).
+  static std::unique_ptr<Renderer> create(Backend requested, std::string* why = nullptr, int cudaDevice = -1);
+  static bool cudaAvailable(std::string* why = nullptr, int cudaDevice = -1);
 };
 } // namespace mcvol
