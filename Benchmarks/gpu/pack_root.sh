@@ -43,7 +43,13 @@ if [ "$build_only" = 0 ]; then
 # --- 1. the programs and modules whose libraries we need --------------------
 roots=(/usr/bin/pvpython /usr/bin/pvbatch /usr/bin/Xvfb /usr/bin/xkbcomp
   /usr/bin/xauth /usr/bin/ctest /usr/bin/python3.11 /usr/bin/bash
-  /usr/bin/mpiexec /usr/bin/orted /usr/lib/x86_64-linux-gnu/dri/swrast_dri.so)
+  /usr/bin/mpiexec /usr/bin/orted /usr/lib/x86_64-linux-gnu/dri/swrast_dri.so
+  /usr/lib/x86_64-linux-gnu/libGLX_mesa.so.0 /usr/lib/x86_64-linux-gnu/libEGL_mesa.so.0)
+# Open MPI loads its components (and they PMIx, libfabric, UCX...) with
+# dlopen: their libraries too, or MPI_Init fails in pvpython and pvbatch.
+mapfile -t mpiso < <(find /usr/lib/x86_64-linux-gnu/openmpi/lib /usr/lib/x86_64-linux-gnu/pmix2 \
+  -name '*.so' 2>/dev/null)
+roots+=("${mpiso[@]}")
 mapfile -t pyso < <(find /usr/lib/python3/dist-packages/paraview \
   /usr/lib/python3/dist-packages/vtkmodules /usr/lib/python3/dist-packages/numpy \
   -name '*.so' 2>/dev/null)
@@ -57,7 +63,7 @@ done | sort -u > "$work/libs"
 explicit=(libc6 libc-bin dash bash coreutils sed grep findutils procps
   util-linux python3 python3.11 python3.11-minimal libpython3.11-minimal
   libpython3.11-stdlib python3-minimal python3-numpy python3-tifffile
-  python3-paraview paraview cmake cmake-data xvfb xauth xkb-data x11-xkb-utils
+  python3-paraview paraview cmake cmake-data xvfb xserver-common xauth xkb-data x11-xkb-utils
   libgl1-mesa-dri libglx-mesa0 libegl-mesa0 openmpi-bin openmpi-common
   libopenmpi3 mricron-data)
 {
@@ -74,26 +80,34 @@ explicit=(libc6 libc-bin dash bash coreutils sed grep findutils procps
 # --- 3. their files, with /bin, /lib... resolved (bookworm merges /usr) -----
 while read -r p; do dpkg -L "$p" 2>/dev/null || true; done < "$work/pkgs" |
   grep -vE '^/usr/share/(doc|man|info|locale|lintian|bug|doc-base)/|^/usr/include/|\.a$|/__pycache__/|^/\.$' |
-  sort -u | while read -r f; do
-    [ -e "$f" ] || [ -L "$f" ] || continue
-    [ -d "$f" ] && [ ! -L "$f" ] && continue
-    d="$(readlink -f "$(dirname "$f")")"
-    echo "${d#/}/$(basename "$f")"
-  done | sort -u > "$work/files"
+  python3 -c '
+import os, sys
+seen = set()
+for line in sys.stdin:
+    f = line.rstrip("\n")
+    if not (os.path.lexists(f)) or (os.path.isdir(f) and not os.path.islink(f)):
+        continue
+    path = os.path.join(os.path.realpath(os.path.dirname(f)), os.path.basename(f))[1:]
+    if path not in seen:
+        seen.add(path)
+        print(path)
+' > "$work/files"
 # Links that update-alternatives made (libblas.so.3, mpiexec, ...): no package
-# owns them, so add every one in the program and library folders.
+# owns them, so add every one in the program and library folders, and the
+# /etc/alternatives links they go through.
 find /usr/bin /usr/sbin /usr/lib/x86_64-linux-gnu -maxdepth 1 -type l \
   -lname '/etc/alternatives/*' | sed 's#^/##' >> "$work/files"
-# The /usr merge links, the loader cache's configuration and a minimal /etc.
-for e in etc/passwd etc/group etc/hosts etc/nsswitch.conf etc/ld.so.conf \
-  etc/ld.so.conf.d etc/alternatives etc/openmpi etc/python3.11; do
+# The /usr merge links, a minimal /etc and the loader's, MPI's and Python's
+# configuration.
+for e in etc/passwd etc/group etc/hosts etc/nsswitch.conf etc/ld.so.conf; do
   [ -e "/$e" ] && echo "$e"
 done >> "$work/files"
+find /etc/alternatives /etc/ld.so.conf.d /etc/openmpi /etc/python3.11 \( -type f -o -type l \) 2>/dev/null |
+  sed 's#^/##' >> "$work/files"
 printf '%s\n' bin lib lib64 sbin >> "$work/files"
 
 rm -rf "$out"/root.tar.zst "$out"/root-*
-tar -C / --no-recursion -cf - -T <(grep -vE '^etc/(ld.so.conf.d|alternatives|openmpi|python3.11)$' "$work/files") \
-  etc/ld.so.conf.d etc/alternatives etc/openmpi etc/python3.11 |
+sort -u "$work/files" | tar -C / --no-recursion -cf - -T - |
   zstd -q -T0 -"${ZSTD_LEVEL:-12}" -o "$out/root.tar.zst"
 echo "root: $(wc -l < "$work/pkgs") packages, $(wc -l < "$work/files") files," \
   "$(du -m "$out/root.tar.zst" | cut -f1) MiB compressed"

@@ -30,7 +30,7 @@ in_root() {
     LANG=C.UTF-8 DISPLAY=:99 MCVOL_BACKEND="${MCVOL_BACKEND:-cuda}" \
     MCVOL_TEST_BACKEND="${MCVOL_TEST_BACKEND:-cuda}" \
     OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 \
-    OMPI_MCA_plm_rsh_agent= PYTHONUNBUFFERED=1 ${MCVOL_EXTRA_ENV:-} "$@"
+    OMPI_MCA_plm_rsh_agent=/usr/bin/false PYTHONUNBUFFERED=1 ${MCVOL_EXTRA_ENV:-} "$@"
 }
 
 start_x() {
