@@ -70,6 +70,7 @@ struct vtkMultiChannelVolumeMapper::vtkInternals
   double EstimatedMSE = -1.0;
   bool EstimateCurrent = false;
   mcvol::adapter::SampleCost Cost; // seconds per sample, for InteractiveFrameTime
+  bool DepthRead = true;            // Depth came from the framebuffer (not all "far")
 
   // Backing store for GetActiveBackendName and GetBackendReport.
   std::string BackendName = "none";
@@ -175,6 +176,7 @@ bool vtkMultiChannelVolumeMapper::TraceImage(const mcvol::Scene& scene, const mc
   settings.seed = this->Seed;
   settings.tracker = this->TrackingMethod == N_DDA ? mcvol::Tracker::NDDA : mcvol::Tracker::OneDDA;
   settings.jitterPixels = this->PixelJitter;
+  settings.readBackEven = false; // GetEstimatedError() reads it back when asked
   try
   {
     renderer->render(scene, camera, settings, depth, accum);
@@ -348,6 +350,18 @@ double vtkMultiChannelVolumeMapper::GetEstimatedError()
   if (!in.EstimateCurrent)
   {
     // One pass over the image (a few ms at 1080p); kept until the next trace.
+    // A device backend copies the even half only now (not every frame).
+    if (in.Accum.evenPendingOnDevice() && in.Backend.Get())
+    {
+      try
+      {
+        in.Backend.Get()->readBackEven(in.Accum);
+      }
+      catch (const std::exception& e)
+      {
+        vtkWarningMacro("The error estimate could not be read back: " << e.what());
+      }
+    }
     in.EstimatedMSE = in.Accum.estimatedMSE();
     in.EstimateCurrent = true;
   }
@@ -830,7 +844,20 @@ bool vtkMultiChannelVolumeMapper::SetUpView(RenderPass& pass)
     vtkErrorMacro(<< error);
     return false;
   }
-  if (!mcvol::adapter::ReadDepth(pass.Window, pass.Viewport, this->Internals->Depth))
+  std::vector<float>& depth = this->Internals->Depth;
+  if (!mcvol::adapter::HasOpaqueGeometry(pass.Renderer))
+  {
+    // Nothing but volumes: the depth buffer is all "far"; skip the read-back.
+    const size_t n = static_cast<size_t>(pass.Viewport.Width) * static_cast<size_t>(pass.Viewport.Height);
+    if (depth.size() != n || this->Internals->DepthRead)
+    {
+      depth.assign(n, 1.f);
+    }
+    this->Internals->DepthRead = false;
+    return true;
+  }
+  this->Internals->DepthRead = true;
+  if (!mcvol::adapter::ReadDepth(pass.Window, pass.Viewport, depth))
   {
     vtkWarningMacro("Could not read the depth buffer; geometry will not occlude the volume.");
   }

@@ -34,11 +34,15 @@ in_root() {
 }
 
 start_x() {
-  if ! in_root /usr/bin/bash -c 'test -e /tmp/.X11-unix/X99'; then
-    in_root /usr/bin/Xvfb :99 -screen 0 1920x1200x24 -nolisten tcp -noreset \
-      > /tmp/mcvol-xvfb.log 2>&1 &
+  # A call's processes end with it, except a new session's: Xvfb runs in one
+  # (setsid) and stays for the next calls while the machine is warm. A socket
+  # left by an Xvfb that did end is removed first.
+  if ! pgrep -f "Xvfb :99" > /dev/null; then
+    rm -f "$R/tmp/.X11-unix/X99" "$R/tmp/.X99-lock"
+    setsid chroot "$R" /usr/bin/env -i PATH=/usr/bin:/bin /usr/bin/Xvfb :99 -screen 0 1920x1200x24 \
+      -nolisten tcp -noreset > /tmp/mcvol-xvfb.log 2>&1 < /dev/null &
     for _ in $(seq 50); do
-      in_root /usr/bin/bash -c 'test -e /tmp/.X11-unix/X99' && return 0
+      [ -e "$R/tmp/.X11-unix/X99" ] && return 0
       sleep 0.2
     done
     echo "Xvfb did not start:"; tail -20 /tmp/mcvol-xvfb.log; return 1

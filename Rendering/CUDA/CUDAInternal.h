@@ -160,6 +160,7 @@ struct CUDARenderer::Internal
   /// error estimate; AccumEven: it is in step with Accum.
   DeviceBuffer<float4> Even;
   bool AccumEven = false;
+  bool SkipEvenReadBack = false; ///< set by render() for RenderSettings::readBackEven off
   DeviceBuffer<float> Depth;
   std::vector<float> LastDepth;
   bool HaveDepth = false;

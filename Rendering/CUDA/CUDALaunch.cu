@@ -474,7 +474,9 @@ void CUDARenderer::render(const Scene& scene, const Camera& camera, const Render
   }
   if (settings.readBack)
   {
+    in.SkipEvenReadBack = !settings.readBackEven;
     this->readBack(accum);
+    in.SkipEvenReadBack = false;
   }
 }
 
@@ -495,12 +497,39 @@ void CUDARenderer::readBack(Accumulator& accum)
   MCVOL_CUDA(cudaSetDevice(in.Device));
   MCVOL_CUDA(cudaMemcpy(accum.rgba(), in.Accum.ptr, in.Accum.bytes(), cudaMemcpyDeviceToHost));
   // The error estimate is computed on the host from both images: one more
-  // copy of the image's size, only while the Accumulator keeps the estimate.
+  // copy of the image's size, only while the Accumulator keeps the estimate
+  // (and, with RenderSettings::readBackEven off, only when readBackEven()
+  // asks for it).
+  accum.setPendingOnDevice(false);
+  accum.setEvenPendingOnDevice(false);
   if (accum.evenRGBA() && in.AccumEven && in.Even.count == in.Accum.count)
   {
-    MCVOL_CUDA(cudaMemcpy(accum.evenRGBA(), in.Even.ptr, in.Even.bytes(), cudaMemcpyDeviceToHost));
+    if (in.SkipEvenReadBack)
+    {
+      accum.setEvenPendingOnDevice(true);
+    }
+    else
+    {
+      MCVOL_CUDA(cudaMemcpy(accum.evenRGBA(), in.Even.ptr, in.Even.bytes(), cudaMemcpyDeviceToHost));
+    }
   }
-  accum.setPendingOnDevice(false);
   ++in.Updates.imageDownloads;
+}
+
+void CUDARenderer::readBackEven(Accumulator& accum)
+{
+  Internal& in = *this->In;
+  if (!accum.evenPendingOnDevice())
+  {
+    return;
+  }
+  const bool mine = in.AccumId == accum.id() && in.AccumSamples == accum.samples() && in.AccumEven &&
+    in.Even.count == size_t(accum.width()) * size_t(accum.height()) && accum.evenRGBA();
+  if (mine)
+  {
+    MCVOL_CUDA(cudaSetDevice(in.Device));
+    MCVOL_CUDA(cudaMemcpy(accum.evenRGBA(), in.Even.ptr, in.Even.bytes(), cudaMemcpyDeviceToHost));
+    accum.setEvenPendingOnDevice(false);
+  }
 }
 } // namespace mcvol

@@ -24,6 +24,8 @@ void Accumulator::resize(int width, int height)
     this->EvenValid = this->EstimateError;
     this->Samples = 0;
     this->Pending = false;
+  this->EvenPending = false;
+    this->EvenPending = false;
     this->Importance = ImportancePool();
   }
 }
@@ -38,6 +40,7 @@ void Accumulator::reset()
   this->EvenValid = this->EstimateError;
   this->Samples = 0;
   this->Pending = false;
+  this->EvenPending = false;
   // The segment lists belong to the image: a new image refines anew.
   std::fill(this->Importance.counts.begin(), this->Importance.counts.end(), uint8_t(0));
   this->Importance.passes = 0;
@@ -67,7 +70,7 @@ void Accumulator::setErrorEstimation(bool on)
 double Accumulator::estimatedMSE() const
 {
   const uint32_t n = this->Samples;
-  if (n < 2 || !this->EvenValid || this->Pending || this->Even.size() != this->RGBA.size())
+  if (n < 2 || !this->EvenValid || this->Pending || this->EvenPending || this->Even.size() != this->RGBA.size())
   {
     return -1.0;
   }

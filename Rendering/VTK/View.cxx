@@ -9,6 +9,8 @@
 #include "vtkMatrix4x4.h"
 #include "vtkNew.h"
 #include "vtkOpenGLRenderWindow.h"
+#include "vtkProp3D.h"
+#include "vtkPropCollection.h"
 #include "vtkRenderer.h"
 #include "vtkVolume.h"
 #include "vtkVolumeProperty.h"
@@ -103,6 +105,26 @@ bool ReadDepth(vtkOpenGLRenderWindow* window, const Viewport& viewport, std::vec
     return false;
   }
   return true;
+}
+
+//------------------------------------------------------------------------------
+bool HasOpaqueGeometry(vtkRenderer* ren)
+{
+  vtkPropCollection* props = ren ? ren->GetViewProps() : nullptr;
+  if (!props)
+  {
+    return true; // cannot tell: read the depth buffer
+  }
+  vtkCollectionSimpleIterator it;
+  props->InitTraversal(it);
+  while (vtkProp* prop = props->GetNextProp(it))
+  {
+    if (prop->GetVisibility() && vtkProp3D::SafeDownCast(prop) && !vtkVolume::SafeDownCast(prop))
+    {
+      return true;
+    }
+  }
+  return false;
 }
 
 //------------------------------------------------------------------------------

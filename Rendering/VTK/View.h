@@ -47,6 +47,12 @@ bool ComputeCamera(vtkRenderer* ren, vtkVolume* vol, vtkImageData* image, const 
 /// could not be read, and `depth` is then all 1 (nothing occludes).
 bool ReadDepth(vtkOpenGLRenderWindow* window, const Viewport& viewport, std::vector<float>& depth);
 
+/// True when `ren` draws something besides volumes that can occlude them: a
+/// visible 3D prop that is not a vtkVolume. Without one the depth buffer
+/// holds only the clear value, and reading it back (a full-window
+/// glReadPixels) is skipped.
+bool HasOpaqueGeometry(vtkRenderer* ren);
+
 /// The mapper's lighting settings (the renderer's lights come on top).
 struct LightingSettings
 {

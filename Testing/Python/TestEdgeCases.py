@@ -202,9 +202,10 @@ errors.clear()
 mapper.SetMixWeight(40, 1.0)
 mapper.SetMixWeight(0, -1.0)
 t.check(len(errors.errors) == 2, "bad mix weights are errors: %s" % errors.errors)
-t.check(mapper.GetActiveBackendName() == "cpu", "CPU backend: %s" % mapper.GetActiveBackendName())
+test_backend = "cuda" if os.environ.get("MCVOL_TEST_BACKEND", "").lower() == "cuda" else "cpu"
+t.check(mapper.GetActiveBackendName() == test_backend, "%s backend: %s" % (test_backend, mapper.GetActiveBackendName()))
 report = mapper.GetBackendReport()
-t.check(report.startswith("CPU backend"), "CPU report: %s" % report)
+t.check(report.startswith(test_backend.upper() + " backend"), "%s report: %s" % (test_backend, report))
 # Auto and CUDA: with a usable device Auto takes CUDA; without one (CI) Auto
 # falls back to the CPU saying why, and CUDA is an error naming the cause.
 mapper.SetBackendToAuto()

@@ -72,6 +72,7 @@ public:
     Accumulator& accum, MarchCounters* counters = nullptr) override;
   const char* name() const override { return "cuda"; }
   void readBack(Accumulator& accum) override;
+  void readBackEven(Accumulator& accum) override;
   void finish() override;
   bool buildsAccelerationOnDevice() const override { return true; }
   size_t deviceBytes() const override;

@@ -43,6 +43,11 @@ struct RenderSettings
   /// another Accumulator replaces it, after which readBack() or render() of
   /// the first throws std::logic_error instead of returning a stale image.
   bool readBack = true;
+  /// Device backends: copy the error estimate's even half back with the
+  /// image (default). false copies the image alone and marks the half
+  /// evenPendingOnDevice() until readBackEven(): a renderer that draws every
+  /// frame and asks for the estimate now and then halves its read-back.
+  bool readBackEven = true;
 };
 
 /// Work counters a render adds up (tests read them; the benchmark prints them).
@@ -133,6 +138,10 @@ public:
   /// (RenderSettings::readBack = false): rgba() is stale until readBack().
   bool pendingOnDevice() const { return this->Pending; }
   void setPendingOnDevice(bool pending) { this->Pending = pending; }
+  /// The even half is still on the device (RenderSettings::readBackEven
+  /// false): estimatedMSE() is unavailable until Renderer::readBackEven().
+  bool evenPendingOnDevice() const { return this->EvenPending; }
+  void setEvenPendingOnDevice(bool pending) { this->EvenPending = pending; }
 
   /**
    * The visibility optimization's per-pixel segment lists (paper 004, Sec.
@@ -164,6 +173,7 @@ private:
   int Height = 0;
   uint32_t Samples = 0;
   bool Pending = false;
+  bool EvenPending = false;
   ObjectId Id;
   std::vector<float> RGBA;
   bool EstimateError = true;
@@ -203,6 +213,9 @@ public:
   /// Device backends: waits for the renders issued so far and copies the
   /// accumulated image into `accum` (see RenderSettings::readBack).
   virtual void readBack(Accumulator& accum) { (void)accum; }
+  /// Device backends: copies the error estimate's even half of the image
+  /// last rendered into `accum` (see RenderSettings::readBackEven).
+  virtual void readBackEven(Accumulator& accum) { (void)accum; }
   /// Waits until every render issued so far has finished.
   virtual void finish() {}
   /// True if the backend builds macrocells and majorants itself (on the
