@@ -70,7 +70,6 @@ struct vtkMultiChannelVolumeMapper::vtkInternals
   double EstimatedMSE = -1.0;
   bool EstimateCurrent = false;
   mcvol::adapter::SampleCost Cost; // seconds per sample, for InteractiveFrameTime
-  bool DepthRead = true;            // Depth came from the framebuffer (not all "far")
 
   // Backing store for GetActiveBackendName and GetBackendReport.
   std::string BackendName = "none";
@@ -847,16 +846,13 @@ bool vtkMultiChannelVolumeMapper::SetUpView(RenderPass& pass)
   std::vector<float>& depth = this->Internals->Depth;
   if (!mcvol::adapter::HasOpaqueGeometry(pass.Renderer))
   {
-    // Nothing but volumes: the depth buffer is all "far"; skip the read-back.
+    // Nothing but volumes: the depth buffer is all "far"; skip the read-back
+    // (filling is a tenth of its cost; the buffer must be refilled each time,
+    // since the Accumulation stage swaps it with the previous frame's).
     const size_t n = static_cast<size_t>(pass.Viewport.Width) * static_cast<size_t>(pass.Viewport.Height);
-    if (depth.size() != n || this->Internals->DepthRead)
-    {
-      depth.assign(n, 1.f);
-    }
-    this->Internals->DepthRead = false;
+    depth.assign(n, 1.f);
     return true;
   }
-  this->Internals->DepthRead = true;
   if (!mcvol::adapter::ReadDepth(pass.Window, pass.Viewport, depth))
   {
     vtkWarningMacro("Could not read the depth buffer; geometry will not occlude the volume.");
