@@ -76,19 +76,24 @@ bool RenderBackend::Ensure(bool uses, int backend, std::string& error)
   }
   this->Instance.reset();
   this->InstanceBackend = backend;
+  const int effective = Effective(backend);
   try
   {
-    this->Instance = Renderer::create(static_cast<Backend>(Effective(backend)), &this->Why, this->CudaDevice);
-    if (Effective(backend) != backend)
+    this->Instance = Renderer::create(static_cast<Backend>(effective), &this->Why, this->CudaDevice);
+    const std::string requested = "(requested";
+    const size_t at = this->Why.find(requested);
+    if (effective != backend && at != std::string::npos)
     {
-      this->Why = "MCVOL_BACKEND set for Auto: " + this->Why;
+      // Word it as Report() does before the first render.
+      this->Why.replace(at, requested.size(),
+        std::string("(auto, MCVOL_BACKEND=") + (static_cast<Backend>(effective) == Backend::CUDA ? "cuda" : "cpu"));
     }
   }
   catch (const std::exception& e)
   {
     this->Why = e.what();
-    error = std::string("Backend ") + BackendLabel(Effective(backend)) +
-      (Effective(backend) != backend ? " (from MCVOL_BACKEND)" : "") + " is not available: " + e.what();
+    error = std::string("Backend ") + BackendLabel(effective) + (effective != backend ? " (from MCVOL_BACKEND)" : "") +
+      " is not available: " + e.what();
     return false;
   }
   if (!this->Instance)
