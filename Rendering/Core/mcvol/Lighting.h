@@ -290,7 +290,12 @@ MCVOL_HOT Vec4f traceLitSample(const SceneView& s, Tracker tracker, Vec3f o, Vec
       out.a = 1.f;
     }
     const Vec3f x = o + d * hit.t;
-    if (!(rng.next() < L.albedo[hit.channel]))
+    // Scatter or absorb: kDimScatter of the sample's point at the camera
+    // ray's collision under Sampler::Sobol; from here on the path draws
+    // from the PCG stream (next() otherwise, as before).
+    const float xiScatter = rng.leading(kDimScatter);
+    rng.endSequence();
+    if (!(xiScatter < L.albedo[hit.channel]))
     {
       radiance += throughput * hit.rgb; // absorbed: emits
       break;

@@ -2,6 +2,7 @@
 #pragma once
 
 #include "mcvol/Macros.h"
+#include "mcvol/Sequence.h"
 
 #include <cstdint>
 
@@ -50,8 +51,55 @@ public:
   /// Uniform in [0, 1 - 2^-24]: never 1, so -log(1 - u) stays finite.
   MCVOL_FUNC float next() { return float(this->nextU32() >> 8) * 0x1p-24f; }
 
+  /**
+   * Sampler::Sobol: the leading dimensions (SequenceDimension) of this
+   * sample come from the pixel's Owen-scrambled Sobol' points (Sequence.h)
+   * until endSequence(); same key as the constructor, so they too depend on
+   * nothing but pixel, sample index and seed. Without it leading() and
+   * firstAccept() are next(), and the independent sampler's images are
+   * unchanged.
+   */
+  MCVOL_FUNC void startSequence(uint32_t pixel, uint32_t sample, uint32_t seed)
+  {
+    this->QKey = hashCombine(seed ^ 0x2545F491u, pixel);
+    this->QIndex = shuffledSobolIndex(sample, this->QKey);
+    this->QAccepted = 0;
+    this->QOn = true;
+  }
+
+  /// The rest of the path (after the camera ray) draws from the PCG stream.
+  MCVOL_FUNC void endSequence() { this->QOn = false; }
+
+  /// Coordinate `dim` of the sample's point (scrambled independently per
+  /// `salt`), or the next PCG number when no sequence is on.
+  MCVOL_FUNC float leading(int dim, uint32_t salt = 0)
+  {
+    if (!this->QOn)
+    {
+      return this->next();
+    }
+    return bitsToUnitFloat(owenSobolBits(this->QIndex, dim, this->QKey, salt));
+  }
+
+  /// The accept test's number of a tentative collision of `channel`: its
+  /// first one on the camera ray takes kDimAccept, later ones the PCG stream.
+  MCVOL_FUNC float acceptTest(int channel)
+  {
+    const uint32_t bit = 1u << (uint32_t(channel) & 31u);
+    if (!this->QOn || (this->QAccepted & bit))
+    {
+      return this->next();
+    }
+    this->QAccepted |= bit;
+    return bitsToUnitFloat(owenSobolBits(this->QIndex, kDimAccept, this->QKey, uint32_t(channel)));
+  }
+
 private:
   uint64_t State;
   uint64_t Inc;
+  uint32_t QIndex = 0;    ///< the pixel's shuffled Sobol' index of this sample
+  uint32_t QKey = 0;      ///< the pixel's scramble key
+  uint32_t QAccepted = 0; ///< channels whose first accept test was drawn
+  bool QOn = false;
 };
 } // namespace mcvol

@@ -32,6 +32,8 @@ struct RenderSettings
   uint32_t seed = 0;
   Tracker tracker = Tracker::OneDDA;
   bool jitterPixels = true; ///< sub-pixel jitter (anti-aliasing)
+  /// Random numbers of the leading dimensions (Types.h, Sequence.h).
+  Sampler sampler = Sampler::Independent;
   /// Device backends: copy the accumulated image into the Accumulator at the
   /// end of render(). false leaves it on the device (the frame may still be
   /// running when render() returns) until readBack() or the next render with

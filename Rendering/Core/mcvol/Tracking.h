@@ -130,6 +130,12 @@ MCVOL_HOT float sampleOpticalDepth(Rng& rng)
   return -logf(1.f - rng.next());
 }
 
+/// The same from a given uniform number u in [0, 1).
+MCVOL_HOT float opticalDepthOf(float u)
+{
+  return -logf(1.f - u);
+}
+
 /**
  * Woodcock steps of channel n over the segment [t0, tStop] of one macrocell
  * with majorant m (Eq. 3 free flights, Eq. 7 / Listing 2 null-collision
@@ -155,7 +161,7 @@ MCVOL_HOT bool woodcockSegment(const SceneView& s, int n, Vec3f o, Vec3f d, floa
     tau = sampleOpticalDepth(rng);
     ++c.tentative;
     Vec3f rgb;
-    if (realCollision<Mode>(s, n, o + d * t, rng.next() * m, rgb, c, imp, t))
+    if (realCollision<Mode>(s, n, o + d * t, rng.acceptTest(n) * m, rgb, c, imp, t))
     {
       hit.t = t;
       hit.rgb = rgb;
@@ -190,7 +196,9 @@ MCVOL_HOT Hit track1DDA(const SceneView& s, Vec3f o, Vec3f d, float tmin, float 
   float tau[kMaxChannels];
   for (int i = 0; i < s.numActive; ++i)
   {
-    tau[i] = sampleOpticalDepth(rng);
+    // The first free flight: kDimFreeFlight under Sampler::Sobol, scrambled
+    // per channel (next() otherwise, in the same order as before).
+    tau[i] = opticalDepthOf(rng.leading(kDimFreeFlight, uint32_t(s.active[i])));
   }
   DDA dda;
   dda.init(s.grid, o, d, tmin, tmax);
@@ -229,7 +237,7 @@ MCVOL_HOT bool trackChannel(const SceneView& s, int n, Vec3f o, Vec3f d, float t
   DDA dda;
   dda.init(s.grid, o, d, tmin, tmax);
   const int N = s.grid.numChannels;
-  float tau = sampleOpticalDepth(rng);
+  float tau = opticalDepthOf(rng.leading(kDimFreeFlight, uint32_t(n)));
   while (!dda.done)
   {
     ++c.ddaSteps;
