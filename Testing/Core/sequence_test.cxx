@@ -64,10 +64,11 @@ uint32_t referenceSobol(uint32_t i, const std::vector<uint32_t>& v)
   return x;
 }
 
-/// The 32-bit coordinate `dim` of sample `k` of the pixel keyed `key`.
-uint32_t point(uint32_t k, int dim, uint32_t key, uint32_t salt = 0)
+/// The 32-bit coordinate `dim` of sample `k` of padded set `group` of the
+/// pixel keyed `key`.
+uint32_t point(uint32_t k, int dim, uint32_t key, uint32_t group = 0)
 {
-  return owenSobolBits(shuffledSobolIndex(k, key), dim, key, salt);
+  return owenSobolBits(shuffledSobolIndex(k, key, group), dim, key, group);
 }
 } // namespace
 
@@ -99,9 +100,9 @@ TEST(Sobol, CoordinatesMatchTheTextbookConstruction)
 
 // Every aligned block of 2^m samples of a pixel (the first 2^m, and later
 // ones: progressive passes) puts exactly one point in each elementary
-// interval [a/2^j, (a+1)/2^j) x [b/2^(m-j), (b+1)/2^(m-j)) of dimensions 0-1,
-// and exactly one point in each interval of width 2^-m of every dimension
-// (and of every channel's scramble). Deterministic: exact counts.
+// interval [a/2^j, (a+1)/2^j) x [b/2^(m-j), (b+1)/2^(m-j)) of dimensions 0-1
+// of every padded set, and exactly one point in each interval of width 2^-m
+// of every dimension. Deterministic: exact counts.
 TEST(Sobol, EveryPowerOfTwoBlockIsStratified)
 {
   for (uint32_t key : { 0u, 1u, 0xdeadbeefu, 123456789u })
@@ -111,40 +112,40 @@ TEST(Sobol, EveryPowerOfTwoBlockIsStratified)
       const uint32_t n = 1u << m;
       for (uint32_t block : { 0u, 1u, 7u })
       {
-        std::vector<uint32_t> x(n), y(n);
-        for (uint32_t k = 0; k < n; ++k)
+        for (uint32_t group : { uint32_t(kGroupPixel), kGroupFlight + 3u, kGroupCollision + 5u })
         {
-          x[k] = point(block * n + k, 0, key);
-          y[k] = point(block * n + k, 1, key);
-        }
-        for (int j = 0; j <= m; ++j)
-        {
-          std::vector<int> cells(n, 0);
+          std::vector<uint32_t> x(n), y(n);
           for (uint32_t k = 0; k < n; ++k)
           {
-            const uint32_t a = j == 0 ? 0u : x[k] >> (32 - j);
-            const uint32_t b = m - j == 0 ? 0u : y[k] >> (32 - (m - j));
-            ++cells[(a << (m - j)) | b];
+            x[k] = point(block * n + k, 0, key, group);
+            y[k] = point(block * n + k, 1, key, group);
           }
-          for (uint32_t c = 0; c < n; ++c)
-          {
-            ASSERT_EQ(cells[c], 1) << "key " << key << " m " << m << " block " << block << " interval 2^-" << j
-                                   << " x 2^-" << (m - j) << " cell " << c;
-          }
-        }
-        for (int dim = 0; dim < kSequenceDimensions; ++dim)
-        {
-          for (uint32_t salt : { 0u, 3u })
+          for (int j = 0; j <= m; ++j)
           {
             std::vector<int> cells(n, 0);
             for (uint32_t k = 0; k < n; ++k)
             {
-              ++cells[m == 0 ? 0u : point(block * n + k, dim, key, salt) >> (32 - m)];
+              const uint32_t a = j == 0 ? 0u : x[k] >> (32 - j);
+              const uint32_t b = m - j == 0 ? 0u : y[k] >> (32 - (m - j));
+              ++cells[(a << (m - j)) | b];
             }
             for (uint32_t c = 0; c < n; ++c)
             {
-              ASSERT_EQ(cells[c], 1) << "dim " << dim << " salt " << salt << " m " << m << " cell " << c;
+              ASSERT_EQ(cells[c], 1) << "key " << key << " m " << m << " block " << block << " group " << group
+                                     << " interval 2^-" << j << " x 2^-" << (m - j) << " cell " << c;
             }
+          }
+        }
+        for (int dim = 0; dim < kSequenceDimensions; ++dim)
+        {
+          std::vector<int> cells(n, 0);
+          for (uint32_t k = 0; k < n; ++k)
+          {
+            ++cells[m == 0 ? 0u : point(block * n + k, dim, key, 9u) >> (32 - m)];
+          }
+          for (uint32_t c = 0; c < n; ++c)
+          {
+            ASSERT_EQ(cells[c], 1) << "dim " << dim << " m " << m << " cell " << c;
           }
         }
       }
@@ -152,43 +153,55 @@ TEST(Sobol, EveryPowerOfTwoBlockIsStratified)
   }
 }
 
-// Over 2^16 pixels, a fixed sample index gives uniform numbers in every
-// dimension (64 bins each), uniform pairs (16 x 16 bins: dims 0-1, 2-3 and
-// the free flights of two channels, which must be independent for the
-// estimator to stay unbiased), for sample indices 0, 1 and 37: 3 x (5 + 3)
-// chi-square tests. The Rng's own values go through the same path.
+// Over 2^16 pixels, a fixed sample index gives uniform numbers for every
+// decision (64 bins each: pixel x and y, two channels' first flights, the
+// first two collisions' accept tests and flights, scatter, ambient (2)) and
+// uniform pairs (16 x 16 bins: pixel (x, y); the two channels' flights and
+// the two collisions' accept tests, which must be independent for the
+// estimator to stay unbiased; a collision's (accept, flight)), for sample
+// indices 0, 1 and 37: 3 x (11 + 4) chi-square tests, through the Rng.
 TEST(Sobol, UniformOverPixels)
 {
-  const double alpha = kAlpha / (3 * 8);
+  const double alpha = kAlpha / (3 * 15);
   const uint32_t P = 1u << 16;
+  const int D = 11;
   for (uint32_t k : { 0u, 1u, 37u })
   {
-    std::vector<std::vector<double>> one(kSequenceDimensions, std::vector<double>(64, 0.0));
-    std::vector<std::vector<double>> two(3, std::vector<double>(256, 0.0));
+    std::vector<std::vector<double>> one(D, std::vector<double>(64, 0.0));
+    std::vector<std::vector<double>> two(4, std::vector<double>(256, 0.0));
     for (uint32_t p = 0; p < P; ++p)
     {
       Rng rng(p, k, 42u);
       rng.startSequence(p, k, 42u);
-      float u[kSequenceDimensions];
-      for (int d = 0; d < kSequenceDimensions; ++d)
+      float u[D];
+      u[0] = rng.sequence(kGroupPixel, 0);
+      u[1] = rng.sequence(kGroupPixel, 1);
+      u[2] = rng.sequence(kGroupFlight + 0);
+      u[3] = rng.sequence(kGroupFlight + 1);
+      rng.collision(u[5], u[4]);
+      rng.collision(u[7], u[6]);
+      u[8] = rng.sequence(kGroupScatter);
+      u[9] = rng.sequence(kGroupAmbient, 0);
+      u[10] = rng.sequence(kGroupAmbient, 1);
+      for (int d = 0; d < D; ++d)
       {
-        u[d] = rng.leading(d);
         ASSERT_GE(u[d], 0.f);
         ASSERT_LT(u[d], 1.f);
         one[size_t(d)][size_t(u[d] * 64)] += 1;
       }
-      const float f1 = rng.leading(kDimFreeFlight, 1);
-      two[0][size_t(u[0] * 16) * 16 + size_t(u[1] * 16)] += 1;
-      two[1][size_t(u[2] * 16) * 16 + size_t(u[3] * 16)] += 1;
-      two[2][size_t(u[2] * 16) * 16 + size_t(f1 * 16)] += 1;
+      auto cell = [&](int a, int b) { return size_t(u[a] * 16) * 16 + size_t(u[b] * 16); };
+      two[0][cell(0, 1)] += 1;
+      two[1][cell(2, 3)] += 1;
+      two[2][cell(4, 6)] += 1;
+      two[3][cell(4, 5)] += 1;
     }
-    for (int d = 0; d < kSequenceDimensions; ++d)
+    for (int d = 0; d < D; ++d)
     {
       double stat = 0;
       const double pv = chiSquarePValue(one[size_t(d)], std::vector<double>(64, 1.0 / 64), &stat);
-      EXPECT_GT(pv, alpha) << "sample " << k << " dim " << d << ": chi-square " << stat;
+      EXPECT_GT(pv, alpha) << "sample " << k << " decision " << d << ": chi-square " << stat;
     }
-    for (int q = 0; q < 3; ++q)
+    for (int q = 0; q < 4; ++q)
     {
       double stat = 0;
       const double pv = chiSquarePValue(two[size_t(q)], std::vector<double>(256, 1.0 / 256), &stat);
@@ -197,29 +210,40 @@ TEST(Sobol, UniformOverPixels)
   }
 }
 
-// The accept test takes the sequence once per channel, then the PCG stream;
-// without a sequence leading() and acceptTest() are next() (the independent
-// sampler's images are those of before).
-TEST(Sobol, RngLeadingDimensions)
+// Without a sequence, sequence() and collision() are next() in the order the
+// code drew before (flight, then accept): the independent sampler's images
+// are unchanged. With one, the first kSequenceCollisions collisions take
+// their sets, later ones and everything after endSequence() the PCG stream.
+TEST(Sobol, RngSequence)
 {
   Rng a(5, 9, 3), b(5, 9, 3);
   for (int i = 0; i < 8; ++i)
   {
-    EXPECT_EQ(a.leading(i % kSequenceDimensions), b.next());
-    EXPECT_EQ(a.acceptTest(i % 3), b.next());
+    EXPECT_EQ(a.sequence(uint32_t(i)), b.next());
+    float f, u;
+    a.collision(f, u);
+    EXPECT_EQ(f, b.next());
+    EXPECT_EQ(u, b.next());
   }
   Rng q(5, 9, 3), plain(5, 9, 3);
   q.startSequence(5, 9, 3);
-  const float first = q.acceptTest(2);
-  EXPECT_EQ(first,
-    bitsToUnitFloat(owenSobolBits(
-      shuffledSobolIndex(9, hashCombine(3u ^ 0x2545F491u, 5)), kDimAccept, hashCombine(3u ^ 0x2545F491u, 5), 2)));
-  EXPECT_EQ(q.acceptTest(2), plain.next()); // second test of channel 2: PCG
-  EXPECT_NE(q.acceptTest(1), first);        // channel 1's first: the sequence
-  const float lead = q.leading(kDimFreeFlight, 0);
-  EXPECT_EQ(q.leading(kDimFreeFlight, 0), lead); // a coordinate, not a stream
+  const uint32_t key = hashCombine(3u ^ 0x2545F491u, 5);
+  const float px = q.sequence(kGroupPixel, 0);
+  EXPECT_EQ(px, sequencePoint(9, key, kGroupPixel, 0));
+  EXPECT_EQ(q.sequence(kGroupPixel, 0), px); // a coordinate, not a stream
+  for (uint32_t k = 0; k < kSequenceCollisions; ++k)
+  {
+    float f, u;
+    q.collision(f, u);
+    EXPECT_EQ(u, sequencePoint(9, key, kGroupCollision + k, 0));
+    EXPECT_EQ(f, sequencePoint(9, key, kGroupCollision + k, 1));
+  }
+  float f, u;
+  q.collision(f, u);
+  EXPECT_EQ(f, plain.next());
+  EXPECT_EQ(u, plain.next());
   q.endSequence();
-  EXPECT_EQ(q.leading(kDimFreeFlight, 0), plain.next());
+  EXPECT_EQ(q.sequence(kGroupFlight), plain.next());
 }
 
 namespace

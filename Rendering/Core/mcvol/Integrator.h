@@ -17,7 +17,7 @@ struct FrameParams
   uint32_t seed = 0;
   Tracker tracker = Tracker::OneDDA;
   bool jitter = true;
-  Sampler sampler = Sampler::Independent;
+  Sampler sampler = Sampler::Sobol;
 };
 
 /**
@@ -46,8 +46,8 @@ MCVOL_FUNC Vec4f renderPixel(const SceneView& s, const CameraView& cam, const Fr
     {
       rng.startSequence(pixel, index, fp.seed);
     }
-    const float jx = fp.jitter ? rng.leading(kDimPixelX) : 0.5f;
-    const float jy = fp.jitter ? rng.leading(kDimPixelY) : 0.5f;
+    const float jx = fp.jitter ? rng.sequence(kGroupPixel, 0) : 0.5f;
+    const float jy = fp.jitter ? rng.sequence(kGroupPixel, 1) : 0.5f;
     IndexRay ray;
     if (!generateRay(cam, s.volume, float(x) + jx, float(y) + jy, depth, ray))
     {

@@ -52,54 +52,58 @@ public:
   MCVOL_FUNC float next() { return float(this->nextU32() >> 8) * 0x1p-24f; }
 
   /**
-   * Sampler::Sobol: the leading dimensions (SequenceDimension) of this
-   * sample come from the pixel's Owen-scrambled Sobol' points (Sequence.h)
-   * until endSequence(); same key as the constructor, so they too depend on
-   * nothing but pixel, sample index and seed. Without it leading() and
-   * firstAccept() are next(), and the independent sampler's images are
-   * unchanged.
+   * Sampler::Sobol: the decisions listed in SequenceGroup take this
+   * sample's points of the pixel's Owen-scrambled Sobol' sets (Sequence.h)
+   * until endSequence(); keyed like the constructor, so they too depend on
+   * nothing but pixel, sample index and seed. Every coordinate serves one
+   * decision at most, so a sample's numbers stay independent uniforms.
+   * Without a sequence sequence() and collision() are next(), in the order
+   * the code drew before, and the independent sampler's images are unchanged.
    */
   MCVOL_FUNC void startSequence(uint32_t pixel, uint32_t sample, uint32_t seed)
   {
     this->QKey = hashCombine(seed ^ 0x2545F491u, pixel);
-    this->QIndex = shuffledSobolIndex(sample, this->QKey);
-    this->QAccepted = 0;
+    this->QSample = sample;
+    this->QCollisions = 0;
     this->QOn = true;
   }
 
   /// The rest of the path (after the camera ray) draws from the PCG stream.
   MCVOL_FUNC void endSequence() { this->QOn = false; }
 
-  /// Coordinate `dim` of the sample's point (scrambled independently per
-  /// `salt`), or the next PCG number when no sequence is on.
-  MCVOL_FUNC float leading(int dim, uint32_t salt = 0)
+  /// Coordinate `coord` (0 or 1) of padded set `group`, or the next PCG
+  /// number when no sequence is on.
+  MCVOL_FUNC float sequence(uint32_t group, int coord = 0)
   {
     if (!this->QOn)
     {
       return this->next();
     }
-    return bitsToUnitFloat(owenSobolBits(this->QIndex, dim, this->QKey, salt));
+    return sequencePoint(this->QSample, this->QKey, group, coord);
   }
 
-  /// The accept test's number of a tentative collision of `channel`: its
-  /// first one on the camera ray takes kDimAccept, later ones the PCG stream.
-  MCVOL_FUNC float acceptTest(int channel)
+  /// The numbers of a tentative collision: the free flight after it, then
+  /// its accept test (this order without a sequence, as before). The first
+  /// kSequenceCollisions of the camera ray take set kGroupCollision + k.
+  MCVOL_FUNC void collision(float& flight, float& accept)
   {
-    const uint32_t bit = 1u << (uint32_t(channel) & 31u);
-    if (!this->QOn || (this->QAccepted & bit))
+    if (!this->QOn || this->QCollisions >= kSequenceCollisions)
     {
-      return this->next();
+      flight = this->next();
+      accept = this->next();
+      return;
     }
-    this->QAccepted |= bit;
-    return bitsToUnitFloat(owenSobolBits(this->QIndex, kDimAccept, this->QKey, uint32_t(channel)));
+    const uint32_t group = kGroupCollision + this->QCollisions++;
+    accept = sequencePoint(this->QSample, this->QKey, group, 0);
+    flight = sequencePoint(this->QSample, this->QKey, group, 1);
   }
 
 private:
   uint64_t State;
   uint64_t Inc;
-  uint32_t QIndex = 0;    ///< the pixel's shuffled Sobol' index of this sample
-  uint32_t QKey = 0;      ///< the pixel's scramble key
-  uint32_t QAccepted = 0; ///< channels whose first accept test was drawn
+  uint32_t QSample = 0;     ///< the sample index (each set shuffles it)
+  uint32_t QKey = 0;        ///< the pixel's scramble key
+  uint32_t QCollisions = 0; ///< tentative collisions that took sets so far
   bool QOn = false;
 };
 } // namespace mcvol

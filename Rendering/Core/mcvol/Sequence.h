@@ -29,6 +29,13 @@ namespace mcvol
  *   map to one aligned block of 2^m Sobol' indices, itself a (t, m, s)-net,
  *   so every power-of-two prefix of a pixel's samples is stratified while
  *   different pixels use decorrelated points.
+ * - Padding (Burley Sec. 4): each decision of a sample takes its own 2D
+ *   point set (Sobol' dimensions 0 and 1, a (0, m, 2)-net) with its own
+ *   index shuffle and scrambles, so the sets of different decisions are
+ *   decorrelated by random permutations (like Latin hypercube sampling
+ *   across the sets) while each set keeps its 2D stratification. One
+ *   coordinate scrambled twice would not do: its two scrambles share every
+ *   digit's structure, a (t = m)-net on the diagonal.
  *
  * Each pixel's points are a randomized QMC set (scramble and shuffle seeded
  * from pixel and seed), so every sample is uniformly distributed and the
@@ -36,18 +43,33 @@ namespace mcvol
  * index, seed) only, so images stay independent of batching and threads.
  */
 
-/// Dimensions of the Sobol' point each sample draws (Rng::leading); the
-/// rest of a path uses the PCG stream. Chosen for what decides most of an
-/// image's per-pixel variance at low sample counts:
-enum SequenceDimension : int
+/// Sobol' dimensions sobolCoordinate() knows (the renderer pads with 2D
+/// sets of dimensions 0-1; 2-4 serve wider sets).
+constexpr int kSequenceDimensions = 5;
+
+/**
+ * The decisions of a sample that take sequence points (Rng::sequence), each
+ * a 2D set of its own; the rest of a path uses the PCG stream. Chosen for
+ * what decides most of an image's per-pixel variance at low sample counts:
+ * where in the pixel the ray goes, how far each channel's first flight
+ * reaches, the first tentative collisions' accept tests and the flights
+ * after them (in tenuous media a real collision comes after several null
+ * ones: Woodcock tracking's majorant exceeds the extinction), and, lit, the
+ * camera ray's scatter-or-absorb test and ambient direction. The renderer
+ * has no light choice to stratify: every light is sampled at every vertex.
+ */
+enum SequenceGroup : uint32_t
 {
-  kDimPixelX = 0,     ///< sub-pixel jitter, x (the pixel's box filter)
-  kDimPixelY = 1,     ///< sub-pixel jitter, y; dims 0-1 form a (0, m, 2)-net
-  kDimFreeFlight = 2, ///< first free flight of the camera ray (per channel: salted)
-  kDimAccept = 3,     ///< accept test of each channel's first tentative collision
-  kDimScatter = 4,    ///< lit: scatter or absorb at the camera ray's collision
-  kSequenceDimensions = 5
+  kGroupPixel = 0,      ///< (x, y) sub-pixel jitter (the pixel's box filter)
+  kGroupScatter = 1,    ///< lit: (scatter or absorb, unused) at the camera ray's collision
+  kGroupAmbient = 2,    ///< lit: the camera ray's ambient direction (cos theta, azimuth)
+  kGroupFlight = 16,    ///< + channel: (first free flight, unused) of the camera ray
+  kGroupCollision = 64, ///< + k: (accept test, next flight) of the ray's k-th tentative collision
 };
+
+/// Tentative collisions of the camera ray (counted over its channels) that
+/// take sequence points; later ones draw from the PCG stream.
+constexpr uint32_t kSequenceCollisions = 8;
 
 /// Bits reversed (bit 0 becomes bit 31).
 MCVOL_FUNC uint32_t reverseBits32(uint32_t x)
@@ -171,16 +193,17 @@ MCVOL_FUNC uint32_t hashCombine(uint32_t a, uint32_t b)
 }
 
 /// The Sobol' index used for sample `sample` of the pixel keyed `key`
-/// (Burley Sec. 4: shuffled by a nested uniform scramble of the index).
-MCVOL_FUNC uint32_t shuffledSobolIndex(uint32_t sample, uint32_t key)
+/// (Burley Sec. 4: shuffled by a nested uniform scramble of the index), per
+/// padded set `group`.
+MCVOL_FUNC uint32_t shuffledSobolIndex(uint32_t sample, uint32_t key, uint32_t group = 0)
 {
-  return nestedUniformScramble(sample, hashCombine(key, 0x68bc21ebu));
+  return nestedUniformScramble(sample, hashCombine(key, 0x68bc21ebu + group * 0x2C1B3C6Du));
 }
 
 /**
  * Coordinate `dim` of the scrambled Sobol' point with (already shuffled)
- * index `index`, for the pixel keyed `key`, as 32 bits; `salt` gives
- * independent scrambles of one coordinate (one per channel).
+ * index `index`, for the pixel keyed `key`, as 32 bits; `salt` (the padded
+ * set) gives independent scrambles.
  */
 MCVOL_FUNC uint32_t owenSobolBits(uint32_t index, int dim, uint32_t key, uint32_t salt = 0)
 {
@@ -192,5 +215,12 @@ MCVOL_FUNC uint32_t owenSobolBits(uint32_t index, int dim, uint32_t key, uint32_
 MCVOL_FUNC float bitsToUnitFloat(uint32_t x)
 {
   return float(x >> 8) * 0x1p-24f;
+}
+
+/// Coordinate `coord` (0 or 1) of padded set `group`'s point for sample
+/// `sample` of the pixel keyed `key`, in [0, 1).
+MCVOL_FUNC float sequencePoint(uint32_t sample, uint32_t key, uint32_t group, int coord)
+{
+  return bitsToUnitFloat(owenSobolBits(shuffledSobolIndex(sample, key, group), coord, key, group));
 }
 } // namespace mcvol

@@ -158,10 +158,12 @@ MCVOL_HOT bool woodcockSegment(const SceneView& s, int n, Vec3f o, Vec3f d, floa
       return false;
     }
     t = advance(t, tau / m);
-    tau = sampleOpticalDepth(rng);
+    float uFlight, uAccept;
+    rng.collision(uFlight, uAccept);
+    tau = opticalDepthOf(uFlight);
     ++c.tentative;
     Vec3f rgb;
-    if (realCollision<Mode>(s, n, o + d * t, rng.acceptTest(n) * m, rgb, c, imp, t))
+    if (realCollision<Mode>(s, n, o + d * t, uAccept * m, rgb, c, imp, t))
     {
       hit.t = t;
       hit.rgb = rgb;
@@ -196,9 +198,9 @@ MCVOL_HOT Hit track1DDA(const SceneView& s, Vec3f o, Vec3f d, float tmin, float 
   float tau[kMaxChannels];
   for (int i = 0; i < s.numActive; ++i)
   {
-    // The first free flight: kDimFreeFlight under Sampler::Sobol, scrambled
-    // per channel (next() otherwise, in the same order as before).
-    tau[i] = opticalDepthOf(rng.leading(kDimFreeFlight, uint32_t(s.active[i])));
+    // The first free flight: a set per channel under Sampler::Sobol (next()
+    // otherwise, in the same order as before).
+    tau[i] = opticalDepthOf(rng.sequence(kGroupFlight + uint32_t(s.active[i])));
   }
   DDA dda;
   dda.init(s.grid, o, d, tmin, tmax);
@@ -237,7 +239,7 @@ MCVOL_HOT bool trackChannel(const SceneView& s, int n, Vec3f o, Vec3f d, float t
   DDA dda;
   dda.init(s.grid, o, d, tmin, tmax);
   const int N = s.grid.numChannels;
-  float tau = opticalDepthOf(rng.leading(kDimFreeFlight, uint32_t(n)));
+  float tau = opticalDepthOf(rng.sequence(kGroupFlight + uint32_t(n)));
   while (!dda.done)
   {
     ++c.ddaSteps;
