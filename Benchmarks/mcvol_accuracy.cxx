@@ -10,7 +10,9 @@
 //   timings.csv          method,variant,param,ms (MC: cumulative render time)
 // Images are W x H premultiplied RGBA float32, rows from the bottom. Monte
 // Carlo samples pixel centres (no pixel jitter) like the ray marcher, so both
-// estimate the same image.
+// estimate the same image. --sampler independent|sobol (default sobol, the
+// renderer's default) picks the progressive series' sample sequence; the
+// 4096-spp cross-check uses the same.
 
 #include "mcvol/CameraMath.h"
 #include "mcvol/DemoData.h"
@@ -57,6 +59,7 @@ struct Options
   int reps = 3;
   mcvol::Backend backend = mcvol::Backend::CPU;
   bool scoreOnly = false; ///< no image files: RMSE and PSNR in the CSV instead
+  mcvol::Sampler sampler = mcvol::Sampler::Sobol;
 };
 
 std::vector<double> splitDoubles(const std::string& s)
@@ -144,6 +147,16 @@ Options parse(int argc, char** argv)
     else if (a == "--score-only")
     {
       o.scoreOnly = true;
+    }
+    else if (a == "--sampler")
+    {
+      need(1);
+      const std::string s = argv[++i];
+      if (s != "independent" && s != "sobol")
+      {
+        throw std::invalid_argument("--sampler takes independent or sobol, not " + s);
+      }
+      o.sampler = s == "sobol" ? mcvol::Sampler::Sobol : mcvol::Sampler::Independent;
     }
     else if (a == "--backend")
     {
@@ -288,6 +301,7 @@ int main(int argc, char** argv)
     std::unique_ptr<mcvol::Renderer> r = mcvol::Renderer::create(o.backend);
     mcvol::RenderSettings rs;
     rs.jitterPixels = false;
+    rs.sampler = o.sampler;
     rs.readBack = false; // device backends: the copy-back is not part of the timed render
     {
       mcvol::Accumulator acc;
@@ -357,7 +371,7 @@ int main(int argc, char** argv)
     std::ofstream m(o.out + "/meta.txt");
     m << "dataset " << o.dataset << "\ndims " << v.dims[0] << " " << v.dims[1] << " " << v.dims[2] << "\nchannels "
       << v.numChannels() << "\nblend " << o.blend << "\nsize " << o.width << " " << o.height << "\nthreads " << threads
-      << "\nbackend " << r->name() << "\nvoxel " << voxel << "\n";
+      << "\nbackend " << r->name() << "\nvoxel " << voxel << "\nsampler " << mcvol::toString(o.sampler) << "\n";
   }
   catch (const std::exception& e)
   {

@@ -21,6 +21,9 @@
 //              unlit image and 1-spp noise (issue 6)
 //   visibility the visibility optimization (paper 004): frame time against
 //              the unoptimized frame, refining renders, segment-list memory
+//   sequences  error against spp for the independent sampler and Owen-scrambled
+//              Sobol' points (--samplers, --spp-max): fitted slopes, spp and
+//              ms to RMSE 0.01 and to --psnr dB (issue 14, item 2)
 //
 // On the CUDA backend frames are timed as render() + finish() with the image
 // left on the device (RenderSettings::readBack = false); a separate column
@@ -60,6 +63,7 @@ const Section sections[] = {
   { "effects", runEffects },
   { "converge", runConverge },
   { "visibility", runVisibility },
+  { "sequences", runSequences },
 };
 } // namespace
 

@@ -19,4 +19,5 @@ void runSampling(Bench& bench);
 void runEffects(Bench& bench);
 void runConverge(Bench& bench);
 void runVisibility(Bench& bench);
+void runSequences(Bench& bench);
 } // namespace mcvolbench
