@@ -121,15 +121,16 @@ void runSequences(Bench& bench)
     const double lowSlope = logSlope(
       std::vector<double>(x.begin(), x.begin() + long(lowN)), std::vector<double>(e.begin(), e.begin() + long(lowN)));
     char line[512];
-    std::snprintf(line, sizeof(line), "| %s | %.3f | %.3f | %s | %s | %s | %s |", mcvol::toString(sampler), slope,
-      lowSlope, sppRmse > 0 ? std::to_string(sppRmse).c_str() : "-",
+    std::snprintf(line, sizeof(line), "| %s | %.2f | %.3f | %.3f | %s | %s | %s | %s |", mcvol::toString(sampler),
+      ms / o.sppMax, slope, lowSlope, sppRmse > 0 ? std::to_string(sppRmse).c_str() : "-",
       sppRmse > 0 ? (std::to_string(int(std::lround(msRmse))) + " ms").c_str() : "-",
       sppPsnr > 0 ? std::to_string(sppPsnr).c_str() : "-",
       sppPsnr > 0 ? (std::to_string(int(std::lround(msPsnr))) + " ms").c_str() : "-");
     summary.push_back(line);
     bench.row("sequences", ds, s.volume.numChannels(), o.macrocell, mcvol::toString(sampler), slope, "slope",
-      "low_slope=" + std::to_string(lowSlope) + " spp_rmse001=" + std::to_string(sppRmse) + " ms_rmse001=" +
-        std::to_string(msRmse) + " spp_psnr=" + std::to_string(sppPsnr) + " ms_psnr=" + std::to_string(msPsnr));
+      "ms_per_spp=" + std::to_string(ms / o.sppMax) + " low_slope=" + std::to_string(lowSlope) +
+        " spp_rmse001=" + std::to_string(sppRmse) + " ms_rmse001=" + std::to_string(msRmse) +
+        " spp_psnr=" + std::to_string(sppPsnr) + " ms_psnr=" + std::to_string(msPsnr));
     for (size_t i = 0; i < x.size(); ++i)
     {
       bench.row("sequences", ds, s.volume.numChannels(), o.macrocell, mcvol::toString(sampler), e[i], "rmse",
@@ -158,8 +159,9 @@ void runSequences(Bench& bench)
     }
     std::printf("\n");
   }
-  std::printf("\n| sampler | RMSE slope (1-%d spp) | slope 1-16 spp | spp to RMSE 0.01 | ms to RMSE 0.01 | spp to "
-              "%.0f dB | ms to %.0f dB |\n|---|---|---|---|---|---|---|\n",
+  std::printf(
+    "\n| sampler | ms per spp | RMSE slope (1-%d spp) | slope 1-16 spp | spp to RMSE 0.01 | ms to RMSE 0.01 | "
+    "spp to %.0f dB | ms to %.0f dB |\n|---|---|---|---|---|---|---|---|\n",
     o.sppMax, o.psnr, o.psnr);
   for (const std::string& l : summary)
   {

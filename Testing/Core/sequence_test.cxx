@@ -91,6 +91,17 @@ TEST(Sobol, CoordinatesMatchTheTextbookConstruction)
       ASSERT_EQ(sobolCoordinate(i, dim), expect) << "dim " << dim << " index " << i;
     }
   }
+  // The scrambled coordinate's shortcut (dimensions 0-1 skip two reversals)
+  // equals the scramble of the coordinate.
+  for (int t = 0; t < 4000; ++t)
+  {
+    const uint32_t i = uint32_t(r.u64()), key = uint32_t(r.u64());
+    for (int dim = 0; dim < kSequenceDimensions; ++dim)
+    {
+      const uint32_t seed = hashCombine(key, uint32_t(dim) * 0x9E3779B9u + 7u * 0x85EBCA6Bu + 1u);
+      ASSERT_EQ(owenSobolBits(i, dim, key, 7), nestedUniformScramble(sobolCoordinate(i, dim), seed)) << dim;
+    }
+  }
   // First points of dimension 1 (Pascal matrix): 0, 1/2, 3/4, 1/4, 5/8.
   EXPECT_EQ(sobolCoordinate(1, 1), 0x80000000u);
   EXPECT_EQ(sobolCoordinate(2, 1), 0xC0000000u);
@@ -230,6 +241,10 @@ TEST(Sobol, RngSequence)
   const uint32_t key = hashCombine(3u ^ 0x2545F491u, 5);
   const float px = q.sequence(kGroupPixel, 0);
   EXPECT_EQ(px, sequencePoint(9, key, kGroupPixel, 0));
+  float p0, p1;
+  q.sequence2(kGroupPixel, p0, p1);
+  EXPECT_EQ(p0, px);
+  EXPECT_EQ(p1, sequencePoint(9, key, kGroupPixel, 1));
   EXPECT_EQ(q.sequence(kGroupPixel, 0), px); // a coordinate, not a stream
   for (uint32_t k = 0; k < kSequenceCollisions; ++k)
   {

@@ -46,8 +46,11 @@ MCVOL_FUNC Vec4f renderPixel(const SceneView& s, const CameraView& cam, const Fr
     {
       rng.startSequence(pixel, index, fp.seed);
     }
-    const float jx = fp.jitter ? rng.sequence(kGroupPixel, 0) : 0.5f;
-    const float jy = fp.jitter ? rng.sequence(kGroupPixel, 1) : 0.5f;
+    float jx = 0.5f, jy = 0.5f;
+    if (fp.jitter)
+    {
+      rng.sequence2(kGroupPixel, jx, jy);
+    }
     IndexRay ray;
     if (!generateRay(cam, s.volume, float(x) + jx, float(y) + jy, depth, ray))
     {

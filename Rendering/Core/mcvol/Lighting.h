@@ -346,8 +346,8 @@ MCVOL_HOT Vec4f traceLitSample(const SceneView& s, Tracker tracker, Vec3f o, Vec
     if (L.ambient.x > 0.f || L.ambient.y > 0.f || L.ambient.z > 0.f)
     {
       // The camera ray's vertex: a 2D set (next() otherwise, as before).
-      const float u0 = rng.sequence(kGroupAmbient, 0);
-      const float u1 = rng.sequence(kGroupAmbient, 1);
+      float u0, u1;
+      rng.sequence2(kGroupAmbient, u0, u1);
       const Vec3f wa = directionAround(w, sampleHGCosine(g, u0), u1);
       float T = 1.f;
       if (L.shadows)

@@ -82,6 +82,19 @@ public:
     return sequencePoint(this->QSample, this->QKey, group, coord);
   }
 
+  /// Both coordinates of padded set `group` (one index shuffle), or the next
+  /// two PCG numbers.
+  MCVOL_FUNC void sequence2(uint32_t group, float& u0, float& u1)
+  {
+    if (!this->QOn)
+    {
+      u0 = this->next();
+      u1 = this->next();
+      return;
+    }
+    sequencePoint2(this->QSample, this->QKey, group, u0, u1);
+  }
+
   /// The numbers of a tentative collision: the free flight after it, then
   /// its accept test (this order without a sequence, as before). The first
   /// kSequenceCollisions of the camera ray take set kGroupCollision + k.
@@ -93,9 +106,7 @@ public:
       accept = this->next();
       return;
     }
-    const uint32_t group = kGroupCollision + this->QCollisions++;
-    accept = sequencePoint(this->QSample, this->QKey, group, 0);
-    flight = sequencePoint(this->QSample, this->QKey, group, 1);
+    sequencePoint2(this->QSample, this->QKey, kGroupCollision + this->QCollisions++, accept, flight);
   }
 
 private:

@@ -87,6 +87,24 @@ MCVOL_FUNC uint32_t reverseBits32(uint32_t x)
 }
 
 /**
+ * Dimension 1's generator matrix (the Pascal matrix mod 2) times i, digits
+ * in bit order (digit j, weight 2^-(j+1), at bit j). By Lucas' theorem the
+ * binomial C(k, j) is odd exactly when j's bits are a subset of k's, so
+ * digit j is the xor of the index bits k that contain j: a superset sum
+ * over 5-bit positions, five shift-mask-xor steps instead of one step per
+ * index bit (a shuffled index has all 32 bits in use).
+ */
+MCVOL_FUNC uint32_t pascalDigits(uint32_t i)
+{
+  i ^= (i >> 1) & 0x55555555u;
+  i ^= (i >> 2) & 0x33333333u;
+  i ^= (i >> 4) & 0x0f0f0f0fu;
+  i ^= (i >> 8) & 0x00ff00ffu;
+  i ^= (i >> 16) & 0x0000ffffu;
+  return i;
+}
+
+/**
  * Coordinate `dim` (0 to kSequenceDimensions - 1) of Sobol' point `i`, as a
  * 32-bit binary fraction: the xor of the direction numbers v_j of the set
  * bits j of i. v_j = m_j 2^(31-j) for j < s (degree s of the dimension's
@@ -101,6 +119,10 @@ MCVOL_FUNC uint32_t sobolCoordinate(uint32_t i, int dim)
   if (dim == 0)
   {
     return reverseBits32(i); // van der Corput: v_j = 2^(31-j)
+  }
+  if (dim == 1)
+  {
+    return reverseBits32(pascalDigits(i));
   }
   int s = 1;
   uint32_t a = 0;
@@ -208,6 +230,16 @@ MCVOL_FUNC uint32_t shuffledSobolIndex(uint32_t sample, uint32_t key, uint32_t g
 MCVOL_FUNC uint32_t owenSobolBits(uint32_t index, int dim, uint32_t key, uint32_t salt = 0)
 {
   const uint32_t seed = hashCombine(key, uint32_t(dim) * 0x9E3779B9u + salt * 0x85EBCA6Bu + 1u);
+  // Dimensions 0 and 1 come out of their generators bit-reversed, which is
+  // the order the scramble works in: the reversals cancel.
+  if (dim == 0)
+  {
+    return reverseBits32(laineKarrasPermutation(index, seed));
+  }
+  if (dim == 1)
+  {
+    return reverseBits32(laineKarrasPermutation(pascalDigits(index), seed));
+  }
   return nestedUniformScramble(sobolCoordinate(index, dim), seed);
 }
 
@@ -222,5 +254,13 @@ MCVOL_FUNC float bitsToUnitFloat(uint32_t x)
 MCVOL_FUNC float sequencePoint(uint32_t sample, uint32_t key, uint32_t group, int coord)
 {
   return bitsToUnitFloat(owenSobolBits(shuffledSobolIndex(sample, key, group), coord, key, group));
+}
+
+/// Both coordinates of that point (one index shuffle).
+MCVOL_FUNC void sequencePoint2(uint32_t sample, uint32_t key, uint32_t group, float& u0, float& u1)
+{
+  const uint32_t index = shuffledSobolIndex(sample, key, group);
+  u0 = bitsToUnitFloat(owenSobolBits(index, 0, key, group));
+  u1 = bitsToUnitFloat(owenSobolBits(index, 1, key, group));
 }
 } // namespace mcvol

@@ -45,10 +45,11 @@ enum class Tracker : int
 /**
  * Where a pixel's samples draw their random numbers (Sequence.h).
  * - Independent: every number from the PCG stream of (pixel, sample, seed).
- * - Sobol: the leading dimensions (sub-pixel position, the camera ray's
- *   first free flight and first accept test per channel, the scatter test
- *   of its collision) from Owen-scrambled Sobol' points with per-pixel index
- *   shuffling (Burley 2020), the rest from the PCG stream. Unbiased as well;
+ * - Sobol: the leading decisions (sub-pixel position, the camera ray's
+ *   first free flight per channel and its first tentative collisions; lit,
+ *   the scatter test and ambient direction of its collision) from
+ *   Owen-scrambled Sobol' points with per-pixel index shuffling (Burley
+ *   2020; SequenceGroup), the rest from the PCG stream. Unbiased as well;
  *   lower error at a given sample count.
  */
 enum class Sampler : int
