@@ -144,6 +144,12 @@ const char* vtkMultiChannelVolumeMapper::GetTrackingMethodAsString()
 }
 
 //------------------------------------------------------------------------------
+const char* vtkMultiChannelVolumeMapper::GetSampleSequenceAsString()
+{
+  return this->SampleSequence == INDEPENDENT_SEQUENCE ? "Independent" : "Sobol";
+}
+
+//------------------------------------------------------------------------------
 const char* vtkMultiChannelVolumeMapper::GetBackendAsString()
 {
   switch (this->Backend)
@@ -171,6 +177,7 @@ bool vtkMultiChannelVolumeMapper::TraceImage(const mcvol::Scene& scene, const mc
   settings.seed = this->Seed;
   settings.tracker = this->TrackingMethod == N_DDA ? mcvol::Tracker::NDDA : mcvol::Tracker::OneDDA;
   settings.jitterPixels = this->PixelJitter;
+  settings.sampler = this->SampleSequence == INDEPENDENT_SEQUENCE ? mcvol::Sampler::Independent : mcvol::Sampler::Sobol;
   try
   {
     renderer->render(scene, camera, settings, depth, accum);
@@ -850,6 +857,7 @@ void vtkMultiChannelVolumeMapper::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "ChannelBlendMode: " << this->GetChannelBlendModeAsString() << "\n";
   os << indent << "MixColorMode: " << (this->MixColorMode == MIX_AVERAGE ? "Average" : "Equation10") << "\n";
   os << indent << "TrackingMethod: " << this->GetTrackingMethodAsString() << "\n";
+  os << indent << "SampleSequence: " << this->GetSampleSequenceAsString() << "\n";
   os << indent << "SamplesPerPixel: " << this->SamplesPerPixel << "\n";
   os << indent << "InteractiveFrameTime: " << this->InteractiveFrameTime << "\n";
   os << indent << "Progressive: " << this->Progressive << "\n";

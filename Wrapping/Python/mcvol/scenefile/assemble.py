@@ -442,6 +442,10 @@ def setup_mapper(mapper, prop, scene, channels, tfs, render_image, reference):
         "composite": mapper.SetChannelBlendModeToComposite,
     }[scene["blend"]]()
     mapper.SetTrackingMethod(mapper.N_DDA if scene["tracking"] == "n-dda" else mapper.ONE_DDA)
+    if scene["sample_sequence"] == "independent":
+        mapper.SetSampleSequenceToIndependent()
+    else:
+        mapper.SetSampleSequenceToSobol()
     mapper.SetMixColorMode(mapper.MIX_EQUATION_10 if scene["mix_color"] == "equation10" else mapper.MIX_AVERAGE)
     if not reference:  # the reference always marches on the CPU
         {"auto": mapper.SetBackendToAuto, "cpu": mapper.SetBackendToCPU, "cuda": mapper.SetBackendToCUDA}[
