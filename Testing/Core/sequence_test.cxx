@@ -346,3 +346,58 @@ TEST(Sobol, ReproducibleWhateverThreadsAndBatches)
     }
   }
 }
+
+// A transparent channel is never active: adding one, in the middle of the
+// list, leaves the image bit for bit as it was, with either sampler and
+// tracker (the Sobol' sets of the first flights are keyed by the place in
+// the active list, not by the channel's index).
+TEST(Sobol, TransparentChannelChangesNothing)
+{
+  TestVolume two(12, 12, 12, 2, 0.5f), three(12, 12, 12, 3, 0.5f);
+  for (int k = 0; k < 12; ++k)
+  {
+    for (int j = 0; j < 12; ++j)
+    {
+      for (int i = 0; i < 12; ++i)
+      {
+        const float a = float((i * 7 + j * 3 + k) % 11) / 10.f, b = float((i + j * 5 + k * 2) % 7) / 6.f;
+        two.channels[0][two.index(i, j, k)] = three.channels[0][three.index(i, j, k)] = a;
+        two.channels[1][two.index(i, j, k)] = three.channels[2][three.index(i, j, k)] = b;
+      }
+    }
+  }
+  TransferFunctionDesc ta = flatTF(0.f, 1, 0.2f, 0.1f, 4.f, 16), tb = flatTF(0.f, 0.1f, 0.4f, 1, 4.f, 16);
+  for (int t = 0; t < 16; ++t)
+  {
+    ta.opacity[size_t(t)] = 0.5f * float(t) / 15.f;
+    tb.opacity[size_t(t)] = 0.4f * float(15 - t) / 15.f;
+  }
+  Scene s2, s3;
+  configure(s2, two, { ta, tb }, 4);
+  configure(s3, three, { ta, flatTF(0.f, 0, 1, 0, 4.f, 16), tb }, 4);
+  const Camera cam = orthoAlongZ(24, 24, 0.5, 10.5, 0.5, 10.5, 20.0, 40.0);
+  for (Sampler sampler : { Sampler::Independent, Sampler::Sobol })
+  {
+    for (Tracker t : { Tracker::OneDDA, Tracker::NDDA })
+    {
+      RenderSettings rs;
+      rs.sampler = sampler;
+      rs.tracker = t;
+      rs.seed = 3;
+      rs.samplesPerPixel = 8;
+      CPURenderer r;
+      Accumulator a2, a3;
+      r.render(s2, cam, rs, nullptr, a2);
+      r.render(s3, cam, rs, nullptr, a3);
+      const std::vector<float> i2 = image(a2), i3 = image(a3);
+      double alpha = 0;
+      for (size_t p = 3; p < i2.size(); p += 4)
+      {
+        alpha += i2[p];
+      }
+      EXPECT_GT(alpha, 24 * 24 * 0.1) << "nearly empty image: the test would be weak";
+      EXPECT_EQ(0, std::memcmp(i2.data(), i3.data(), i2.size() * sizeof(float)))
+        << toString(sampler) << " " << toString(t) << ": a transparent channel changed the image";
+    }
+  }
+}

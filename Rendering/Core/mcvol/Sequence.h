@@ -63,7 +63,7 @@ enum SequenceGroup : uint32_t
   kGroupPixel = 0,      ///< (x, y) sub-pixel jitter (the pixel's box filter)
   kGroupScatter = 1,    ///< lit: (scatter or absorb, unused) at the camera ray's collision
   kGroupAmbient = 2,    ///< lit: the camera ray's ambient direction (cos theta, azimuth)
-  kGroupFlight = 16,    ///< + channel: (first free flight, unused) of the camera ray
+  kGroupFlight = 16,    ///< + active slot: (first free flight, unused) of the camera ray
   kGroupCollision = 64, ///< + k: (accept test, next flight) of the ray's k-th tentative collision
 };
 

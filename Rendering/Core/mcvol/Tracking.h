@@ -198,9 +198,11 @@ MCVOL_HOT Hit track1DDA(const SceneView& s, Vec3f o, Vec3f d, float tmin, float 
   float tau[kMaxChannels];
   for (int i = 0; i < s.numActive; ++i)
   {
-    // The first free flight: a set per channel under Sampler::Sobol (next()
-    // otherwise, in the same order as before).
-    tau[i] = opticalDepthOf(rng.sequence(kGroupFlight + uint32_t(s.active[i])));
+    // The first free flight: a set per active channel under Sampler::Sobol
+    // (next() otherwise, in the same order as before). Keyed by the place in
+    // the active list, not the channel's index, so that a transparent
+    // channel (never active) changes no image, with either sampler.
+    tau[i] = opticalDepthOf(rng.sequence(kGroupFlight + uint32_t(i)));
   }
   DDA dda;
   dda.init(s.grid, o, d, tmin, tmax);
@@ -229,17 +231,18 @@ MCVOL_HOT Hit track1DDA(const SceneView& s, Vec3f o, Vec3f d, float tmin, float 
   return hit;
 }
 
-/// Woodcock tracking of one channel alone over [tmin, tmax] (used by N-DDA
-/// for each channel and by post-render compositing); the optical depth is
-/// carried across cells as in track1DDA.
+/// Woodcock tracking of active channel `slot` (s.active[slot]) alone over
+/// [tmin, tmax] (used by N-DDA for each channel and by post-render
+/// compositing); the optical depth is carried across cells as in track1DDA.
 template <BlendMode Mode>
-MCVOL_HOT bool trackChannel(const SceneView& s, int n, Vec3f o, Vec3f d, float tmin, float tmax, Rng& rng,
+MCVOL_HOT bool trackChannel(const SceneView& s, int slot, Vec3f o, Vec3f d, float tmin, float tmax, Rng& rng,
   RayCounters& c, Hit& hit, const RayImportance* imp = nullptr)
 {
+  const int n = s.active[slot];
   DDA dda;
   dda.init(s.grid, o, d, tmin, tmax);
   const int N = s.grid.numChannels;
-  float tau = opticalDepthOf(rng.sequence(kGroupFlight + uint32_t(n)));
+  float tau = opticalDepthOf(rng.sequence(kGroupFlight + uint32_t(slot)));
   while (!dda.done)
   {
     ++c.ddaSteps;
@@ -265,7 +268,7 @@ MCVOL_HOT Hit trackNDDA(const SceneView& s, Vec3f o, Vec3f d, float tmin, float 
   hit.t = tmax;
   for (int i = 0; i < s.numActive; ++i)
   {
-    trackChannel<Mode>(s, s.active[i], o, d, tmin, hit.t, rng, c, hit, imp);
+    trackChannel<Mode>(s, i, o, d, tmin, hit.t, rng, c, hit, imp);
   }
   if (hit.found())
   {
@@ -287,7 +290,7 @@ MCVOL_HOT Vec4f trackComposite(const SceneView& s, Vec3f o, Vec3f d, float tmin,
   for (int i = 0; i < s.numActive; ++i)
   {
     Hit hit;
-    if (trackChannel<BlendMode::Composite>(s, s.active[i], o, d, tmin, tmax, rng, c, hit, imp))
+    if (trackChannel<BlendMode::Composite>(s, i, o, d, tmin, tmax, rng, c, hit, imp))
     {
       ++c.real;
       out.r += hit.rgb.x;
