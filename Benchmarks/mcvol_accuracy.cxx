@@ -16,6 +16,9 @@
 // both are timed on the same hardware; --march-textures makes the CUDA march
 // read voxels through the hardware texture filter, as the Monte Carlo
 // renders do (the reference march never does).
+// --sampler independent|sobol (default sobol, the
+// renderer's default) picks the progressive series' sample sequence; the
+// 4096-spp cross-check uses the same.
 
 #include "mcvol/CameraMath.h"
 #include "mcvol/DemoData.h"
@@ -65,6 +68,7 @@ struct Options
   int marchBackend = -1;      ///< a mcvol::Backend; -1: the same as backend
   bool marchTextures = false; ///< CUDA march: hardware texture filtering (not for the reference)
   bool scoreOnly = false;     ///< no image files: RMSE and PSNR in the CSV instead
+  mcvol::Sampler sampler = mcvol::Sampler::Sobol;
 };
 
 std::vector<double> splitDoubles(const std::string& s)
@@ -152,6 +156,16 @@ Options parse(int argc, char** argv)
     else if (a == "--score-only")
     {
       o.scoreOnly = true;
+    }
+    else if (a == "--sampler")
+    {
+      need(1);
+      const std::string s = argv[++i];
+      if (s != "independent" && s != "sobol")
+      {
+        throw std::invalid_argument("--sampler takes independent or sobol, not " + s);
+      }
+      o.sampler = s == "sobol" ? mcvol::Sampler::Sobol : mcvol::Sampler::Independent;
     }
     else if (a == "--backend")
     {
@@ -326,6 +340,7 @@ int main(int argc, char** argv)
     // Monte Carlo: cross-check at refSpp, then the progressive series.
     mcvol::RenderSettings rs;
     rs.jitterPixels = false;
+    rs.sampler = o.sampler;
     rs.readBack = false; // device backends: the copy-back is not part of the timed render
     {
       mcvol::Accumulator acc;
@@ -399,7 +414,7 @@ int main(int argc, char** argv)
     m << "dataset " << o.dataset << "\ndims " << v.dims[0] << " " << v.dims[1] << " " << v.dims[2] << "\nchannels "
       << v.numChannels() << "\nblend " << o.blend << "\nsize " << o.width << " " << o.height << "\nthreads " << threads
       << "\nbackend " << r->name() << "\nmarch_backend " << marcher->name() << (o.marchTextures ? " (textures)" : "")
-      << "\nvoxel " << voxel << "\n";
+      << "\nvoxel " << voxel << "\nsampler " << mcvol::toString(o.sampler) << "\n";
   }
   catch (const std::exception& e)
   {

@@ -23,6 +23,9 @@
 //              the unoptimized frame, refining renders, segment-list memory
 //   estimate   the error estimate against the true error (--reference-spp)
 //              at 16, 64, 256 spp, and the frame time with and without it
+//   sequences  error against spp for the independent sampler and Owen-scrambled
+//              Sobol' points (--samplers, --spp-max): fitted slopes, spp and
+//              ms to RMSE 0.01 and to --psnr dB (issue 14, item 2)
 //
 // On the CUDA backend frames are timed as render() + finish() with the image
 // left on the device (RenderSettings::readBack = false); a separate column
@@ -63,6 +66,7 @@ const Section sections[] = {
   { "converge", runConverge },
   { "visibility", runVisibility },
   { "estimate", runEstimate },
+  { "sequences", runSequences },
 };
 } // namespace
 

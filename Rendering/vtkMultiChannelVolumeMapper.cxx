@@ -148,6 +148,12 @@ const char* vtkMultiChannelVolumeMapper::GetTrackingMethodAsString()
 }
 
 //------------------------------------------------------------------------------
+const char* vtkMultiChannelVolumeMapper::GetSampleSequenceAsString()
+{
+  return this->SampleSequence == INDEPENDENT_SEQUENCE ? "Independent" : "Sobol";
+}
+
+//------------------------------------------------------------------------------
 const char* vtkMultiChannelVolumeMapper::GetBackendAsString()
 {
   switch (this->Backend)
@@ -176,6 +182,7 @@ bool vtkMultiChannelVolumeMapper::TraceImage(const mcvol::Scene& scene, const mc
   settings.tracker = this->TrackingMethod == N_DDA ? mcvol::Tracker::NDDA : mcvol::Tracker::OneDDA;
   settings.jitterPixels = this->PixelJitter;
   settings.readBackEven = false; // GetEstimatedError() reads it back when asked
+  settings.sampler = this->SampleSequence == INDEPENDENT_SEQUENCE ? mcvol::Sampler::Independent : mcvol::Sampler::Sobol;
   try
   {
     renderer->render(scene, camera, settings, depth, accum);
@@ -951,6 +958,7 @@ void vtkMultiChannelVolumeMapper::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "ChannelBlendMode: " << this->GetChannelBlendModeAsString() << "\n";
   os << indent << "MixColorMode: " << (this->MixColorMode == MIX_AVERAGE ? "Average" : "Equation10") << "\n";
   os << indent << "TrackingMethod: " << this->GetTrackingMethodAsString() << "\n";
+  os << indent << "SampleSequence: " << this->GetSampleSequenceAsString() << "\n";
   os << indent << "SamplesPerPixel: " << this->SamplesPerPixel << "\n";
   os << indent << "InteractiveFrameTime: " << this->InteractiveFrameTime << "\n";
   os << indent << "Progressive: " << this->Progressive << "\n";

@@ -140,6 +140,31 @@ public:
   const char* GetTrackingMethodAsString();
   ///@}
 
+  enum SampleSequences
+  {
+    INDEPENDENT_SEQUENCE = 0,
+    SOBOL_SEQUENCE = 1
+  };
+
+  ///@{
+  /**
+   * Where each pixel's samples draw the random numbers of their leading
+   * decisions (sub-pixel position, the camera ray's first free flights and
+   * tentative collisions, lit: its scatter test and ambient direction):
+   * SOBOL_SEQUENCE (default) from Owen-scrambled Sobol' points with
+   * per-pixel index shuffling (Burley 2020), INDEPENDENT_SEQUENCE from the
+   * pseudo-random stream like the rest of each path. Both are unbiased and
+   * reproducible for a fixed Seed whatever the thread count; the Sobol'
+   * points lower the error at a given sample count. A change restarts the
+   * progressive image.
+   */
+  vtkSetClampMacro(SampleSequence, int, INDEPENDENT_SEQUENCE, SOBOL_SEQUENCE);
+  vtkGetMacro(SampleSequence, int);
+  void SetSampleSequenceToIndependent() { this->SetSampleSequence(INDEPENDENT_SEQUENCE); }
+  void SetSampleSequenceToSobol() { this->SetSampleSequence(SOBOL_SEQUENCE); }
+  const char* GetSampleSequenceAsString();
+  ///@}
+
   ///@{
   /**
    * Samples per pixel added by each Render() (default 1, 1..4096).
@@ -622,6 +647,7 @@ protected:
   int ChannelBlendMode = MC_DENSITY_BLEND;
   int MixColorMode = MIX_AVERAGE;
   int TrackingMethod = ONE_DDA;
+  int SampleSequence = SOBOL_SEQUENCE;
   int SamplesPerPixel = 1;
   double InteractiveFrameTime = 0.0;
   int LastSamplesPerRender = 0;

@@ -48,7 +48,9 @@ void usage()
             "                   [--channel-counts 1,2,4] [--macrocell-sizes 4,8,16] [--csv FILE]\n"
             "                   [--label TEXT] [--sampling texture|global] [--block X Y]\n"
             "                   [--psnr DB] [--reference-spp N] [--density F]\n"
-            "sections: trackers channels macrocell rebuild memory paper converge sampling effects visibility estimate");
+            "                   [--samplers independent,sobol] [--spp-max N]\n"
+            "sections: trackers channels macrocell rebuild memory paper converge sampling effects visibility estimate\n"
+            "          sequences");
 }
 
 Options parse(int argc, char** argv)
@@ -136,6 +138,23 @@ Options parse(int argc, char** argv)
     {
       need(1);
       o.psnr = std::stod(argv[++i]);
+    }
+    else if (a == "--samplers")
+    {
+      need(1);
+      o.samplers = split(argv[++i], ',');
+      for (const std::string& n : o.samplers)
+      {
+        if (n != "independent" && n != "sobol")
+        {
+          throw std::invalid_argument("--samplers takes independent and/or sobol, not " + n);
+        }
+      }
+    }
+    else if (a == "--spp-max")
+    {
+      need(1);
+      o.sppMax = std::stoi(argv[++i]);
     }
     else if (a == "--reference-spp")
     {

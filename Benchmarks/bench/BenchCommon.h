@@ -44,6 +44,8 @@ struct Options
   int referenceSpp = 2048;
   int maxConvergeFrames = 4096;
   double density = 1.0; ///< divides every opacity unit distance (denser volumes)
+  std::vector<std::string> samplers = { "independent", "sobol" }; ///< section sequences
+  int sppMax = 256;                                               ///< section sequences
 };
 
 void usage();

@@ -20,4 +20,5 @@ void runEffects(Bench& bench);
 void runConverge(Bench& bench);
 void runVisibility(Bench& bench);
 void runEstimate(Bench& bench);
+void runSequences(Bench& bench);
 } // namespace mcvolbench

@@ -11,6 +11,9 @@
 #   rebuild   GPU majorant rebuild after one transfer-function change
 #   block     render-kernel block shapes (NYX-like)
 #   profile   Nsight Compute on the render kernel of the slowest paper case
+#   sequences independent samples against Owen-scrambled Sobol' points: error
+#             against spp, slopes, spp and ms to RMSE 0.01 and 35 dB (1024^2,
+#             the four paper-sized datasets; issue 14, item 2)
 # Usage: bash Benchmarks/gpu/bench.sh [build-dir] stage...   (results under $OUT)
 set -uo pipefail
 b="${1:-/tmp/mcvol-gpu}"
@@ -41,6 +44,14 @@ for stage in "$@"; do
         run "paper-$key" --backend cuda --dataset "$ds" --dims "$x" "$y" "$z" --channels "$ch" --label "$label" \
           --size 1024 1024 --warmup 25 --frames 500 --reference-spp 4096 --sections paper,memory,sampling,converge
         grep -A4 "^| tracker | FPS" "$out/paper-$key.md" | sed -n 3,4p | sed "s/^/$label /"
+      done
+      ;;
+    sequences)
+      for s in "${sets[@]}"; do
+        read -r key ds x y z ch label <<< "$s"
+        run "sequences-$key" --backend cuda --dataset "$ds" --dims "$x" "$y" "$z" --channels "$ch" --label "$label" \
+          --size 1024 1024 --reference-spp 4096 --spp-max 256 --sections sequences
+        grep -A3 "^| sampler |" "$out/sequences-$key.md" | sed -n 3,4p | sed "s/^/$label /"
       done
       ;;
     dense)

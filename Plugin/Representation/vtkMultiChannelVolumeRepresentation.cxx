@@ -209,6 +209,11 @@ void vtkMultiChannelVolumeRepresentation::SetTrackingMethod(int method)
   this->GetMultiChannelMapper()->SetTrackingMethod(method);
 }
 
+void vtkMultiChannelVolumeRepresentation::SetSampleSequence(int sequence)
+{
+  this->GetMultiChannelMapper()->SetSampleSequence(sequence);
+}
+
 void vtkMultiChannelVolumeRepresentation::SetInteractiveFrameTime(double seconds)
 {
   this->GetMultiChannelMapper()->SetInteractiveFrameTime(seconds);

@@ -88,6 +88,7 @@ public:
   void SetMixWeight(int channel, double weight);
   void SetMixColorMode(int mode);
   void SetTrackingMethod(int method);
+  void SetSampleSequence(int sequence);
   void SetSamplesPerRender(int spp);
   void SetInteractiveFrameTime(double seconds);
   void SetProgressiveRefinement(bool on);

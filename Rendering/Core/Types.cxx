@@ -42,6 +42,11 @@ const char* toString(Tracker t)
   return t == Tracker::NDDA ? "N-DDA" : "1-DDA";
 }
 
+const char* toString(Sampler s)
+{
+  return s == Sampler::Sobol ? "sobol" : "independent";
+}
+
 const char* toString(Backend b)
 {
   switch (b)

@@ -59,6 +59,10 @@ int TestMultiChannelVolumeMapper(int argc, char* argv[])
   mapper->SetInputData(image);
   mapper->SetBackendToCPU();
   mapper->SetSeed(7);
+  // The baseline was made with the independent sampler; pinning it keeps this
+  // an exact regression of that sampler's images (the Sobol' sampler, the
+  // default, is tested statistically in Testing/Core/sequence_test.cxx).
+  mapper->SetSampleSequenceToIndependent();
   mapper->SetSamplesPerPixel(16);
 
   vtkNew<vtkVolumeProperty> property;

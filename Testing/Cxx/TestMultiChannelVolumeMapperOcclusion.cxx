@@ -59,6 +59,9 @@ int TestMultiChannelVolumeMapperOcclusion(int argc, char* argv[])
   mapper->SetInputData(image);
   mapper->SetBackendToCPU();
   mapper->SetSamplesPerPixel(8);
+  // The baseline was made with the independent sampler (see
+  // TestMultiChannelVolumeMapper.cxx).
+  mapper->SetSampleSequenceToIndependent();
 
   vtkNew<vtkVolumeProperty> property;
   property->IndependentComponentsOn();

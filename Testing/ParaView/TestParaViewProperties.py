@@ -86,6 +86,7 @@ rep.InteractiveFrameTime = 0
 reference = image()
 
 expect_property("Seed", 8, True)
+expect_property("SampleSequence", "Sobol", True)
 expect_property("SamplesPerRender", 4, False, "SamplesPerRender (same total)")
 expect_property("MaximumTotalSamples", 64, True)
 expect_property("ChannelBlendMode", "Mix", True)

@@ -21,6 +21,7 @@ settings = {
     "ChannelBlendMode": "Mix",
     "MixWeights": [0.5, 1.0, 2.0],
     "TrackingMethod": "N DDA",
+    "SampleSequence": "Sobol",  # show() pins Independent
     "SamplesPerRender": 4,
     "ProgressiveRefinement": 1,
     "MaximumTotalSamples": 24,

@@ -72,6 +72,7 @@ BAD_SCENES = [
     ("missing-file", {"input": "no-such-file.vti", "channels": [{"component": 0}]}, "input: file not found"),
     ("bad-blend", {"input": {"demo": "figure3"}, "blend": "sum"}, "blend:"),
     ("bad-tracking", {"input": {"demo": "figure3"}, "tracking": "2-dda"}, "tracking:"),
+    ("bad-sample-sequence", {"input": {"demo": "figure3"}, "sample_sequence": "halton"}, "sample_sequence:"),
     ("bad-mix-color", {"input": {"demo": "figure3"}, "blend": "mix", "mix_color": "sum"}, "mix_color:"),
     ("bad-interpolation", {"input": {"demo": "figure3"}, "interpolation": "cubic"}, "interpolation:"),
     ("bad-spp-type", {"input": {"demo": "figure3"}, "samples_per_pixel": "many"}, "samples_per_pixel:"),

@@ -17,12 +17,15 @@ struct FrameParams
   uint32_t seed = 0;
   Tracker tracker = Tracker::OneDDA;
   bool jitter = true;
+  Sampler sampler = Sampler::Sobol;
 };
 
 /**
  * Sum of `samplesPerPixel` Monte Carlo samples of pixel (x, y), premultiplied
- * RGBA. Sample k of a pixel draws from Rng(pixel, firstSample + k, seed), so
- * the result depends on nothing but the pixel, the sample indices and the seed.
+ * RGBA. Sample k of a pixel draws from Rng(pixel, firstSample + k, seed) (and,
+ * with Sampler::Sobol, the pixel's scrambled Sobol' point of that sample
+ * index), so the result depends on nothing but the pixel, the sample indices
+ * and the seed.
  * Optimized (a compile-time choice, as Lit) tracks through the visibility
  * optimization with the pixel's list `imp`; without it the tracking code is
  * exactly the unoptimized one (the null list folds away). `even` (optional)
@@ -39,9 +42,17 @@ MCVOL_FUNC Vec4f renderPixel(const SceneView& s, const CameraView& cam, const Fr
   const uint32_t pixel = uint32_t(y) * uint32_t(cam.width) + uint32_t(x);
   for (int k = 0; k < fp.samplesPerPixel; ++k)
   {
-    Rng rng(pixel, fp.firstSample + uint32_t(k), fp.seed);
-    const float jx = fp.jitter ? rng.next() : 0.5f;
-    const float jy = fp.jitter ? rng.next() : 0.5f;
+    const uint32_t index = fp.firstSample + uint32_t(k);
+    Rng rng(pixel, index, fp.seed);
+    if (fp.sampler == Sampler::Sobol)
+    {
+      rng.startSequence(pixel, index, fp.seed);
+    }
+    float jx = 0.5f, jy = 0.5f;
+    if (fp.jitter)
+    {
+      rng.sequence2(kGroupPixel, jx, jy);
+    }
     IndexRay ray;
     if (!generateRay(cam, s.volume, float(x) + jx, float(y) + jy, depth, ray))
     {

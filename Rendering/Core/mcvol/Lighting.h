@@ -290,7 +290,9 @@ MCVOL_HOT Vec4f traceLitSample(const SceneView& s, Tracker tracker, Vec3f o, Vec
       out.a = 1.f;
     }
     const Vec3f x = o + d * hit.t;
-    if (!(rng.next() < L.albedo[hit.channel]))
+    // Scatter or absorb: a set of its own at the camera ray's collision
+    // under Sampler::Sobol (next() otherwise, as before).
+    if (!(rng.sequence(kGroupScatter) < L.albedo[hit.channel]))
     {
       radiance += throughput * hit.rgb; // absorbed: emits
       break;
@@ -343,7 +345,10 @@ MCVOL_HOT Vec4f traceLitSample(const SceneView& s, Tracker tracker, Vec3f o, Vec
     }
     if (L.ambient.x > 0.f || L.ambient.y > 0.f || L.ambient.z > 0.f)
     {
-      const Vec3f wa = directionAround(w, sampleHGCosine(g, rng.next()), rng.next());
+      // The camera ray's vertex: a 2D set (next() otherwise, as before).
+      float u0, u1;
+      rng.sequence2(kGroupAmbient, u0, u1);
+      const Vec3f wa = directionAround(w, sampleHGCosine(g, u0), u1);
       float T = 1.f;
       if (L.shadows)
       {
@@ -353,6 +358,8 @@ MCVOL_HOT Vec4f traceLitSample(const SceneView& s, Tracker tracker, Vec3f o, Vec
       }
       radiance += throughput * L.ambient * T;
     }
+    // From here on the path draws from the PCG stream.
+    rng.endSequence();
     if (depth + 1 >= L.maxDepth)
     {
       break;

@@ -99,6 +99,7 @@ inline FrameParams frameParams(const RenderSettings& s, uint32_t firstSample)
   fp.seed = s.seed;
   fp.tracker = s.tracker;
   fp.jitter = s.jitterPixels;
+  fp.sampler = s.sampler;
   return fp;
 }
 

@@ -35,6 +35,10 @@ struct RenderSettings
   uint32_t seed = 0;
   Tracker tracker = Tracker::OneDDA;
   bool jitterPixels = true; ///< sub-pixel jitter (anti-aliasing)
+  /// Where the samples' leading decisions draw their numbers (Types.h,
+  /// Sequence.h). Sobol by default: lower error at every sample count
+  /// measured (Benchmarks/RESULTS.md, "Sample sequences").
+  Sampler sampler = Sampler::Sobol;
   /// Device backends: copy the accumulated image into the Accumulator at the
   /// end of render(). false leaves it on the device (the frame may still be
   /// running when render() returns) until readBack() or the next render with

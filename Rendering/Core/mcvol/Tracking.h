@@ -130,6 +130,12 @@ MCVOL_HOT float sampleOpticalDepth(Rng& rng)
   return -logf(1.f - rng.next());
 }
 
+/// The same from a given uniform number u in [0, 1).
+MCVOL_HOT float opticalDepthOf(float u)
+{
+  return -logf(1.f - u);
+}
+
 /**
  * Woodcock steps of channel n over the segment [t0, tStop] of one macrocell
  * with majorant m (Eq. 3 free flights, Eq. 7 / Listing 2 null-collision
@@ -152,10 +158,12 @@ MCVOL_HOT bool woodcockSegment(const SceneView& s, int n, Vec3f o, Vec3f d, floa
       return false;
     }
     t = advance(t, tau / m);
-    tau = sampleOpticalDepth(rng);
+    float uFlight, uAccept;
+    rng.collision(uFlight, uAccept);
+    tau = opticalDepthOf(uFlight);
     ++c.tentative;
     Vec3f rgb;
-    if (realCollision<Mode>(s, n, o + d * t, rng.next() * m, rgb, c, imp, t))
+    if (realCollision<Mode>(s, n, o + d * t, uAccept * m, rgb, c, imp, t))
     {
       hit.t = t;
       hit.rgb = rgb;
@@ -190,7 +198,11 @@ MCVOL_HOT Hit track1DDA(const SceneView& s, Vec3f o, Vec3f d, float tmin, float 
   float tau[kMaxChannels];
   for (int i = 0; i < s.numActive; ++i)
   {
-    tau[i] = sampleOpticalDepth(rng);
+    // The first free flight: a set per active channel under Sampler::Sobol
+    // (next() otherwise, in the same order as before). Keyed by the place in
+    // the active list, not the channel's index, so that a transparent
+    // channel (never active) changes no image, with either sampler.
+    tau[i] = opticalDepthOf(rng.sequence(kGroupFlight + uint32_t(i)));
   }
   DDA dda;
   dda.init(s.grid, o, d, tmin, tmax);
@@ -219,17 +231,18 @@ MCVOL_HOT Hit track1DDA(const SceneView& s, Vec3f o, Vec3f d, float tmin, float 
   return hit;
 }
 
-/// Woodcock tracking of one channel alone over [tmin, tmax] (used by N-DDA
-/// for each channel and by post-render compositing); the optical depth is
-/// carried across cells as in track1DDA.
+/// Woodcock tracking of active channel `slot` (s.active[slot]) alone over
+/// [tmin, tmax] (used by N-DDA for each channel and by post-render
+/// compositing); the optical depth is carried across cells as in track1DDA.
 template <BlendMode Mode>
-MCVOL_HOT bool trackChannel(const SceneView& s, int n, Vec3f o, Vec3f d, float tmin, float tmax, Rng& rng,
+MCVOL_HOT bool trackChannel(const SceneView& s, int slot, Vec3f o, Vec3f d, float tmin, float tmax, Rng& rng,
   RayCounters& c, Hit& hit, const RayImportance* imp = nullptr)
 {
+  const int n = s.active[slot];
   DDA dda;
   dda.init(s.grid, o, d, tmin, tmax);
   const int N = s.grid.numChannels;
-  float tau = sampleOpticalDepth(rng);
+  float tau = opticalDepthOf(rng.sequence(kGroupFlight + uint32_t(slot)));
   while (!dda.done)
   {
     ++c.ddaSteps;
@@ -255,7 +268,7 @@ MCVOL_HOT Hit trackNDDA(const SceneView& s, Vec3f o, Vec3f d, float tmin, float 
   hit.t = tmax;
   for (int i = 0; i < s.numActive; ++i)
   {
-    trackChannel<Mode>(s, s.active[i], o, d, tmin, hit.t, rng, c, hit, imp);
+    trackChannel<Mode>(s, i, o, d, tmin, hit.t, rng, c, hit, imp);
   }
   if (hit.found())
   {
@@ -277,7 +290,7 @@ MCVOL_HOT Vec4f trackComposite(const SceneView& s, Vec3f o, Vec3f d, float tmin,
   for (int i = 0; i < s.numActive; ++i)
   {
     Hit hit;
-    if (trackChannel<BlendMode::Composite>(s, s.active[i], o, d, tmin, tmax, rng, c, hit, imp))
+    if (trackChannel<BlendMode::Composite>(s, i, o, d, tmin, tmax, rng, c, hit, imp))
     {
       ++c.real;
       out.r += hit.rgb.x;

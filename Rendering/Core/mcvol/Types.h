@@ -42,6 +42,22 @@ enum class Tracker : int
   NDDA = 1
 };
 
+/**
+ * Where a pixel's samples draw their random numbers (Sequence.h).
+ * - Independent: every number from the PCG stream of (pixel, sample, seed).
+ * - Sobol: the leading decisions (sub-pixel position, the camera ray's
+ *   first free flight per channel and its first tentative collisions; lit,
+ *   the scatter test and ambient direction of its collision) from
+ *   Owen-scrambled Sobol' points with per-pixel index shuffling (Burley
+ *   2020; SequenceGroup), the rest from the PCG stream. Unbiased as well;
+ *   lower error at a given sample count.
+ */
+enum class Sampler : int
+{
+  Independent = 0,
+  Sobol = 1
+};
+
 enum class Backend : int
 {
   Auto = 0,
@@ -90,6 +106,7 @@ MCVOL_HOT decltype(auto) visitScalarType(ScalarType t, F&& f)
 const char* toString(ScalarType t);
 const char* toString(BlendMode m);
 const char* toString(Tracker t);
+const char* toString(Sampler s);
 const char* toString(Backend b);
 int scalarTypeSize(ScalarType t);
 } // namespace mcvol

@@ -442,6 +442,10 @@ def setup_mapper(mapper, prop, scene, channels, tfs, render_image, reference):
         "composite": mapper.SetChannelBlendModeToComposite,
     }[scene["blend"]]()
     mapper.SetTrackingMethod(mapper.N_DDA if scene["tracking"] == "n-dda" else mapper.ONE_DDA)
+    if scene["sample_sequence"] == "independent":
+        mapper.SetSampleSequenceToIndependent()
+    else:
+        mapper.SetSampleSequenceToSobol()
     mapper.SetMixColorMode(mapper.MIX_EQUATION_10 if scene["mix_color"] == "equation10" else mapper.MIX_AVERAGE)
     # Both mappers: the reference marches on the backend chosen (the same
     # per-ray code on the CPU and on CUDA).

@@ -31,6 +31,7 @@ from .schema import (
     RAW_TYPES,
     RENDERERS,
     RESAMPLING,
+    SAMPLE_SEQUENCES,
     SHADOWS,
     TOP_KEYS,
     TRACKING,
@@ -355,6 +356,11 @@ def parse_scene(data, scene_dir, presets):
         get_string(data["interpolation"], "interpolation", INTERPOLATIONS) if "interpolation" in data else "linear"
     )
     s["tracking"] = get_string(data["tracking"], "tracking", TRACKING) if "tracking" in data else "1-dda"
+    s["sample_sequence"] = (
+        get_string(data["sample_sequence"], "sample_sequence", SAMPLE_SEQUENCES)
+        if "sample_sequence" in data
+        else "sobol"
+    )
     s["backend"] = get_string(data["backend"], "backend", BACKENDS) if "backend" in data else "auto"
     s["samples_per_pixel"] = (
         get_number(data["samples_per_pixel"], "samples_per_pixel", lo=1, hi=1 << 24, integer=True)

@@ -18,6 +18,7 @@ MIX_COLORS = ("average", "equation10")
 INTERPOLATIONS = ("linear", "nearest")
 RANGE_MODES = ("auto", "data")  # a channel's "range" as a word
 TRACKING = ("1-dda", "n-dda")
+SAMPLE_SEQUENCES = ("sobol", "independent")
 BACKENDS = ("auto", "cpu", "cuda")
 RENDERERS = ("montecarlo", "raymarch")
 COMPOSITING = ("extinction", "opacity")
@@ -51,6 +52,7 @@ TOP_KEYS = {
     "mix_color",
     "interpolation",
     "tracking",
+    "sample_sequence",
     "backend",
     "samples_per_pixel",
     "samples_per_render",
