@@ -25,11 +25,18 @@ void runMemory(Bench& bench)
     mcvol::Accumulator acc;
     bench.r.render(s.scene, benchCamera(o, s.scene), mcvol::RenderSettings(), nullptr, acc);
     const mcvol::CudaMemoryStats dm = g->memory();
-    m.dataBytes = dm.dataBytes;
+    const double data = double(s.scene.memory().dataBytes); // on the host, in the native types
+    const double held = double(dm.dataBytes + dm.textureBytes);
+    const double total = double(g->deviceBytes());
+    m.dataBytes = dm.dataBytes + dm.textureBytes;
     m.macrocellBytes = dm.macrocellBytes;
     m.majorantBytes = dm.majorantBytes;
-    std::printf("GPU memory: data %.2f MiB, texture copies %.2f MiB (texture sampling), image buffers %.2f MiB\n\n",
-      dm.dataBytes / MiB, dm.textureBytes / MiB, dm.imageBytes / MiB);
+    std::printf("GPU memory: channels %.2f MiB (arrays %.2f, textures %.2f; host data %.2f MiB), image buffers "
+                "%.2f MiB, everything %.2f MiB = data x %.4f + image buffers\n\n",
+      held / MiB, dm.dataBytes / MiB, dm.textureBytes / MiB, data / MiB, dm.imageBytes / MiB, total / MiB,
+      (total - double(dm.imageBytes)) / data);
+    bench.row("memory", describe(o, s), s.volume.numChannels(), o.macrocell, "device",
+      (total - double(dm.imageBytes)) / data, "device_bytes_over_data", "");
   }
 #endif
   std::printf(

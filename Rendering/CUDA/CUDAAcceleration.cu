@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 //
-// Macrocell ranges and majorants built on the GPU from the device copies of
-// the channels, and the active-channel list reduced from the majorants. The
-// kernels call the same cellVoxelBounds() and cellMajorant() as the host
+// Macrocell ranges and majorants built on the GPU from the device copy of
+// each channel (texture or array), and the active-channel list reduced from
+// the majorants. The kernels call the same cellVoxelBounds() and cellMajorant() as the host
 // build (Acceleration.h).
 #include "CUDAInternal.h"
 
@@ -30,10 +30,35 @@ __device__ MCVOL_FORCE_INLINE unsigned warpMaxU32(unsigned v)
   return v;
 }
 
+/// Reads voxel (i, j, k) of a dense device array.
+template <typename T>
+struct ArrayVoxels
+{
+  const T* __restrict__ data;
+  int nx;
+  int ny;
+  __device__ MCVOL_FORCE_INLINE float operator()(int i, int j, int k) const
+  {
+    return float(data[(int64_t(k) * ny + j) * nx + i]);
+  }
+};
+
+/// Reads voxel (i, j, k) of a texture-held channel through its point object,
+/// in data units, as sampleChannel() and fetchVoxel() read it.
+struct TextureVoxels
+{
+  cudaTextureObject_t point;
+  float scale;
+  __device__ MCVOL_FORCE_INLINE float operator()(int i, int j, int k) const
+  {
+    return scale * tex3D<float>(point, float(i) + 0.5f, float(j) + 0.5f, float(k) + 0.5f);
+  }
+};
+
 /// Scalar range of channel n over each macrocell's voxels (NaN voxels
 /// skipped, as on the host): one thread per cell.
-template <typename T>
-__global__ void rangeKernel(const T* __restrict__ data, int3 dims, int3 gdims, int macrocell, int numChannels, int n,
+template <typename Voxels>
+__global__ void rangeKernel(const Voxels voxel, int3 dims, int3 gdims, int macrocell, int numChannels, int n,
   int64_t cells, float2* __restrict__ ranges, unsigned* __restrict__ nonFiniteFlags)
 {
   const int64_t c = int64_t(blockIdx.x) * blockDim.x + threadIdx.x;
@@ -54,10 +79,9 @@ __global__ void rangeKernel(const T* __restrict__ data, int3 dims, int3 gdims, i
   {
     for (int j = lo[1]; j <= hi[1]; ++j)
     {
-      const T* row = data + (int64_t(k) * dims.y + j) * dims.x;
       for (int i = lo[0]; i <= hi[0]; ++i)
       {
-        const float v = float(row[i]);
+        const float v = voxel(i, j, k);
         if (v == v)
         {
           mn = fminf(mn, v);
@@ -114,13 +138,21 @@ void CUDARenderer::Internal::buildRanges(int macrocell)
   for (int n = 0; n < N; ++n)
   {
     const DeviceChannel& dc = this->Channels[n];
-    visitScalarType(dc.type,
-      [&](auto tag)
-      {
-        using T = DeviceScalar<typename decltype(tag)::type>;
-        rangeKernel<<<blocks, threads>>>(
-          reinterpret_cast<const T*>(dc.bytes.ptr), dims, gd, M, N, n, cells, this->Ranges.ptr, this->NaNFlags.ptr);
-      });
+    if (dc.array)
+    {
+      rangeKernel<<<blocks, threads>>>(TextureVoxels{ dc.point, dc.textureScale }, dims, gd, M, N, n, cells,
+        this->Ranges.ptr, this->NaNFlags.ptr);
+    }
+    else
+    {
+      visitScalarType(dc.type,
+        [&](auto tag)
+        {
+          using T = DeviceScalar<typename decltype(tag)::type>;
+          const ArrayVoxels<T> voxels{ reinterpret_cast<const T*>(dc.bytes.ptr), dims.x, dims.y };
+          rangeKernel<<<blocks, threads>>>(voxels, dims, gd, M, N, n, cells, this->Ranges.ptr, this->NaNFlags.ptr);
+        });
+    }
     MCVOL_CUDA(cudaGetLastError());
   }
   MCVOL_CUDA(cudaEventRecord(this->Stop));

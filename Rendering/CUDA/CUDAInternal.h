@@ -75,10 +75,11 @@ struct DeviceBuffer
 template <typename T>
 using DeviceScalar = std::conditional_t<std::is_same<T, double>::value, float, T>;
 
-/// One channel in device memory, with its optional 3D texture.
+/// One channel in device memory, held once: as a 3D texture (array, linear
+/// and point objects) or as a dense array (bytes), never both.
 struct DeviceChannel
 {
-  DeviceBuffer<uint8_t> bytes; ///< native type (float64 converted to float32 on upload)
+  DeviceBuffer<uint8_t> bytes; ///< dense array, native type (float64 converted to float32 on upload); empty when texture-held
   ScalarType type = ScalarType::Float32;
   cudaArray_t array = nullptr;
   cudaTextureObject_t linear = 0;
@@ -121,7 +122,7 @@ struct DeviceChannel
  * from. The members are defined where their work is done:
  * - CUDARenderer.cu: sync() (what to refresh at each render), device setup
  *   and queries;
- * - CUDAUpload.cu: uploadChannels(), buildTextures();
+ * - CUDAUpload.cu: uploadChannels(), moveNonFiniteToArrays();
  * - CUDAAcceleration.cu: buildRanges(), buildMajorants();
  * - CUDALaunch.cu: render() and readBack() use Accum, Depth and Counters;
  * - CUDAMarch.cu: march(), the ray-marching reference, on the same copies.
@@ -142,7 +143,6 @@ struct CUDARenderer::Internal
   int Dims[3] = { 0, 0, 0 };
   int NumChannels = 0;
   int TableSize = 0;
-  bool TexturesBuilt = false;
 
   DeviceChannel Channels[kMaxChannels];
   DeviceBuffer<float> Tables;    ///< [channel][K][4]
@@ -194,14 +194,21 @@ struct CUDARenderer::Internal
     }
   }
 
+  /// Holds each channel once: a texture (Texture sampling, if it fits) or a dense array.
   void uploadChannels(const Scene& scene);
-  void buildTextures();
+  /// Makes dc a texture-held channel from dense host voxels of dc.type;
+  /// false (nothing allocated) when the device has no room.
+  bool uploadTexture(DeviceChannel& dc, const void* host);
+  /// After buildRanges(): texture-held channels with NaN or Inf voxels move
+  /// to dense arrays (the core's NaN rule needs unfiltered reads).
+  void moveNonFiniteToArrays(const Scene& scene);
   void buildRanges(int macrocell);
   void buildMajorants(const Scene& scene, const bool* which);
   void sync(const Scene& scene);
   // CUDALaunch.cu: what a Monte Carlo render and a march both need.
   /// The per-render device view (after sync()): blend, interpolation,
-  /// channels (textures built first when `textures`) and lighting; no
+  /// channels (hardware-filtered reads of texture-held channels when
+  /// `textures`) and lighting; no
   /// importance, no per-camera fields.
   SceneView renderView(const Scene& scene, bool textures);
   /// The depth image on the device (uploaded when it changed), or nullptr.

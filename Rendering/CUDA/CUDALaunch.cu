@@ -233,19 +233,20 @@ SceneView CUDARenderer::Internal::renderView(const Scene& scene, bool textures)
   const SceneView& hv = scene.view();
   s.blend = hv.blend;
   s.volume.nearest = hv.volume.nearest;
-  if (textures && !this->TexturesBuilt)
-  {
-    this->buildTextures();
-  }
   for (int n = 0; n < this->NumChannels; ++n)
   {
     const DeviceChannel& dc = this->Channels[n];
     ChannelView& c = s.volume.channels[n];
-    c.data = dc.bytes.ptr;
+    c.data = dc.bytes.ptr; // null for a texture-held channel
     c.stride = 1;
     c.type = dc.type;
     c.offset = 0.0;
+    // Texture-held channels: hardware filtering when `textures`, else exact
+    // voxel reads through the point object (the reference march).
     c.texture = textures && !dc.nonFinite && dc.array ? (hv.volume.nearest ? dc.point : dc.linear) : 0;
+    c.voxelTexture = dc.array ? dc.point : 0;
+    c.voxelTextureDims[0] = this->Dims[0];
+    c.voxelTextureDims[1] = this->Dims[1];
     c.textureScale = dc.textureScale;
   }
   s.lighting = hv.lighting;

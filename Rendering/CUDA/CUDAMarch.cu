@@ -91,6 +91,11 @@ void CUDARenderer::march(const Scene& scene, const Camera& camera, const MarchSe
 {
   Internal& in = *this->In;
   MCVOL_CUDA(cudaSetDevice(in.Device));
+  if (settings.deviceTextures && in.Sampling != CudaSampling::Texture)
+  {
+    throw std::invalid_argument("mcvol: MarchSettings::deviceTextures reads hardware-filtered textures, and this "
+                                "renderer holds the channels as arrays (CudaSampling::Global): set texture sampling");
+  }
   in.sync(scene);
   SceneView s = in.renderView(scene, settings.deviceTextures);
   const SceneView& hv = scene.view();

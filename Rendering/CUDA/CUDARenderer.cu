@@ -171,6 +171,10 @@ CUDARenderer::~CUDARenderer() = default;
 
 void CUDARenderer::setSampling(CudaSampling s)
 {
+  if (s != this->In->Sampling)
+  {
+    this->In->ContentVersion = ~0ull; // channels move between textures and arrays at the next render
+  }
   this->In->Sampling = s;
 }
 
@@ -288,6 +292,10 @@ void CUDARenderer::Internal::sync(const Scene& scene)
   if (newGrid)
   {
     this->buildRanges(scene.macrocellSize());
+    if (newData)
+    {
+      this->moveNonFiniteToArrays(scene);
+    }
   }
   bool which[kMaxChannels] = {};
   bool any = false;

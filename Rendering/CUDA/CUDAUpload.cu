@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 //
-// Device copies of the channels: one dense array per channel in its native
-// type (strided channels packed, float64 converted to float32) and, for
-// texture sampling, a 3D texture made from that array.
+// Device copies of the channels, each held once: a 3D texture (texture
+// sampling) or a dense array in its native type (strided channels packed,
+// float64 converted to float32).
 #include "CUDAInternal.h"
 
 #include <algorithm>
@@ -39,110 +39,136 @@ cudaChannelFormatDesc formatOf(ScalarType t, float& scale, cudaTextureReadMode& 
       }
     });
 }
+/// The channel's voxels as one dense host array in the device type (float64
+/// converted to float32 relative to the offset, exactly as fetchVoxel()
+/// converts them; strided channels packed), using `staging` where needed.
+const void* denseHostVoxels(const ChannelSource& src, size_t voxels, std::vector<uint8_t>& staging, ScalarType& type)
+{
+  if (src.type == ScalarType::Float64)
+  {
+    staging.resize(voxels * sizeof(float));
+    float* out = reinterpret_cast<float*>(staging.data());
+    const double* in = static_cast<const double*>(src.data);
+    for (size_t v = 0; v < voxels; ++v)
+    {
+      out[v] = float(in[v * size_t(src.stride)] - src.offset);
+    }
+    type = ScalarType::Float32;
+    return staging.data();
+  }
+  type = src.type;
+  if (src.stride == 1)
+  {
+    return src.data;
+  }
+  const size_t es = size_t(scalarTypeSize(src.type));
+  staging.resize(voxels * es);
+  const uint8_t* in = static_cast<const uint8_t*>(src.data);
+  for (size_t v = 0; v < voxels; ++v)
+  {
+    std::memcpy(staging.data() + v * es, in + v * size_t(src.stride) * es, es);
+  }
+  return staging.data();
+}
+
 } // namespace
+
+bool CUDARenderer::Internal::uploadTexture(DeviceChannel& dc, const void* host)
+{
+  const int* d = this->Dims;
+  cudaTextureReadMode mode;
+  cudaChannelFormatDesc fmt = formatOf(dc.type, dc.textureScale, mode);
+  const cudaExtent ext = make_cudaExtent(size_t(d[0]), size_t(d[1]), size_t(d[2]));
+  const cudaError_t e = cudaMalloc3DArray(&dc.array, &fmt, ext);
+  if (e == cudaErrorMemoryAllocation)
+  {
+    (void)cudaGetLastError();
+    dc.array = nullptr;
+    return false;
+  }
+  check(e, "cudaMalloc3DArray");
+  const size_t es = size_t(scalarTypeSize(dc.type));
+  dc.arrayBytes = size_t(d[0]) * size_t(d[1]) * size_t(d[2]) * es;
+  cudaMemcpy3DParms copy{};
+  copy.srcPtr = make_cudaPitchedPtr(const_cast<void*>(host), size_t(d[0]) * es, size_t(d[0]), size_t(d[1]));
+  copy.dstArray = dc.array;
+  copy.extent = ext;
+  copy.kind = cudaMemcpyHostToDevice;
+  MCVOL_CUDA(cudaMemcpy3D(&copy));
+  cudaResourceDesc res{};
+  res.resType = cudaResourceTypeArray;
+  res.res.array.array = dc.array;
+  cudaTextureDesc td{};
+  td.addressMode[0] = td.addressMode[1] = td.addressMode[2] = cudaAddressModeClamp;
+  td.readMode = mode;
+  td.normalizedCoords = 0;
+  td.filterMode = cudaFilterModeLinear;
+  MCVOL_CUDA(cudaCreateTextureObject(&dc.linear, &res, &td, nullptr));
+  td.filterMode = cudaFilterModePoint;
+  MCVOL_CUDA(cudaCreateTextureObject(&dc.point, &res, &td, nullptr));
+  return true;
+}
 
 void CUDARenderer::Internal::uploadChannels(const Scene& scene)
 {
+  // Each channel is held once on the device (issue 14, item 5): as a 3D
+  // texture when texture sampling is on and it fits (the faster path,
+  // RESULTS.md "Texture or global-memory sampling"), else as a dense array.
+  // Ranges are built from whichever holds it; a texture-held channel found
+  // to hold NaN or Inf moves to an array afterwards (moveNonFiniteToArrays()).
   const int* d = scene.dims();
   const size_t voxels = size_t(d[0]) * size_t(d[1]) * size_t(d[2]);
-  std::vector<uint8_t> staging;
-  for (int n = scene.numChannels(); n < this->NumChannels; ++n)
+  for (int n = 0; n < this->NumChannels; ++n)
   {
     this->Channels[n].bytes.release();
     this->Channels[n].releaseTexture();
   }
+  std::copy(d, d + 3, this->Dims);
+  this->NumChannels = scene.numChannels();
+  const bool fits =
+    d[0] <= this->Props.maxTexture3D[0] && d[1] <= this->Props.maxTexture3D[1] && d[2] <= this->Props.maxTexture3D[2];
+  std::vector<uint8_t> staging;
   for (int n = 0; n < scene.numChannels(); ++n)
   {
-    const ChannelSource& src = scene.channel(n);
     DeviceChannel& dc = this->Channels[n];
-    dc.releaseTexture();
-    const void* host = src.data;
-    if (src.type == ScalarType::Float64)
+    dc.nonFinite = false;
+    const void* host = denseHostVoxels(scene.channel(n), voxels, staging, dc.type);
+    if (this->Sampling == CudaSampling::Texture && fits)
     {
-      // Doubles become floats relative to the channel's offset, exactly as
-      // fetchVoxel() converts them, so both backends see the same values.
-      staging.resize(voxels * sizeof(float));
-      float* out = reinterpret_cast<float*>(staging.data());
-      const double* in = static_cast<const double*>(src.data);
-      for (size_t v = 0; v < voxels; ++v)
+      if (this->uploadTexture(dc, host))
       {
-        out[v] = float(in[v * size_t(src.stride)] - src.offset);
+        ++this->Updates.dataUploads;
+        continue;
       }
-      host = staging.data();
-      dc.type = ScalarType::Float32;
-    }
-    else
-    {
-      dc.type = src.type;
-      if (src.stride != 1)
-      {
-        const size_t es = size_t(scalarTypeSize(src.type));
-        staging.resize(voxels * es);
-        const uint8_t* in = static_cast<const uint8_t*>(src.data);
-        for (size_t v = 0; v < voxels; ++v)
-        {
-          std::memcpy(staging.data() + v * es, in + v * size_t(src.stride) * es, es);
-        }
-        host = staging.data();
-      }
+      ++this->Updates.textureFallbacks; // no room for a texture: a dense array instead
     }
     const size_t bytes = voxels * size_t(scalarTypeSize(dc.type));
     dc.bytes.resize(bytes);
     MCVOL_CUDA(cudaMemcpy(dc.bytes.ptr, host, bytes, cudaMemcpyHostToDevice));
     ++this->Updates.dataUploads;
   }
-  std::copy(d, d + 3, this->Dims);
-  this->NumChannels = scene.numChannels();
-  this->TexturesBuilt = false;
 }
 
-void CUDARenderer::Internal::buildTextures()
+void CUDARenderer::Internal::moveNonFiniteToArrays(const Scene& scene)
 {
-  MCVOL_CUDA(cudaDeviceSynchronize()); // no kernel may still read the old textures
-  const int* d = this->Dims;
-  const bool fits =
-    d[0] <= this->Props.maxTexture3D[0] && d[1] <= this->Props.maxTexture3D[1] && d[2] <= this->Props.maxTexture3D[2];
+  // Hardware filtering drops a non-finite corner whose weight rounds to 0,
+  // where the core's rule makes the sample NaN (transparent): such channels
+  // sample a dense array instead of their texture.
+  const size_t voxels = size_t(this->Dims[0]) * size_t(this->Dims[1]) * size_t(this->Dims[2]);
+  std::vector<uint8_t> staging;
   for (int n = 0; n < this->NumChannels; ++n)
   {
     DeviceChannel& dc = this->Channels[n];
-    dc.releaseTexture();
-    if (!fits)
+    if (!dc.nonFinite || !dc.array)
     {
-      continue; // too large for a 3D texture: this channel samples global memory
-    }
-    cudaTextureReadMode mode;
-    cudaChannelFormatDesc fmt = formatOf(dc.type, dc.textureScale, mode);
-    const cudaExtent ext = make_cudaExtent(size_t(d[0]), size_t(d[1]), size_t(d[2]));
-    const cudaError_t e = cudaMalloc3DArray(&dc.array, &fmt, ext);
-    if (e == cudaErrorMemoryAllocation)
-    {
-      // No room for a second copy: this channel samples global memory.
-      (void)cudaGetLastError();
-      dc.array = nullptr;
-      ++this->Updates.textureFallbacks;
       continue;
     }
-    check(e, "cudaMalloc3DArray");
-    const size_t es = size_t(scalarTypeSize(dc.type));
-    dc.arrayBytes = size_t(d[0]) * size_t(d[1]) * size_t(d[2]) * es;
-    cudaMemcpy3DParms copy{};
-    copy.srcPtr = make_cudaPitchedPtr(dc.bytes.ptr, size_t(d[0]) * es, size_t(d[0]), size_t(d[1]));
-    copy.dstArray = dc.array;
-    copy.extent = ext;
-    copy.kind = cudaMemcpyDeviceToDevice;
-    MCVOL_CUDA(cudaMemcpy3D(&copy));
-    cudaResourceDesc res{};
-    res.resType = cudaResourceTypeArray;
-    res.res.array.array = dc.array;
-    cudaTextureDesc td{};
-    td.addressMode[0] = td.addressMode[1] = td.addressMode[2] = cudaAddressModeClamp;
-    td.readMode = mode;
-    td.normalizedCoords = 0;
-    td.filterMode = cudaFilterModeLinear;
-    MCVOL_CUDA(cudaCreateTextureObject(&dc.linear, &res, &td, nullptr));
-    td.filterMode = cudaFilterModePoint;
-    MCVOL_CUDA(cudaCreateTextureObject(&dc.point, &res, &td, nullptr));
+    MCVOL_CUDA(cudaDeviceSynchronize());
+    dc.releaseTexture();
+    const void* host = denseHostVoxels(scene.channel(n), voxels, staging, dc.type);
+    const size_t bytes = voxels * size_t(scalarTypeSize(dc.type));
+    dc.bytes.resize(bytes);
+    MCVOL_CUDA(cudaMemcpy(dc.bytes.ptr, host, bytes, cudaMemcpyHostToDevice));
   }
-  this->TexturesBuilt = true;
 }
 } // namespace mcvol

@@ -344,10 +344,12 @@ TEST(CudaMarch, VisibilityOptimizedEqualsCPU)
 }
 
 // The march reads the Monte Carlo renders' device copies: after a render, a
-// march uploads nothing and builds no grid, and the reverse. Software
-// interpolation builds no texture; MarchSettings::deviceTextures does, and
-// stays close to the reference (hardware weights are 9-bit fixed point: a
-// loose bound, not the reference's tolerance).
+// march uploads nothing and builds no grid, and the reverse. Global sampling
+// holds arrays, texture sampling textures (each channel once); the reference
+// march reads the same voxels from either. MarchSettings::deviceTextures
+// filters in hardware and stays close to the reference (hardware weights are
+// 9-bit fixed point: a loose bound, not the reference's tolerance); it needs
+// texture sampling and says so otherwise.
 TEST(CudaMarch, SharesTheUploadAndSamplingIsChosen)
 {
   const DemoVolume v = makeDemo("cosmology", { 24, 24, 24 });
@@ -365,19 +367,21 @@ TEST(CudaMarch, SharesTheUploadAndSamplingIsChosen)
   EXPECT_EQ(gpu.updateCounters().dataUploads, before.dataUploads);
   EXPECT_EQ(gpu.updateCounters().rangeBuilds, before.rangeBuilds);
   EXPECT_EQ(gpu.updateCounters().majorantChannelBuilds, before.majorantChannelBuilds);
-  EXPECT_EQ(gpu.memory().textureBytes, 0u) << "software interpolation builds no texture";
+  EXPECT_EQ(gpu.memory().textureBytes, 0u) << "global sampling holds arrays";
   gpu.render(scene, cam, rs, nullptr, mc);
   EXPECT_EQ(gpu.updateCounters().dataUploads, before.dataUploads);
   EXPECT_EQ(mc.samples(), 2u);
 
-  CUDARenderer fresh;
+  CUDARenderer fresh; // texture sampling: the channels are held as textures
   const Marched b = marchOn(fresh, scene, cam, ms);
   EXPECT_EQ(fresh.updateCounters().dataUploads, uint64_t(v.numChannels())) << "one upload per channel";
-  expectClose(a, b, 0.0, "same device copies, same image");
+  EXPECT_GT(fresh.memory().textureBytes, 0u);
+  EXPECT_EQ(fresh.memory().dataBytes, 0u) << "texture-held channels keep no array";
+  expectClose(a, b, 0.0, "the same voxels read from textures or arrays, the same image");
 
   ms.deviceTextures = true;
-  const Marched t = marchOn(gpu, scene, cam, ms);
-  EXPECT_GT(gpu.memory().textureBytes, 0u);
+  EXPECT_THROW(marchOn(gpu, scene, cam, ms), std::invalid_argument) << "arrays cannot be hardware-filtered";
+  const Marched t = marchOn(fresh, scene, cam, ms);
   expectClose(a, t, 0.02, "texture sampling (loose bound)");
 }
 

@@ -404,6 +404,49 @@ TEST(CudaGrid, UploadsAndRebuildsFollowChanges)
   EXPECT_LT(meanDiff, 2e-3) << "max difference " << maxDiff;
 }
 
+// Each channel is held once on the device (issue 14, item 5): as a texture
+// with texture sampling, as an array with global sampling, and as an array
+// when it holds NaN (the core's NaN rule needs unfiltered reads). Device
+// bytes equal the data (float64 stored as float32), whatever the type, and
+// a change of sampling moves the channels without a second copy.
+TEST(CudaMemory, EachChannelHeldOnce)
+{
+  for (ScalarType t : { ScalarType::UInt8, ScalarType::Int16, ScalarType::UInt16, ScalarType::Float32,
+         ScalarType::Float64 })
+  {
+    SCOPED_TRACE(toString(t));
+    const int N = 3;
+    const TypedVolume v(t, N, 20, 18, 16);
+    Scene scene;
+    v.configure(scene, BlendMode::Density);
+    CUDARenderer g;
+    const Camera cam = orbitCamera(v.dims, std::array<double, 3>{ 1, 1, 1 }.data(), 16, 16, 30, 20);
+    Accumulator acc;
+    RenderSettings rs;
+    g.render(scene, cam, rs, nullptr, acc);
+    const size_t voxels = size_t(20) * 18 * 16;
+    const size_t es = t == ScalarType::Float64 ? 4 : size_t(scalarTypeSize(t));
+    const size_t all = voxels * es * N;
+    // Float32 channel 0 holds a NaN voxel (TypedVolume): it alone is an array.
+    const size_t arrays = t == ScalarType::Float32 ? voxels * es : 0;
+    CudaMemoryStats m = g.memory();
+    EXPECT_EQ(m.textureBytes + m.dataBytes, all) << "each channel once";
+    EXPECT_EQ(m.dataBytes, arrays);
+    EXPECT_EQ(g.updateCounters().dataUploads, uint64_t(N));
+
+    g.setSampling(CudaSampling::Global);
+    g.render(scene, cam, rs, nullptr, acc);
+    m = g.memory();
+    EXPECT_EQ(m.textureBytes, 0u);
+    EXPECT_EQ(m.dataBytes, all);
+    g.setSampling(CudaSampling::Texture);
+    g.render(scene, cam, rs, nullptr, acc);
+    m = g.memory();
+    EXPECT_EQ(m.textureBytes + m.dataBytes, all);
+    EXPECT_EQ(m.dataBytes, arrays);
+  }
+}
+
 // Progressive accumulation on the device: k renders of one sample with the
 // image left on the device equal one render of k samples; a host reset
 // restarts the device mean; the CPU's progressive mean matches too.

@@ -20,8 +20,8 @@ enum class CudaSampling : int
 /// Device-side memory of a CUDA renderer (the paper's Table 1, on the GPU).
 struct CudaMemoryStats
 {
-  size_t dataBytes = 0;      ///< channel arrays (native type; float64 stored as float32)
-  size_t textureBytes = 0;   ///< 3D texture arrays (a second copy, when texture sampling is on)
+  size_t dataBytes = 0;      ///< channels held as dense arrays (native type; float64 stored as float32)
+  size_t textureBytes = 0;   ///< channels held as 3D textures (each channel is held one way only)
   size_t macrocellBytes = 0; ///< per-cell per-channel scalar ranges
   size_t majorantBytes = 0;  ///< per-cell per-channel majorants
   size_t imageBytes = 0;     ///< accumulation (with the error estimate's even half) and depth buffers
@@ -36,7 +36,7 @@ struct CudaUpdateCounters
   uint64_t imageDownloads = 0;        ///< accumulated images copied to the host
   double lastMajorantMs = 0.0;        ///< GPU time of the last majorant rebuild (all channels it touched)
   double lastRangeMs = 0.0;           ///< GPU time of the last range build
-  uint64_t textureFallbacks = 0;      ///< channels sampled from global memory for lack of room for a texture
+  uint64_t textureFallbacks = 0;      ///< channels held as dense arrays for lack of room for a texture
 };
 
 /**

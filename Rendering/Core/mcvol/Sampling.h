@@ -11,6 +11,19 @@ namespace mcvol
 /// One voxel of a channel, converted to float.
 MCVOL_HOT float fetchVoxel(const ChannelView& c, int64_t v)
 {
+#if defined(__CUDA_ARCH__)
+  if (c.data == nullptr)
+  {
+    // Texture-held channel (ChannelView::voxelTexture): the voxel's centre.
+    const int64_t nx = c.voxelTextureDims[0];
+    const int64_t nxy = nx * c.voxelTextureDims[1];
+    const int64_t k = v / nxy;
+    const int64_t r = v - k * nxy;
+    const int64_t j = r / nx;
+    const int64_t i = r - j * nx;
+    return c.textureScale * tex3D<float>(c.voxelTexture, float(i) + 0.5f, float(j) + 0.5f, float(k) + 0.5f);
+  }
+#endif
   const int64_t i = v * c.stride;
   return visitScalarType(c.type,
     [&](auto tag) -> float

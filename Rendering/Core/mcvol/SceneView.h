@@ -23,6 +23,11 @@ struct ChannelView
   /// CUDA backend only: a 3D texture object (cudaTextureObject_t) holding the
   /// same voxels, sampled with hardware filtering instead of `data`; 0 = none.
   unsigned long long texture = 0;
+  /// CUDA backend only: when `data` is null, a point-filtered 3D texture
+  /// holding the voxels (the channel is held once, as a texture), read voxel
+  /// by voxel by fetchVoxel(); voxelTextureDims are the grid's x and y sizes.
+  unsigned long long voxelTexture = 0;
+  int voxelTextureDims[2] = { 0, 0 };
   /// Texture reads of integer data come back normalised (uint8 / 255 ...);
   /// this factor restores data units.
   float textureScale = 1.f;
