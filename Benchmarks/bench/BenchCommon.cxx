@@ -213,7 +213,14 @@ double median(std::vector<double> v)
 
 void Setup::load(const Options& o, int channels, int macrocell, bool hostAcceleration)
 {
-  this->volume = mcvol::makeDemo(o.dataset, o.dims, channels);
+  const std::string key = o.dataset + " " + std::to_string(o.dims[0]) + " " + std::to_string(o.dims[1]) + " " +
+    std::to_string(o.dims[2]) + " " + std::to_string(channels);
+  if (key != this->loadedKey)
+  {
+    this->volume = mcvol::DemoVolume(); // the old one goes first (host memory)
+    this->volume = mcvol::makeDemo(o.dataset, o.dims, channels);
+    this->loadedKey = key;
+  }
   this->configure(o, this->volume.numChannels(), macrocell, hostAcceleration);
 }
 

@@ -65,7 +65,11 @@ struct Setup
   std::vector<std::array<float, 2>> ranges;
   mcvol::Scene scene;
 
+  /// Generates the dataset (kept for the next section when name, size and
+  /// channel count are the same: large volumes take minutes) and configures
+  /// a new scene over it.
   void load(const Options& o, int channels, int macrocell, bool hostAcceleration = true);
+  std::string loadedKey; ///< what `volume` was generated from ("" after another section replaced it)
 
   /// A new scene over the first `channels` channels of the loaded volume (the
   /// channel sweep generates the largest count once).

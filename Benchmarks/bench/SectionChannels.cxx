@@ -21,6 +21,7 @@ void runChannels(Bench& bench)
   std::printf("## Frame time against channel count (%s, macrocell %d)\n\n", o.dataset.c_str(), o.macrocell);
   std::printf("| channels | 1-DDA ms | N-DDA ms | 1-DDA / 1 channel | mean alpha |\n|---|---|---|---|---|\n");
   double base = 0;
+  s.loadedKey.clear();
   s.volume = mcvol::makeDemo(o.dataset, o.dims, *std::max_element(o.channelCounts.begin(), o.channelCounts.end()));
   for (int n : o.channelCounts)
   {

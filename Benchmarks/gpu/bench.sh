@@ -14,6 +14,9 @@
 #   sequences independent samples against Owen-scrambled Sobol' points: error
 #             against spp, slopes, spp and ms to RMSE 0.01 and 35 dB (1024^2,
 #             the four paper-sized datasets; issue 14, item 2)
+#   big       a volume of FRACTION (default 0.6) of the device's memory
+#             (figure3, 3 x float32, generated cheaply) renders: device bytes
+#             and frame time (issue 14, item 5)
 # Usage: bash Benchmarks/gpu/bench.sh [build-dir] stage...   (results under $OUT)
 set -uo pipefail
 b="${1:-/tmp/mcvol-gpu}"
@@ -129,6 +132,14 @@ for stage in "$@"; do
           done
         done
       fi
+      ;;
+    big)
+      # 3 float32 channels: 12 bytes per voxel position.
+      mib="$(nvidia-smi --query-gpu=memory.total --format=csv,noheader,nounits | head -1)"
+      edge="$(python3 -c "print(int((${FRACTION:-0.6} * $mib * 2**20 / 12) ** (1 / 3)))")"
+      run "big-$edge" --backend cuda --dataset figure3 --dims "$edge" "$edge" "$edge" --label "figure3 ${FRACTION:-0.6} of ${mib} MiB" \
+        --size 1024 1024 --warmup 5 --frames 50 --sections memory,trackers
+      grep -E "^GPU memory|^\| (1-DDA|N-DDA)" "$out/big-$edge.md"
       ;;
     rebuild)
       # One channel's transfer function changes: GPU majorant rebuild time.
