@@ -148,6 +148,12 @@ const char* vtkMultiChannelVolumeMapper::GetTrackingMethodAsString()
 }
 
 //------------------------------------------------------------------------------
+const char* vtkMultiChannelVolumeMapper::GetEstimatorAsString()
+{
+  return this->Estimator == COLLISION_ESTIMATOR ? "Collision" : "ExpectedValue";
+}
+
+//------------------------------------------------------------------------------
 const char* vtkMultiChannelVolumeMapper::GetSampleSequenceAsString()
 {
   return this->SampleSequence == INDEPENDENT_SEQUENCE ? "Independent" : "Sobol";
@@ -183,6 +189,8 @@ bool vtkMultiChannelVolumeMapper::TraceImage(const mcvol::Scene& scene, const mc
   settings.jitterPixels = this->PixelJitter;
   settings.readBackEven = false; // GetEstimatedError() reads it back when asked
   settings.sampler = this->SampleSequence == INDEPENDENT_SEQUENCE ? mcvol::Sampler::Independent : mcvol::Sampler::Sobol;
+  settings.estimator =
+    this->Estimator == COLLISION_ESTIMATOR ? mcvol::Estimator::Collision : mcvol::Estimator::ExpectedValue;
   try
   {
     renderer->render(scene, camera, settings, depth, accum);
@@ -959,6 +967,7 @@ void vtkMultiChannelVolumeMapper::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "MixColorMode: " << (this->MixColorMode == MIX_AVERAGE ? "Average" : "Equation10") << "\n";
   os << indent << "TrackingMethod: " << this->GetTrackingMethodAsString() << "\n";
   os << indent << "SampleSequence: " << this->GetSampleSequenceAsString() << "\n";
+  os << indent << "Estimator: " << this->GetEstimatorAsString() << "\n";
   os << indent << "SamplesPerPixel: " << this->SamplesPerPixel << "\n";
   os << indent << "InteractiveFrameTime: " << this->InteractiveFrameTime << "\n";
   os << indent << "Progressive: " << this->Progressive << "\n";

@@ -140,6 +140,32 @@ public:
   const char* GetTrackingMethodAsString();
   ///@}
 
+  enum Estimators
+  {
+    COLLISION_ESTIMATOR = 0,
+    EXPECTED_VALUE_ESTIMATOR = 1
+  };
+
+  ///@{
+  /**
+   * What each unlit camera ray scores. EXPECTED_VALUE_ESTIMATOR (default)
+   * scores every tentative collision of the blend's majorant with the
+   * transmittance so far (ratio tracking of the emission) and stops by
+   * Russian roulette; COLLISION_ESTIMATOR tracks to the first real collision
+   * and scores its colour (the papers' estimator; TrackingMethod then picks
+   * 1-DDA or N-DDA). Both are unbiased; the expected-value estimator reaches
+   * a given error several times sooner on every dataset measured
+   * (Benchmarks/RESULTS.md, "Estimators"). Lit volumes (ShadeOn), the
+   * composite blend mode and the visibility optimization always use the
+   * collision estimator. A change restarts the progressive image.
+   */
+  vtkSetClampMacro(Estimator, int, COLLISION_ESTIMATOR, EXPECTED_VALUE_ESTIMATOR);
+  vtkGetMacro(Estimator, int);
+  void SetEstimatorToCollision() { this->SetEstimator(COLLISION_ESTIMATOR); }
+  void SetEstimatorToExpectedValue() { this->SetEstimator(EXPECTED_VALUE_ESTIMATOR); }
+  const char* GetEstimatorAsString();
+  ///@}
+
   enum SampleSequences
   {
     INDEPENDENT_SEQUENCE = 0,
@@ -648,6 +674,7 @@ protected:
   int MixColorMode = MIX_AVERAGE;
   int TrackingMethod = ONE_DDA;
   int SampleSequence = SOBOL_SEQUENCE;
+  int Estimator = EXPECTED_VALUE_ESTIMATOR;
   int SamplesPerPixel = 1;
   double InteractiveFrameTime = 0.0;
   int LastSamplesPerRender = 0;

@@ -49,6 +49,7 @@ void usage()
             "                   [--label TEXT] [--sampling texture|global] [--block X Y]\n"
             "                   [--psnr DB] [--reference-spp N] [--density F]\n"
             "                   [--samplers independent,sobol] [--spp-max N]\n"
+            "                   [--estimators collision,expected-value]\n"
             "sections: trackers channels macrocell rebuild memory paper converge sampling effects visibility estimate\n"
             "          sequences");
 }
@@ -138,6 +139,18 @@ Options parse(int argc, char** argv)
     {
       need(1);
       o.psnr = std::stod(argv[++i]);
+    }
+    else if (a == "--estimators")
+    {
+      need(1);
+      o.estimators = split(argv[++i], ',');
+      for (const std::string& n : o.estimators)
+      {
+        if (n != "collision" && n != "expected-value")
+        {
+          throw std::invalid_argument("--estimators takes collision and/or expected-value, not " + n);
+        }
+      }
     }
     else if (a == "--samplers")
     {

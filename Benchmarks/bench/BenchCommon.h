@@ -46,6 +46,7 @@ struct Options
   double density = 1.0; ///< divides every opacity unit distance (denser volumes)
   std::vector<std::string> samplers = { "independent", "sobol" }; ///< section sequences
   int sppMax = 256;                                               ///< section sequences
+  std::vector<std::string> estimators = { "collision" };          ///< section sequences
 };
 
 void usage();

@@ -3,8 +3,9 @@
 // mcvol-bench section "sequences" (issue 14, item 2): the error of the
 // progressive image against a converged reference at 1, 2, 4, ... --spp-max
 // samples per pixel, for the independent sampler and for Owen-scrambled
-// Sobol' points (RenderSettings::sampler), 1 spp per frame (1-DDA, pixel
-// jitter on). Prints per sampler the RMSE and PSNR at each power of two, the
+// Sobol' points (RenderSettings::sampler), each with the --estimators given
+// (RenderSettings::estimator: collision, expected-value), 1 spp per frame
+// (1-DDA, pixel jitter on). Prints per sampler the RMSE and PSNR at each power of two, the
 // fitted log-log slope of RMSE against spp (over all points and over 1-16
 // spp), and the samples and rendering time (the scoring between frames is
 // not timed) to reach RMSE 0.01 and --psnr dB (default 35).
@@ -64,18 +65,32 @@ void runSequences(Bench& bench)
   }
   r.readBack(ref);
   const std::vector<float> refImg(ref.rgba(), ref.rgba() + size_t(4) * ref.width() * ref.height());
-  std::vector<mcvol::Sampler> samplers;
-  for (const std::string& name : o.samplers)
+  struct Config
   {
-    samplers.push_back(name == "sobol" ? mcvol::Sampler::Sobol : mcvol::Sampler::Independent);
+    mcvol::Sampler sampler;
+    mcvol::Estimator estimator;
+    std::string name;
+  };
+  std::vector<Config> configs;
+  for (const std::string& est : o.estimators)
+  {
+    for (const std::string& name : o.samplers)
+    {
+      Config c;
+      c.sampler = name == "sobol" ? mcvol::Sampler::Sobol : mcvol::Sampler::Independent;
+      c.estimator = est == "expected-value" ? mcvol::Estimator::ExpectedValue : mcvol::Estimator::Collision;
+      c.name = o.estimators.size() > 1 ? name + " " + est : name;
+      configs.push_back(c);
+    }
   }
   std::vector<std::vector<double>> errs;
   std::vector<std::string> summary;
-  for (mcvol::Sampler sampler : samplers)
+  for (const Config& config : configs)
   {
     mcvol::RenderSettings st;
     st.seed = 7;
-    st.sampler = sampler;
+    st.sampler = config.sampler;
+    st.estimator = config.estimator;
     st.readBack = false;
     {
       mcvol::Accumulator w;
@@ -121,31 +136,31 @@ void runSequences(Bench& bench)
     const double lowSlope = logSlope(
       std::vector<double>(x.begin(), x.begin() + long(lowN)), std::vector<double>(e.begin(), e.begin() + long(lowN)));
     char line[512];
-    std::snprintf(line, sizeof(line), "| %s | %.2f | %.3f | %.3f | %s | %s | %s | %s |", mcvol::toString(sampler),
+    std::snprintf(line, sizeof(line), "| %s | %.2f | %.3f | %.3f | %s | %s | %s | %s |", config.name.c_str(),
       ms / o.sppMax, slope, lowSlope, sppRmse > 0 ? std::to_string(sppRmse).c_str() : "-",
       sppRmse > 0 ? (std::to_string(int(std::lround(msRmse))) + " ms").c_str() : "-",
       sppPsnr > 0 ? std::to_string(sppPsnr).c_str() : "-",
       sppPsnr > 0 ? (std::to_string(int(std::lround(msPsnr))) + " ms").c_str() : "-");
     summary.push_back(line);
-    bench.row("sequences", ds, s.volume.numChannels(), o.macrocell, mcvol::toString(sampler), slope, "slope",
+    bench.row("sequences", ds, s.volume.numChannels(), o.macrocell, config.name, slope, "slope",
       "ms_per_spp=" + std::to_string(ms / o.sppMax) + " low_slope=" + std::to_string(lowSlope) +
         " spp_rmse001=" + std::to_string(sppRmse) + " ms_rmse001=" + std::to_string(msRmse) +
         " spp_psnr=" + std::to_string(sppPsnr) + " ms_psnr=" + std::to_string(msPsnr));
     for (size_t i = 0; i < x.size(); ++i)
     {
-      bench.row("sequences", ds, s.volume.numChannels(), o.macrocell, mcvol::toString(sampler), e[i], "rmse",
+      bench.row("sequences", ds, s.volume.numChannels(), o.macrocell, config.name, e[i], "rmse",
         "spp=" + std::to_string(int(x[i])));
     }
   }
   std::printf("## Sample sequences: %s, %dx%d, 1-DDA, 1 spp per frame, RMSE (RGB over black) against %u spp of "
               "the independent sampler (another seed)\n\n| spp |",
     ds.c_str(), o.width, o.height, ref.samples());
-  for (mcvol::Sampler sampler : samplers)
+  for (const Config& config : configs)
   {
-    std::printf(" RMSE %s |", mcvol::toString(sampler));
+    std::printf(" RMSE %s |", config.name.c_str());
   }
   std::printf("\n|---|");
-  for (size_t k = 0; k < samplers.size(); ++k)
+  for (size_t k = 0; k < configs.size(); ++k)
   {
     std::printf("---|");
   }

@@ -209,6 +209,11 @@ void vtkMultiChannelVolumeRepresentation::SetTrackingMethod(int method)
   this->GetMultiChannelMapper()->SetTrackingMethod(method);
 }
 
+void vtkMultiChannelVolumeRepresentation::SetEstimator(int estimator)
+{
+  this->GetMultiChannelMapper()->SetEstimator(estimator);
+}
+
 void vtkMultiChannelVolumeRepresentation::SetSampleSequence(int sequence)
 {
   this->GetMultiChannelMapper()->SetSampleSequence(sequence);

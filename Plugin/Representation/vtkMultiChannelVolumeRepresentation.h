@@ -89,6 +89,7 @@ public:
   void SetMixColorMode(int mode);
   void SetTrackingMethod(int method);
   void SetSampleSequence(int sequence);
+  void SetEstimator(int estimator);
   void SetSamplesPerRender(int spp);
   void SetInteractiveFrameTime(double seconds);
   void SetProgressiveRefinement(bool on);

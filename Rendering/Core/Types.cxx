@@ -47,6 +47,11 @@ const char* toString(Sampler s)
   return s == Sampler::Sobol ? "sobol" : "independent";
 }
 
+const char* toString(Estimator e)
+{
+  return e == Estimator::ExpectedValue ? "expected-value" : "collision";
+}
+
 const char* toString(Backend b)
 {
   switch (b)

@@ -6,6 +6,8 @@
 // (Bonferroni) over its statistical checks; seeds are fixed.
 #include "TestUtil.h"
 
+#include "mcvol/Acceleration.h"
+
 #include "mcvol/Sampling.h"
 
 #include <cstring>
@@ -26,7 +28,7 @@ struct Image
 };
 
 Image render(const Scene& scene, const Camera& cam, Tracker t, int spp, uint32_t seed,
-  RenderCounters* counters = nullptr, bool jitter = true)
+  RenderCounters* counters = nullptr, bool jitter = true, Estimator estimator = RenderSettings().estimator)
 {
   std::unique_ptr<Renderer> r = testRenderer();
   Accumulator acc;
@@ -34,6 +36,7 @@ Image render(const Scene& scene, const Camera& cam, Tracker t, int spp, uint32_t
   rs.samplesPerPixel = spp;
   rs.seed = seed;
   rs.tracker = t;
+  rs.estimator = estimator;
   rs.jitterPixels = jitter;
   r->render(scene, cam, rs, nullptr, acc, counters);
   Image img;
@@ -112,19 +115,26 @@ TEST(HardCases, OpacityOne)
   }
   const double spacing[3] = { 1, 1, 1 };
   const Camera cam = axisCamera(2, v.dims, spacing, 0.5, 6.5, 12, 12);
-  for (Tracker t : { Tracker::OneDDA, Tracker::NDDA })
-  {
-    const Image img = render(scene, cam, t, 16, 3);
-    expectFinite(img, "opacity 1");
-    for (int p = 0; p < cam.width * cam.height; ++p)
+  // Collision: the first tentative collision is real, colour exact. Expected
+  // value: it scores w = sigma / majorant = 1 / kMajorantInflation and
+  // leaves T = 1 - w (about 1e-5), which the roulette ends (T = 0, alpha
+  // exactly 1) unless a survivor (probability T / kRouletteThreshold, none
+  // with this seed) goes on; the colour is short by at most c (1 - w).
+  for (Estimator e : { Estimator::Collision, Estimator::ExpectedValue })
+    for (Tracker t : { Tracker::OneDDA, Tracker::NDDA })
     {
-      const float* px = img.px.data() + 4 * p;
-      EXPECT_EQ(px[3], 1.f) << toString(t) << " pixel " << p;
-      EXPECT_NEAR(px[0], 0.2f, 1e-6);
-      EXPECT_NEAR(px[1], 0.4f, 1e-6);
-      EXPECT_NEAR(px[2], 0.6f, 1e-6);
+      const Image img = render(scene, cam, t, 16, 3, nullptr, true, e);
+      expectFinite(img, "opacity 1");
+      const double tol = e == Estimator::Collision ? 1e-6 : 1e-6 + (1.0 - 1.0 / kMajorantInflation);
+      for (int p = 0; p < cam.width * cam.height; ++p)
+      {
+        const float* px = img.px.data() + 4 * p;
+        EXPECT_EQ(px[3], 1.f) << toString(t) << " " << toString(e) << " pixel " << p;
+        EXPECT_NEAR(px[0], 0.2f, 0.2 * tol) << toString(e);
+        EXPECT_NEAR(px[1], 0.4f, 0.4 * tol) << toString(e);
+        EXPECT_NEAR(px[2], 0.6f, 0.6 * tol) << toString(e);
+      }
     }
-  }
 }
 
 // All-zero opacity: no channel active, nothing traversed, nothing sampled,

@@ -37,6 +37,7 @@ TEST(Trackers, NDDAMatches1DDA)
     configureDemo(scene, v, 4);
     const Camera cam = demoCamera(v, 40, 40);
     RenderSettings rs;
+    rs.estimator = Estimator::Collision; // the trackers' estimator (expected-value uses neither)
     rs.tracker = Tracker::OneDDA;
     const Moments one = renderMoments(scene, cam, rs, 64, 1000);
     rs.tracker = Tracker::NDDA;
@@ -61,12 +62,14 @@ TEST(Reproducibility, ThreadCountDoesNotChangeImage)
   {
     scene.setBlendMode(mode);
     scene.update();
+    for (Estimator e : { Estimator::Collision, Estimator::ExpectedValue })
     for (Tracker t : { Tracker::OneDDA, Tracker::NDDA })
     {
       RenderSettings rs;
       rs.samplesPerPixel = 4;
       rs.seed = 77;
       rs.tracker = t;
+      rs.estimator = e;
       std::vector<float> ref;
       RenderCounters refCounters;
       for (int threads : { 1, 2, 3 })
@@ -84,7 +87,8 @@ TEST(Reproducibility, ThreadCountDoesNotChangeImage)
           continue;
         }
         EXPECT_EQ(0, std::memcmp(ref.data(), img.data(), ref.size() * sizeof(float)))
-          << toString(mode) << " " << toString(t) << ": " << threads << " threads differ from 1 thread";
+          << toString(mode) << " " << toString(t) << " " << toString(e) << ": " << threads
+          << " threads differ from 1 thread";
         EXPECT_EQ(counters.tentativeCollisions, refCounters.tentativeCollisions);
         EXPECT_EQ(counters.ddaSteps, refCounters.ddaSteps);
         EXPECT_EQ(counters.realCollisions, refCounters.realCollisions);
@@ -155,6 +159,7 @@ struct TwoChannelSlab
     rs.samplesPerPixel = spp;
     rs.seed = seed;
     rs.tracker = t;
+    rs.estimator = Estimator::Collision; // alpha counts collided samples
     r.render(scene, cam, rs, nullptr, acc);
     double hits = 0;
     for (int p = 0; p < cam.width * cam.height; ++p)
@@ -197,6 +202,7 @@ TEST(BlendModes, MaxShowsOnlyTheDenserChannel)
       rs.samplesPerPixel = spp;
       rs.seed = ++seed;
       rs.tracker = t;
+      rs.estimator = Estimator::Collision;
       r.render(density.scene, density.cam, rs, nullptr, acc);
       double dh = 0;
       for (int p = 0; p < density.cam.width * density.cam.height; ++p)
@@ -298,6 +304,7 @@ TEST(BlendModes, CompositeIsSumOfChannels)
   configureDemo(scene, v, 4, 64, 1.0, BlendMode::Composite);
   RenderSettings rs;
   rs.jitterPixels = false;
+  rs.estimator = Estimator::Collision; // the single-channel renders below compare sample by sample
   const Moments C = renderMoments(scene, cam, rs, n, 100);
   std::vector<Moments> S;
   for (int k = 0; k < N; ++k)

@@ -63,6 +63,7 @@ int TestMultiChannelVolumeMapper(int argc, char* argv[])
   // an exact regression of that sampler's images (the Sobol' sampler, the
   // default, is tested statistically in Testing/Core/sequence_test.cxx).
   mapper->SetSampleSequenceToIndependent();
+  mapper->SetEstimatorToCollision(); // and the collision estimator
   mapper->SetSamplesPerPixel(16);
 
   vtkNew<vtkVolumeProperty> property;

@@ -62,6 +62,7 @@ int TestMultiChannelVolumeMapperOcclusion(int argc, char* argv[])
   // The baseline was made with the independent sampler (see
   // TestMultiChannelVolumeMapper.cxx).
   mapper->SetSampleSequenceToIndependent();
+  mapper->SetEstimatorToCollision(); // and the collision estimator
 
   vtkNew<vtkVolumeProperty> property;
   property->IndependentComponentsOn();

@@ -87,6 +87,7 @@ reference = image()
 
 expect_property("Seed", 8, True)
 expect_property("SampleSequence", "Sobol", True)
+expect_property("Estimator", "Expected Value", True)
 expect_property("SamplesPerRender", 4, False, "SamplesPerRender (same total)")
 expect_property("MaximumTotalSamples", 64, True)
 expect_property("ChannelBlendMode", "Mix", True)

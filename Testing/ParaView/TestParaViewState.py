@@ -22,6 +22,7 @@ settings = {
     "MixWeights": [0.5, 1.0, 2.0],
     "TrackingMethod": "N DDA",
     "SampleSequence": "Sobol",  # show() pins Independent
+    "Estimator": "Expected Value",  # show() pins Collision
     "SamplesPerRender": 4,
     "ProgressiveRefinement": 1,
     "MaximumTotalSamples": 24,

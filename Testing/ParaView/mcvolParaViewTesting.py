@@ -135,6 +135,7 @@ def show(source, view):
     # The baselines were made with the independent sampler (the default Sobol'
     # sampler is tested statistically in Testing/Core/sequence_test.cxx).
     rep.SampleSequence = "Independent"
+    rep.Estimator = "Collision"  # and with the collision estimator
     rep.SamplesPerRender = 8
     rep.InteractiveFrameTime = 0  # fixed batches: the tests count samples
     rep.MaximumTotalSamples = 32

@@ -77,6 +77,7 @@ def render(dataset, mode, tracker, spp=SPP, seed=7):
     # this test an exact regression of that sampler's images (the default
     # Sobol' sampler is tested statistically in Testing/Core/sequence_test.cxx).
     mapper.SetSampleSequenceToIndependent()
+    mapper.SetEstimatorToCollision()  # and the collision estimator
     use_test_backend(mapper)
     if mode in ("Mix", "MixAverage"):
         for c in range(n):

@@ -73,6 +73,7 @@ BAD_SCENES = [
     ("bad-blend", {"input": {"demo": "figure3"}, "blend": "sum"}, "blend:"),
     ("bad-tracking", {"input": {"demo": "figure3"}, "tracking": "2-dda"}, "tracking:"),
     ("bad-sample-sequence", {"input": {"demo": "figure3"}, "sample_sequence": "halton"}, "sample_sequence:"),
+    ("bad-estimator", {"input": {"demo": "figure3"}, "estimator": "track-length"}, "estimator:"),
     ("bad-mix-color", {"input": {"demo": "figure3"}, "blend": "mix", "mix_color": "sum"}, "mix_color:"),
     ("bad-interpolation", {"input": {"demo": "figure3"}, "interpolation": "cubic"}, "interpolation:"),
     ("bad-spp-type", {"input": {"demo": "figure3"}, "samples_per_pixel": "many"}, "samples_per_pixel:"),

@@ -18,6 +18,7 @@ struct FrameParams
   Tracker tracker = Tracker::OneDDA;
   bool jitter = true;
   Sampler sampler = Sampler::Sobol;
+  Estimator estimator = Estimator::ExpectedValue;
 };
 
 /**
@@ -58,8 +59,19 @@ MCVOL_FUNC Vec4f renderPixel(const SceneView& s, const CameraView& cam, const Fr
     {
       continue;
     }
-    const Vec4f v = Lit ? traceLitSample<Mode>(s, fp.tracker, ray.o, ray.d, ray.world, ray.tmax, rng, c, sc, ri)
-                        : traceSample<Mode>(s, fp.tracker, ray.o, ray.d, 0.f, ray.tmax, rng, c, ri);
+    Vec4f v;
+    if (Lit)
+    {
+      v = traceLitSample<Mode>(s, fp.tracker, ray.o, ray.d, ray.world, ray.tmax, rng, c, sc, ri);
+    }
+    else if (!Optimized && Mode != BlendMode::Composite && fp.estimator == Estimator::ExpectedValue)
+    {
+      v = trackExpected<Mode>(s, ray.o, ray.d, 0.f, ray.tmax, rng, c);
+    }
+    else
+    {
+      v = traceSample<Mode>(s, fp.tracker, ray.o, ray.d, 0.f, ray.tmax, rng, c, ri);
+    }
     sum.r += v.r;
     sum.g += v.g;
     sum.b += v.b;

@@ -100,6 +100,7 @@ inline FrameParams frameParams(const RenderSettings& s, uint32_t firstSample)
   fp.tracker = s.tracker;
   fp.jitter = s.jitterPixels;
   fp.sampler = s.sampler;
+  fp.estimator = s.estimator;
   return fp;
 }
 

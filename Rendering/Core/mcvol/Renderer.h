@@ -39,6 +39,10 @@ struct RenderSettings
   /// Sequence.h). Sobol by default: lower error at every sample count
   /// measured (Benchmarks/RESULTS.md, "Sample sequences").
   Sampler sampler = Sampler::Sobol;
+  /// What an unlit camera ray scores (Types.h). ExpectedValue by default:
+  /// less time to a given error on every dataset measured
+  /// (Benchmarks/RESULTS.md, "Estimators").
+  Estimator estimator = Estimator::ExpectedValue;
   /// Device backends: copy the accumulated image into the Accumulator at the
   /// end of render(). false leaves it on the device (the frame may still be
   /// running when render() returns) until readBack() or the next render with

@@ -58,6 +58,29 @@ enum class Sampler : int
   Sobol = 1
 };
 
+/**
+ * What an unlit camera ray scores (issue 14, item 1). Both are unbiased
+ * estimates of the same emission-absorption integral.
+ * - Collision: Woodcock tracking to the first real collision, which scores
+ *   its colour with alpha 1 (the papers' estimator; the trackers choose
+ *   1-DDA or N-DDA).
+ * - ExpectedValue: every tentative collision of the summed (density) or
+ *   largest (max, mix) majorant scores T * (sigma / majorant) * emission of
+ *   the blend there and multiplies the running transmittance T by
+ *   1 - sigma / majorant (ratio tracking of the emission term), until T
+ *   falls below kRouletteThreshold and Russian roulette ends it; alpha is
+ *   1 - T. More work per sample (every active channel is sampled at every
+ *   tentative collision, and the ray goes on past the first real one), much
+ *   less noise per sample.
+ * Lit paths, post-render compositing and the visibility optimization keep
+ * the collision estimator whatever is asked (their own estimators apply).
+ */
+enum class Estimator : int
+{
+  Collision = 0,
+  ExpectedValue = 1
+};
+
 enum class Backend : int
 {
   Auto = 0,
@@ -107,6 +130,7 @@ const char* toString(ScalarType t);
 const char* toString(BlendMode m);
 const char* toString(Tracker t);
 const char* toString(Sampler s);
+const char* toString(Estimator e);
 const char* toString(Backend b);
 int scalarTypeSize(ScalarType t);
 } // namespace mcvol

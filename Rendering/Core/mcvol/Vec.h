@@ -71,6 +71,10 @@ MCVOL_FUNC float minf(float a, float b)
 {
   return a < b ? a : b;
 }
+MCVOL_FUNC float maxf(float a, float b)
+{
+  return a > b ? a : b;
+}
 MCVOL_FUNC float clampf(float v, float lo, float hi)
 {
   return v < lo ? lo : (v > hi ? hi : v);

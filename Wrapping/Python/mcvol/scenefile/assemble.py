@@ -442,6 +442,10 @@ def setup_mapper(mapper, prop, scene, channels, tfs, render_image, reference):
         "composite": mapper.SetChannelBlendModeToComposite,
     }[scene["blend"]]()
     mapper.SetTrackingMethod(mapper.N_DDA if scene["tracking"] == "n-dda" else mapper.ONE_DDA)
+    if scene["estimator"] == "collision":
+        mapper.SetEstimatorToCollision()
+    else:
+        mapper.SetEstimatorToExpectedValue()
     if scene["sample_sequence"] == "independent":
         mapper.SetSampleSequenceToIndependent()
     else:

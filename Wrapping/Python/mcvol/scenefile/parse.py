@@ -32,6 +32,7 @@ from .schema import (
     RENDERERS,
     RESAMPLING,
     SAMPLE_SEQUENCES,
+    ESTIMATORS,
     SHADOWS,
     TOP_KEYS,
     TRACKING,
@@ -360,6 +361,9 @@ def parse_scene(data, scene_dir, presets):
         get_string(data["sample_sequence"], "sample_sequence", SAMPLE_SEQUENCES)
         if "sample_sequence" in data
         else "sobol"
+    )
+    s["estimator"] = (
+        get_string(data["estimator"], "estimator", ESTIMATORS) if "estimator" in data else "expected-value"
     )
     s["backend"] = get_string(data["backend"], "backend", BACKENDS) if "backend" in data else "auto"
     s["samples_per_pixel"] = (

@@ -19,6 +19,7 @@ INTERPOLATIONS = ("linear", "nearest")
 RANGE_MODES = ("auto", "data")  # a channel's "range" as a word
 TRACKING = ("1-dda", "n-dda")
 SAMPLE_SEQUENCES = ("sobol", "independent")
+ESTIMATORS = ("expected-value", "collision")
 BACKENDS = ("auto", "cpu", "cuda")
 RENDERERS = ("montecarlo", "raymarch")
 COMPOSITING = ("extinction", "opacity")
@@ -53,6 +54,7 @@ TOP_KEYS = {
     "interpolation",
     "tracking",
     "sample_sequence",
+    "estimator",
     "backend",
     "samples_per_pixel",
     "samples_per_render",
