@@ -80,6 +80,8 @@ struct DeviceChannel
 {
   DeviceBuffer<uint8_t> bytes; ///< native type (float64 converted to float32 on upload)
   ScalarType type = ScalarType::Float32;
+  /// Extinction: 4 packed floats per voxel (stride 4), never a texture.
+  ChannelFormat format = ChannelFormat::Scalar;
   cudaArray_t array = nullptr;
   cudaTextureObject_t linear = 0;
   cudaTextureObject_t point = 0;

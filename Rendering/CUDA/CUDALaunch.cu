@@ -242,10 +242,13 @@ SceneView CUDARenderer::Internal::renderView(const Scene& scene, bool textures)
     const DeviceChannel& dc = this->Channels[n];
     ChannelView& c = s.volume.channels[n];
     c.data = dc.bytes.ptr;
-    c.stride = 1;
+    c.format = dc.format;
+    c.stride = dc.format == ChannelFormat::Extinction ? 4 : 1;
     c.type = dc.type;
     c.offset = 0.0;
-    c.texture = textures && !dc.nonFinite && dc.array ? (hv.volume.nearest ? dc.point : dc.linear) : 0;
+    c.texture = textures && !dc.nonFinite && dc.array && dc.format == ChannelFormat::Scalar
+      ? (hv.volume.nearest ? dc.point : dc.linear)
+      : 0;
     c.textureScale = dc.textureScale;
   }
   s.lighting = hv.lighting;

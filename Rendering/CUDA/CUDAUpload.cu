@@ -57,6 +57,25 @@ void CUDARenderer::Internal::uploadChannels(const Scene& scene)
     DeviceChannel& dc = this->Channels[n];
     dc.releaseTexture();
     const void* host = src.data;
+    dc.format = src.format;
+    if (src.format == ChannelFormat::Extinction)
+    {
+      // Pre-classified: 4 floats per voxel, packed (stride 4) in linear
+      // memory; sampled in software (sampleClassified), no texture.
+      staging.resize(voxels * 4 * sizeof(float));
+      float* out = reinterpret_cast<float*>(staging.data());
+      const float* in = static_cast<const float*>(src.data);
+      for (size_t v = 0; v < voxels; ++v)
+      {
+        std::memcpy(out + 4 * v, in + v * size_t(src.stride), 4 * sizeof(float));
+      }
+      const size_t bytes = voxels * 4 * sizeof(float);
+      dc.type = ScalarType::Float32;
+      dc.bytes.resize(bytes);
+      MCVOL_CUDA(cudaMemcpy(dc.bytes.ptr, staging.data(), bytes, cudaMemcpyHostToDevice));
+      ++this->Updates.dataUploads;
+      continue;
+    }
     if (src.type == ScalarType::Float64)
     {
       // Doubles become floats relative to the channel's offset, exactly as
@@ -106,9 +125,11 @@ void CUDARenderer::Internal::buildTextures()
   {
     DeviceChannel& dc = this->Channels[n];
     dc.releaseTexture();
-    if (!fits)
+    if (!fits || dc.format == ChannelFormat::Extinction)
     {
-      continue; // too large for a 3D texture: this channel samples global memory
+      // Too large for a 3D texture, or pre-classified (always software
+      // sampling): this channel samples global memory.
+      continue;
     }
     cudaTextureReadMode mode;
     cudaChannelFormatDesc fmt = formatOf(dc.type, dc.textureScale, mode);
