@@ -32,11 +32,12 @@ struct ChannelSource
   const void* data = nullptr;
   ScalarType type = ScalarType::Float32;
   int64_t stride = 1; ///< in elements; N for the components of an interleaved array
-  ChannelFormat format = ChannelFormat::Scalar;
   /// Float64 only: subtracted in double before a value becomes float, so data
   /// far from zero (1e9 + [0, 500]) keeps its resolution. Set it near the
   /// data (its minimum, say); transfer-function ranges stay in data units.
   double offset = 0.0;
+  /// Last, so that aggregate initialisers { data, type, stride, offset } keep working.
+  ChannelFormat format = ChannelFormat::Scalar;
 };
 
 /**

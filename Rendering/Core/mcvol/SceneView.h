@@ -19,9 +19,6 @@ struct ChannelView
   const void* data = nullptr;
   int64_t stride = 1; ///< elements between consecutive voxels
   ScalarType type = ScalarType::Float32;
-  /// Extinction: 4 float32 per voxel (sigma, sigma r, sigma g, sigma b),
-  /// sampled in software (sampleClassified); `texture` stays 0.
-  ChannelFormat format = ChannelFormat::Scalar;
   double offset = 0.0; ///< Float64 only: subtracted before conversion to float
   /// CUDA backend only: a 3D texture object (cudaTextureObject_t) holding the
   /// same voxels, sampled with hardware filtering instead of `data`; 0 = none.
@@ -29,6 +26,9 @@ struct ChannelView
   /// Texture reads of integer data come back normalised (uint8 / 255 ...);
   /// this factor restores data units.
   float textureScale = 1.f;
+  /// Extinction: 4 float32 per voxel (sigma, sigma r, sigma g, sigma b),
+  /// sampled in software (sampleClassified); `texture` stays 0.
+  ChannelFormat format = ChannelFormat::Scalar;
 };
 
 struct VolumeView
