@@ -98,19 +98,57 @@ __global__ void rangeKernel(const Voxels voxel, int3 dims, int3 gdims, int macro
   }
 }
 
+/// Range of a pre-classified channel's sanitised sigma (classifiedVoxel, as
+/// the host build and the per-ray sampling read it) over each macrocell.
+__global__ void classifiedRangeKernel(const float* __restrict__ data, int3 dims, int3 gdims, int macrocell,
+  int numChannels, int n, int64_t cells, float2* __restrict__ ranges)
+{
+  const int64_t c = int64_t(blockIdx.x) * blockDim.x + threadIdx.x;
+  if (c >= cells)
+  {
+    return;
+  }
+  const int3 cc = cellOf(c, gdims);
+  const int d[3] = { dims.x, dims.y, dims.z };
+  const int cell[3] = { cc.x, cc.y, cc.z };
+  int lo[3];
+  int hi[3];
+  cellVoxelBounds(d, macrocell, cell, lo, hi);
+  float mn = __int_as_float(0x7f800000);  // +inf
+  float mx = -__int_as_float(0x7f800000); // -inf
+  for (int k = lo[2]; k <= hi[2]; ++k)
+  {
+    for (int j = lo[1]; j <= hi[1]; ++j)
+    {
+      const float* row = data + ((int64_t(k) * dims.y + j) * dims.x) * 4;
+      for (int i = lo[0]; i <= hi[0]; ++i)
+      {
+        float x[4];
+        if (classifiedVoxel(row + int64_t(i) * 4, x))
+        {
+          mn = fminf(mn, x[0]);
+          mx = fmaxf(mx, x[0]);
+        }
+      }
+    }
+  }
+  ranges[c * numChannels + n] = make_float2(mn, mx);
+}
+
 /// Majorants of channel n from the ranges and the channel's sparse table; the
 /// channel's largest majorant goes to channelMax[n] (float bits, >= 0, so
 /// unsigned comparison orders them).
 __global__ void majorantKernel(const __grid_constant__ TableView tv, int n, int numChannels, int64_t cells,
   const float2* __restrict__ ranges, const float* __restrict__ sparse, float* __restrict__ majorants,
-  unsigned* __restrict__ channelMax)
+  unsigned* __restrict__ channelMax, bool classified)
 {
   const int64_t c = int64_t(blockIdx.x) * blockDim.x + threadIdx.x;
   float m = 0.f;
   if (c < cells)
   {
     const float2 r = ranges[c * numChannels + n];
-    m = cellMajorant(tv, n, r.x, r.y, sparse);
+    // Pre-classified channels: the range is sigma's own (identity rule).
+    m = classified ? classifiedCellMajorant(r.x, r.y) : cellMajorant(tv, n, r.x, r.y, sparse);
     majorants[c * numChannels + n] = m;
   }
   const unsigned warpMax = warpMaxU32(__float_as_uint(m));
@@ -138,6 +176,13 @@ void CUDARenderer::Internal::buildRanges(int macrocell)
   for (int n = 0; n < N; ++n)
   {
     const DeviceChannel& dc = this->Channels[n];
+    if (dc.format == ChannelFormat::Extinction)
+    {
+      classifiedRangeKernel<<<blocks, threads>>>(
+        reinterpret_cast<const float*>(dc.bytes.ptr), dims, gd, M, N, n, cells, this->Ranges.ptr);
+      MCVOL_CUDA(cudaGetLastError());
+      continue;
+    }
     if (dc.array)
     {
       rangeKernel<<<blocks, threads>>>(TextureVoxels{ dc.point, dc.textureScale }, dims, gd, M, N, n, cells,
@@ -194,7 +239,8 @@ void CUDARenderer::Internal::buildMajorants(const Scene& scene, const bool* whic
     MCVOL_CUDA(cudaMemcpyAsync(dst, sparse.data(), sparse.size() * sizeof(float), cudaMemcpyHostToDevice));
     MCVOL_CUDA(cudaMemsetAsync(this->ChannelMax.ptr + n, 0, sizeof(unsigned)));
     majorantKernel<<<blocks, threads>>>(
-      tv, n, N, cells, this->Ranges.ptr, dst, this->Majorants.ptr, this->ChannelMax.ptr);
+      tv, n, N, cells, this->Ranges.ptr, dst, this->Majorants.ptr, this->ChannelMax.ptr,
+      this->Channels[n].format == ChannelFormat::Extinction);
     MCVOL_CUDA(cudaGetLastError());
     ++rebuilt;
     ++this->Updates.majorantChannelBuilds;

@@ -81,6 +81,8 @@ struct DeviceChannel
 {
   DeviceBuffer<uint8_t> bytes; ///< dense array, native type (float64 converted to float32 on upload); empty when texture-held
   ScalarType type = ScalarType::Float32;
+  /// Extinction: 4 packed floats per voxel (stride 4), never a texture.
+  ChannelFormat format = ChannelFormat::Scalar;
   cudaArray_t array = nullptr;
   cudaTextureObject_t linear = 0;
   cudaTextureObject_t point = 0;

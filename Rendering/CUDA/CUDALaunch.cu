@@ -238,11 +238,13 @@ SceneView CUDARenderer::Internal::renderView(const Scene& scene, bool textures)
     const DeviceChannel& dc = this->Channels[n];
     ChannelView& c = s.volume.channels[n];
     c.data = dc.bytes.ptr; // null for a texture-held channel
-    c.stride = 1;
+    c.format = dc.format;
+    c.stride = dc.format == ChannelFormat::Extinction ? 4 : 1;
     c.type = dc.type;
     c.offset = 0.0;
     // Texture-held channels: hardware filtering when `textures`, else exact
     // voxel reads through the point object (the reference march).
+    // Pre-classified channels are always arrays (software sampling).
     c.texture = textures && !dc.nonFinite && dc.array ? (hv.volume.nearest ? dc.point : dc.linear) : 0;
     c.voxelTexture = dc.array ? dc.point : 0;
     c.voxelTextureDims[0] = this->Dims[0];

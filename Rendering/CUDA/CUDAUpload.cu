@@ -132,7 +132,32 @@ void CUDARenderer::Internal::uploadChannels(const Scene& scene)
   {
     DeviceChannel& dc = this->Channels[n];
     dc.nonFinite = false;
-    const void* host = denseHostVoxels(scene.channel(n), voxels, staging, dc.type);
+    const ChannelSource& src = scene.channel(n);
+    dc.format = src.format;
+    if (src.format == ChannelFormat::Extinction)
+    {
+      // Pre-classified: 4 floats per voxel, packed (stride 4) in linear
+      // memory; sampled in software (sampleClassified), no texture.
+      const void* packed = src.data;
+      if (src.stride != 4)
+      {
+        staging.resize(voxels * 4 * sizeof(float));
+        float* out = reinterpret_cast<float*>(staging.data());
+        const float* in = static_cast<const float*>(src.data);
+        for (size_t v = 0; v < voxels; ++v)
+        {
+          std::memcpy(out + 4 * v, in + v * size_t(src.stride), 4 * sizeof(float));
+        }
+        packed = staging.data();
+      }
+      const size_t bytes = voxels * 4 * sizeof(float);
+      dc.type = ScalarType::Float32;
+      dc.bytes.resize(bytes);
+      MCVOL_CUDA(cudaMemcpy(dc.bytes.ptr, packed, bytes, cudaMemcpyHostToDevice));
+      ++this->Updates.dataUploads;
+      continue;
+    }
+    const void* host = denseHostVoxels(src, voxels, staging, dc.type);
     if (this->Sampling == CudaSampling::Texture && fits)
     {
       if (this->uploadTexture(dc, host))

@@ -65,7 +65,8 @@ MemoryStats Scene::memory() const
   const size_t voxels = size_t(this->Dims[0]) * this->Dims[1] * this->Dims[2];
   for (int n = 0; n < this->NumChannels; ++n)
   {
-    m.dataBytes += voxels * size_t(scalarTypeSize(this->Channels[n].type));
+    m.dataBytes += voxels * size_t(scalarTypeSize(this->Channels[n].type)) *
+      (this->Channels[n].format == ChannelFormat::Extinction ? 4u : 1u);
   }
   m.macrocellBytes = this->Ranges.size() * sizeof(float);
   m.majorantBytes = this->Majorants.size() * sizeof(float);
@@ -105,11 +106,26 @@ bool Scene::update()
   }
   for (int n = 0; n < this->NumChannels; ++n)
   {
-    if (!this->HasTF[n])
+    // Pre-classified channels read no table.
+    if (!this->HasTF[n] && this->Channels[n].format != ChannelFormat::Extinction)
     {
       throw std::invalid_argument("mcvol: " + channelText(n) + " has no transfer function (" +
         std::to_string(this->NumChannels) + " channels need " + std::to_string(this->NumChannels) + ")");
     }
+  }
+  if (this->View.tables.size < 2)
+  {
+    // Only pre-classified channels and no table set: a transparent
+    // placeholder of 2 texels, so that the tables are never empty for the
+    // backends (they check the size) and no code path reads a null table.
+    this->Tables.assign(size_t(kMaxChannels) * 2 * 4, 0.f);
+    this->View.tables.size = 2;
+    for (int n = 0; n < kMaxChannels; ++n)
+    {
+      this->View.tables.scalarMin[n] = 0.f;
+      this->View.tables.scale[n] = 1.f;
+    }
+    ++this->TableVersion;
   }
   this->refreshImportance();
   bool changed = false;

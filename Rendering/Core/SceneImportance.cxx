@@ -12,6 +12,16 @@
 
 namespace mcvol
 {
+namespace
+{
+std::string classifiedImportanceText(int n)
+{
+  return "mcvol: " + detail::channelText(n) +
+    " is pre-classified (extinction format) and has no scalar to look an importance function up by; give it an "
+    "empty importance table (the visibility optimization of pre-classified channels is not supported)";
+}
+} // namespace
+
 float snapImportance(float v)
 {
   if (!(v > 0.f))
@@ -51,6 +61,13 @@ void Scene::setImportance(const ImportanceDesc& d)
   {
     throw std::invalid_argument("mcvol: more importance tables than channels are supported");
   }
+  for (int n = 0; n < this->NumChannels && n < int(d.tables.size()); ++n)
+  {
+    if (!d.tables[size_t(n)].empty() && this->Channels[size_t(n)].format == ChannelFormat::Extinction)
+    {
+      throw std::invalid_argument(classifiedImportanceText(n));
+    }
+  }
   this->Importance = d;
 }
 
@@ -68,6 +85,10 @@ void Scene::refreshImportance()
     if (t.empty())
     {
       continue;
+    }
+    if (this->Channels[size_t(n)].format == ChannelFormat::Extinction)
+    {
+      throw std::invalid_argument(classifiedImportanceText(n));
     }
     if (int(t.size()) != K)
     {

@@ -48,6 +48,28 @@ void rangeOf(const T* data, int64_t stride, double offset, const int dims[3], co
     }
   }
 }
+/// Range of a pre-classified channel's sanitised sigma (classifiedVoxel), NaN
+/// voxels skipped, as the per-ray code reads it.
+void classifiedRangeOf(const float* data, int64_t stride, const int dims[3], const int lo[3], const int hi[3],
+  float& mn, float& mx)
+{
+  for (int k = lo[2]; k <= hi[2]; ++k)
+  {
+    for (int j = lo[1]; j <= hi[1]; ++j)
+    {
+      const int64_t row = (int64_t(k) * dims[1] + j) * dims[0];
+      for (int i = lo[0]; i <= hi[0]; ++i)
+      {
+        float x[4];
+        if (classifiedVoxel(data + (row + i) * stride, x))
+        {
+          mn = x[0] < mn ? x[0] : mn;
+          mx = x[0] > mx ? x[0] : mx;
+        }
+      }
+    }
+  }
+}
 } // namespace
 
 void Scene::setMacrocellSize(int voxels)
@@ -98,6 +120,7 @@ void Scene::layoutGrid()
     v.channels[n].stride = this->Channels[n].stride;
     v.channels[n].offset = this->Channels[n].offset;
     v.channels[n].type = this->Channels[n].type;
+    v.channels[n].format = this->Channels[n].format;
   }
   g.numChannels = this->NumChannels;
 }
@@ -126,12 +149,19 @@ void Scene::rebuildMacrocells()
     {
       float mn = std::numeric_limits<float>::infinity();
       float mx = -std::numeric_limits<float>::infinity();
-      visitScalarType(ch[n].type,
+      if (ch[n].format == ChannelFormat::Extinction)
+      {
+        classifiedRangeOf(static_cast<const float*>(ch[n].data), ch[n].stride, D, lo, hi, mn, mx);
+      }
+      else
+      {
+        visitScalarType(ch[n].type,
         [&](auto tag)
         {
           using T = typename decltype(tag)::type;
           rangeOf(static_cast<const T*>(ch[n].data), ch[n].stride, ch[n].offset, D, lo, hi, mn, mx);
         });
+      }
       ranges[(c * N + n) * 2 + 0] = mn;
       ranges[(c * N + n) * 2 + 1] = mx;
     }

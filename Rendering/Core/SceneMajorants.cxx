@@ -21,6 +21,17 @@ void Scene::rebuildMajorants(int channel)
   const float* table = this->Tables.data() + size_t(channel) * K * 4;
   const float* ranges = this->Ranges.data();
   float* maj = this->Majorants.data();
+  if (this->Channels[size_t(channel)].format == ChannelFormat::Extinction)
+  {
+    // Pre-classified: the ranges hold sigma itself (identity rule).
+#pragma omp parallel for schedule(static) if (cells > 100000)
+    for (int64_t c = 0; c < cells; ++c)
+    {
+      maj[c * N + channel] =
+        classifiedCellMajorant(ranges[(c * N + channel) * 2 + 0], ranges[(c * N + channel) * 2 + 1]);
+    }
+    return;
+  }
   // Range-maximum queries over the table's extinctions in O(1) per cell (a
   // sparse table): a cell's scalar range can cover most of the table, so a
   // per-cell loop over texels would make a rebuild cost cells x K.

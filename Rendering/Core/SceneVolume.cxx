@@ -44,6 +44,26 @@ void Scene::setVolume(const int dims[3], int numChannels, const ChannelSource* c
         " has an offset; only finite offsets of float64 channels "
         "are supported");
     }
+    if (channels[n].format != ChannelFormat::Scalar && channels[n].format != ChannelFormat::Extinction)
+    {
+      throw std::invalid_argument(
+        "mcvol: " + channelText(n) + " has an unknown channel format (" + std::to_string(int(channels[n].format)) + ")");
+    }
+    if (channels[n].format == ChannelFormat::Extinction)
+    {
+      if (channels[n].type != ScalarType::Float32)
+      {
+        throw std::invalid_argument("mcvol: " + channelText(n) +
+          " is pre-classified (extinction format) and must be float32 (sigma, sigma r, sigma g, sigma b), not " +
+          toString(channels[n].type));
+      }
+      if (channels[n].stride < 4)
+      {
+        throw std::invalid_argument("mcvol: " + channelText(n) +
+          " is pre-classified (extinction format): its stride must be at least 4 floats (4 values per voxel), not " +
+          std::to_string(channels[n].stride));
+      }
+    }
     // visitScalarType() reads a value outside the enum as float32, which
     // could read past the end of a narrower array; reject it here, once.
     if (int(channels[n].type) < int(ScalarType::UInt8) || int(channels[n].type) > int(ScalarType::Float64))

@@ -21,6 +21,18 @@ const char* toString(ScalarType t)
   return "unknown";
 }
 
+const char* toString(ChannelFormat f)
+{
+  switch (f)
+  {
+    case ChannelFormat::Scalar:
+      return "scalar";
+    case ChannelFormat::Extinction:
+      return "extinction";
+  }
+  return "unknown";
+}
+
 const char* toString(BlendMode m)
 {
   switch (m)

@@ -77,6 +77,22 @@ MCVOL_FUNC float cellMajorant(const TableView& tv, int n, float mn, float mx, co
   return (a > b ? a : b) * kMajorantInflation;
 }
 
+/**
+ * Majorant of a pre-classified (Extinction) channel over a macrocell: its
+ * "scalar" range is the range of the sanitised sigma over the cell's
+ * footprint (classifiedVoxel), so the identity rule applies: the largest
+ * sigma, inflated as cellMajorant() inflates. Interpolation (convex weights)
+ * never exceeds it. An empty range (every voxel NaN) gives 0.
+ */
+MCVOL_FUNC float classifiedCellMajorant(float mn, float mx)
+{
+  if (!(mn <= mx) || !(mx > 0.f))
+  {
+    return 0.f;
+  }
+  return mx * kMajorantInflation;
+}
+
 /// Fills `sparse` (sparseLevels(K) * K floats) from channel n's texels
 /// (r, g, b, extinction).
 MCVOL_FUNC void buildSparseTable(const float* texels, int K, float* sparse)

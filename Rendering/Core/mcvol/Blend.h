@@ -39,11 +39,17 @@ MCVOL_HOT Vec3f mixColour(const BlendView& b, Vec3f weighted, float weightedSigm
   return weighted * (1.f / maxSigma);
 }
 
-/// One channel's transfer-function sample at p (extinction clamped to the
-/// render's limit, as the trackers clamp it).
+/// One channel's optics at p (extinction clamped to the render's limit, as
+/// the trackers clamp it): a scalar channel's interpolated value through its
+/// transfer function, or a pre-classified channel's interpolated extinction
+/// and extinction-weighted colour (sampleClassified). Every tracker, blend
+/// mode, the lighting (extinction gradient) and the extinction-model march
+/// read channels through here.
 MCVOL_HOT TFSample channelOptics(const SceneView& s, int n, Vec3f p)
 {
-  TFSample t = lookupTF(s.tables, n, sampleChannel(s.volume, n, p));
+  TFSample t = s.volume.channels[n].format == ChannelFormat::Extinction
+    ? sampleClassified(s.volume, n, p)
+    : lookupTF(s.tables, n, sampleChannel(s.volume, n, p));
   t.sigma = minf(t.sigma, s.sigmaLimit);
   return t;
 }

@@ -105,18 +105,35 @@ MCVOL_HOT Corners cornersOf(const VolumeView& vol, Vec3f p)
 
 /// Opacity-based sampling of channel n at the corners: interpolated step
 /// opacity and opacity-weighted colour. A NaN voxel among the corners makes
-/// the channel transparent at p (the core's NaN rule).
+/// the channel transparent at p (the core's NaN rule). A pre-classified
+/// channel's voxel gives its own sigma and colour (alpha = 1 - exp(-sigma d)
+/// per voxel, then interpolated: the paper's opacity-based baseline).
 MCVOL_HOT StepOptics opacitySample(const SceneView& s, int n, const Corners& c, float step)
 {
   StepOptics o;
+  const ChannelView& ch = s.volume.channels[n];
+  const bool classified = ch.format == ChannelFormat::Extinction;
   for (int k = 0; k < c.count; ++k)
   {
-    const float v = fetchVoxel(s.volume.channels[n], c.index[k]);
-    if (!(v == v))
+    TFSample t;
+    if (classified)
     {
-      return StepOptics();
+      float x[4];
+      if (!fetchClassified(ch, c.index[k], x))
+      {
+        return StepOptics();
+      }
+      t = classifiedOptics(x);
     }
-    const TFSample t = lookupTF(s.tables, n, v);
+    else
+    {
+      const float v = fetchVoxel(ch, c.index[k]);
+      if (!(v == v))
+      {
+        return StepOptics();
+      }
+      t = lookupTF(s.tables, n, v);
+    }
     const float a = -expm1f(-minf(t.sigma, s.sigmaLimit) * step); // 1 - (1 - a_u)^(d/u)
     o.alpha += c.weight[k] * a;
     o.colour += t.rgb * (c.weight[k] * a);

@@ -8,6 +8,67 @@
 
 namespace mcvol
 {
+/// Transfer-function sample: linear RGB and extinction (world units^-1).
+struct TFSample
+{
+  Vec3f rgb;
+  float sigma = 0.f;
+};
+
+/// Largest extinction a pre-classified voxel keeps (larger values, +Inf
+/// included, are clamped to it): finite, so that a zero interpolation weight
+/// times it stays 0, and far above any render's extinction limit.
+constexpr float kMaxClassifiedSigma = 1e30f;
+
+/**
+ * One pre-classified voxel (ChannelFormat::Extinction) at x[0..3] = (sigma,
+ * sigma r, sigma g, sigma b), sanitised as ChannelSource documents: negative
+ * sigma -> 0 (and its colour 0), sigma clamped to kMaxClassifiedSigma, each
+ * sigma*c to [0, sigma]. Returns false if any of the four is NaN (the voxel
+ * makes the channel transparent where it is read). Shared by the per-ray
+ * sampling and the macrocell range builds (host and device), so the ranges
+ * bound exactly the values the sampling interpolates.
+ */
+MCVOL_FUNC bool classifiedVoxel(const float* x, float out[4])
+{
+  const float s = x[0], r = x[1], g = x[2], b = x[3];
+  if (!(s == s) || !(r == r) || !(g == g) || !(b == b))
+  {
+    return false;
+  }
+  if (!(s > 0.f))
+  {
+    out[0] = out[1] = out[2] = out[3] = 0.f;
+    return true;
+  }
+  const float sc = s < kMaxClassifiedSigma ? s : kMaxClassifiedSigma;
+  out[0] = sc;
+  out[1] = clampf(r, 0.f, sc);
+  out[2] = clampf(g, 0.f, sc);
+  out[3] = clampf(b, 0.f, sc);
+  return true;
+}
+
+/// A pre-classified channel's voxel v (index, not element) as classifiedVoxel() reads it.
+MCVOL_HOT bool fetchClassified(const ChannelView& c, int64_t v, float out[4])
+{
+  return classifiedVoxel(static_cast<const float*>(c.data) + v * c.stride, out);
+}
+
+/// Optics of a sanitised classified value (sigma, sigma r, sigma g, sigma b):
+/// the colour is the ratio (Eq. 23's C~(tau) / tau), black where sigma is 0.
+MCVOL_HOT TFSample classifiedOptics(const float v[4])
+{
+  TFSample t;
+  t.sigma = v[0];
+  if (v[0] > 0.f)
+  {
+    const float inv = 1.f / v[0];
+    t.rgb = Vec3f(minf(v[1] * inv, 1.f), minf(v[2] * inv, 1.f), minf(v[3] * inv, 1.f));
+  }
+  return t;
+}
+
 /// One voxel of a channel, converted to float.
 MCVOL_HOT float fetchVoxel(const ChannelView& c, int64_t v)
 {
@@ -129,12 +190,49 @@ MCVOL_HOT float sampleChannel(const VolumeView& vol, int n, Vec3f p)
   return y0 + f[2] * (y1 - y0);
 }
 
-/// Transfer-function sample: linear RGB and extinction (world units^-1).
-struct TFSample
+
+/**
+ * Extinction-based sampling of a pre-classified channel n at continuous index
+ * p (Kraus and Buerger Sec. 3.3): sigma and sigma*colour interpolated
+ * trilinearly (or the nearest voxel, if vol.nearest) with the footprint and
+ * clamping of sampleChannel(), colour their ratio. A NaN among the voxels
+ * read gives sigma 0 (transparent). Always software sampling (no texture).
+ */
+MCVOL_HOT TFSample sampleClassified(const VolumeView& vol, int n, Vec3f p)
 {
-  Vec3f rgb;
-  float sigma = 0.f;
-};
+  const ChannelView& c = vol.channels[n];
+  float acc[4] = { 0.f, 0.f, 0.f, 0.f };
+  if (vol.nearest)
+  {
+    if (!fetchClassified(c, nearestVoxel(vol, p), acc))
+    {
+      return TFSample();
+    }
+    return classifiedOptics(acc);
+  }
+  int i0[3];
+  int i1[3];
+  float f[3];
+  trilinearFootprint(vol, p, i0, i1, f);
+  const int64_t sy = vol.dims[0];
+  const int64_t sz = int64_t(vol.dims[0]) * vol.dims[1];
+  for (int k = 0; k < 8; ++k)
+  {
+    const int bx = k & 1, by = (k >> 1) & 1, bz = (k >> 2) & 1;
+    const int64_t v = (bx ? i1[0] : i0[0]) + (by ? i1[1] : i0[1]) * sy + (bz ? i1[2] : i0[2]) * sz;
+    const float w = (bx ? f[0] : 1.f - f[0]) * (by ? f[1] : 1.f - f[1]) * (bz ? f[2] : 1.f - f[2]);
+    float x[4];
+    if (!fetchClassified(c, v, x))
+    {
+      return TFSample();
+    }
+    acc[0] += w * x[0];
+    acc[1] += w * x[1];
+    acc[2] += w * x[2];
+    acc[3] += w * x[3];
+  }
+  return classifiedOptics(acc);
+}
 
 /// Continuous texel coordinate of scalar s in channel n's table, in [0, K-1];
 /// NaN maps to -1 (no texel).

@@ -11,7 +11,22 @@
 
 namespace mcvol
 {
-/// Where one channel's voxels live: value of voxel v is data[v * stride].
+/**
+ * Where one channel's voxels live: value of voxel v is data[v * stride].
+ *
+ * format Extinction (pre-classified, issue 13): voxel v is the 4 float32
+ * values data[v * stride + 0..3] = (sigma, sigma r, sigma g, sigma b), sigma
+ * the extinction per world unit (as a transfer-function table holds it) and
+ * (r, g, b) linear RGB in [0, 1]. type must be Float32, stride (in floats) at
+ * least 4 (4: packed RGBA-like quadruples), offset 0. Such a channel needs no
+ * transfer function (one set anyway is kept but never read) and carries no
+ * importance. Values are sanitised per voxel when read, never rejected
+ * (the data are not scanned at setVolume): a negative sigma is clamped to 0
+ * (the voxel is transparent and its colour ignored), sigma above 1e30 is
+ * clamped to 1e30, and each sigma*c to [0, sigma]. A NaN in any of the four
+ * values makes the channel transparent wherever that voxel is read (the
+ * scalar NaN rule).
+ */
 struct ChannelSource
 {
   const void* data = nullptr;
@@ -21,6 +36,8 @@ struct ChannelSource
   /// far from zero (1e9 + [0, 500]) keeps its resolution. Set it near the
   /// data (its minimum, say); transfer-function ranges stay in data units.
   double offset = 0.0;
+  /// Last, so that aggregate initialisers { data, type, stride, offset } keep working.
+  ChannelFormat format = ChannelFormat::Scalar;
 };
 
 /**
@@ -137,6 +154,8 @@ public:
   Scene();
 
   /// dims: voxels per axis (each >= 1). The data must outlive the Scene.
+  /// Each channel's format (ChannelSource::format) may be Scalar or
+  /// Extinction, mixed freely.
   void setVolume(const int dims[3], int numChannels, const ChannelSource* channels);
   /// Marks the data as changed (same pointers, new values).
   void dataModified();
@@ -156,7 +175,9 @@ public:
   void setLighting(const LightingDesc& lighting);
   bool lit() const { return this->View.lighting.enabled; }
   /// Importance functions and weights (throws std::invalid_argument on bad
-  /// values or a table whose size differs from the channel's colour table).
+  /// values, a table whose size differs from the channel's colour table, or
+  /// a non-empty table for a pre-classified (Extinction) channel, which has
+  /// no scalar to look importance up by; update() checks that again).
   void setImportance(const ImportanceDesc& importance);
   /// Whether rendering runs the visibility optimization.
   bool optimized() const { return this->View.importance.enabled; }

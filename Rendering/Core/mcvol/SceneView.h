@@ -31,6 +31,9 @@ struct ChannelView
   /// Texture reads of integer data come back normalised (uint8 / 255 ...);
   /// this factor restores data units.
   float textureScale = 1.f;
+  /// Extinction: 4 float32 per voxel (sigma, sigma r, sigma g, sigma b),
+  /// sampled in software (sampleClassified); `texture` stays 0.
+  ChannelFormat format = ChannelFormat::Scalar;
 };
 
 struct VolumeView

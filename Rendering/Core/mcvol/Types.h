@@ -18,6 +18,22 @@ enum class ScalarType : int
 };
 
 /**
+ * What a channel's voxels hold (issue 13; Kraus and Buerger, Sec. 3.3).
+ * - Scalar: one value per voxel, classified after interpolation through the
+ *   channel's transfer-function table (post-classification).
+ * - Extinction: pre-classified voxels of 4 float32 values (sigma, sigma r,
+ *   sigma g, sigma b): extinction per world unit (as the transfer-function
+ *   tables hold it) and extinction-weighted linear RGB. Extinction and
+ *   extinction-weighted colour are interpolated; the colour at a point is
+ *   their ratio (Eq. 18-21). No transfer function is read.
+ */
+enum class ChannelFormat : int
+{
+  Scalar = 0,
+  Extinction = 1
+};
+
+/**
  * How N channels combine (Sahistan et al., Sections 4.1 and 4.2).
  * - Density: Eq. 6/7, channel extinctions add; a collision picks a channel with
  *   probability proportional to its extinction (physically based; default).
@@ -127,6 +143,7 @@ MCVOL_HOT decltype(auto) visitScalarType(ScalarType t, F&& f)
 }
 
 const char* toString(ScalarType t);
+const char* toString(ChannelFormat f);
 const char* toString(BlendMode m);
 const char* toString(Tracker t);
 const char* toString(Sampler s);

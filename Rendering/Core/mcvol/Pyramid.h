@@ -1,0 +1,144 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#pragma once
+
+#include "mcvol/Scene.h"
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace mcvol
+{
+/**
+ * Extinction-based pyramids of pre-classified volumes (issue 13; Kraus and
+ * Buerger, "Interpolating and Downsampling RGBA Volume Data", Section 4).
+ *
+ * A pre-classified volume holds per voxel (sigma, sigma r, sigma g, sigma b)
+ * as 4 floats: extinction per world unit and extinction-weighted linear RGB
+ * (ChannelFormat::Extinction). A level halves every axis (ceil; an axis of 1
+ * voxel stays 1) by filtering sigma and sigma*colour with a separable,
+ * symmetric filter (Sec. 4.1: extinction, not opacity, is averaged, so a thin
+ * opaque structure is blurred but keeps its opacity along rays through it).
+ *
+ * Alignment (cell-centred, like mipmaps): coarse voxel c along an axis is
+ * centred between fine voxels 2c and 2c+1, so a level's spacing is twice the
+ * finer one and its origin (world position of voxel 0) moves by half a finer
+ * spacing. An axis of 1 voxel is not filtered: its spacing and origin stay.
+ * Boundary: taps outside the finer grid are clamped to its edge voxel (a
+ * constant volume stays constant everywhere, edges included); weights are
+ * normalised (they sum to 1).
+ */
+enum class DownsampleFilter : int
+{
+  /// (1 1) / 2: the 2x2x2 box, the usual mipmap filter (paper Sec. 4.2:
+  /// epsilon = 0.34, epsilon_0 = 0.14 against a convolution).
+  Box2 = 0,
+  /// (1 1 1 1) / 4: the paper's "4-tap box filter", its recommended
+  /// compromise for data sampled by trilinear interpolation (epsilon =
+  /// 0.057, epsilon_0 = 0.0093). The paper names it without listing
+  /// weights; a box has equal ones.
+  Box4 = 1,
+  /// (13 19 19 13) / 64: Kraus' filter for data sampled by quadratic
+  /// B-spline filtering (epsilon = 0.0276, epsilon_0 = 0.0027).
+  BSpline = 2
+};
+
+const char* toString(DownsampleFilter f);
+
+/// A filter's taps: coarse voxel c reads finer voxels 2c + first + k,
+/// k < count, with weights w[k] (normalised: they sum to 1).
+struct FilterTaps
+{
+  int count = 0;
+  int first = 0;
+  double w[4] = { 0, 0, 0, 0 };
+};
+FilterTaps filterTaps(DownsampleFilter f);
+
+/// A pre-classified volume read in place: voxel v is voxels[v * stride +
+/// 0..3] = (sigma, sigma r, sigma g, sigma b), x fastest.
+struct ClassifiedVolumeView
+{
+  const float* voxels = nullptr;
+  int64_t stride = 4; ///< floats between voxels (>= 4)
+  int dims[3] = { 0, 0, 0 };
+  double spacing[3] = { 1, 1, 1 }; ///< world units, > 0
+  double origin[3] = { 0, 0, 0 };  ///< world position of voxel 0
+};
+
+/// One level of a pyramid: its own packed voxels (stride 4).
+struct PyramidLevel
+{
+  int level = 0; ///< 0 = full resolution
+  int dims[3] = { 0, 0, 0 };
+  double spacing[3] = { 1, 1, 1 };
+  double origin[3] = { 0, 0, 0 };
+  std::vector<float> voxels; ///< 4 floats per voxel
+
+  size_t numVoxels() const { return size_t(this->dims[0]) * size_t(this->dims[1]) * size_t(this->dims[2]); }
+  size_t bytes() const { return this->voxels.size() * sizeof(float); }
+  ClassifiedVolumeView view() const;
+  /// A channel for Scene::setVolume (format Extinction, stride 4); the level
+  /// must outlive the Scene. The caller's camera maps world to index with
+  /// this level's spacing and origin.
+  ChannelSource source() const;
+};
+
+/// The number of halvings after which every axis of `dims` is 1 (the most
+/// levels a pyramid of them can have above level 0).
+int maxPyramidLevels(const int dims[3]);
+
+/**
+ * One extinction-based downsampling step (Sec. 4.1): sigma and sigma*colour
+ * filtered separably. Throws std::invalid_argument on bad input: no voxels,
+ * a stride below 4, dims below 1, a spacing that is not positive and finite,
+ * or a voxel whose sigma is negative, NaN or infinite or whose weighted
+ * colour is NaN, infinite or negative (rejected, not clamped: a filter
+ * would spread them into their neighbours).
+ */
+PyramidLevel downsampleExtinction(const ClassifiedVolumeView& fine, DownsampleFilter filter);
+
+/// Levels 1..levels (in order) of the extinction-based pyramid over level 0;
+/// levels in [0, maxPyramidLevels(dims)] (0 gives none). Same errors as
+/// downsampleExtinction, and a level count out of range.
+std::vector<PyramidLevel> buildExtinctionPyramid(
+  const ClassifiedVolumeView& level0, int levels, DownsampleFilter filter = DownsampleFilter::Box4);
+
+/**
+ * The opacity-averaging baseline (Sec. 4.1, Fig. 3), for comparison only:
+ * each finer voxel's opacity for the distance `step` (world units),
+ * alpha = 1 - exp(-sigma step), and its opacity-weighted colour alpha c are
+ * filtered; the coarse voxel's averaged opacity a is taken as the opacity
+ * over `step`, so over its own doubled size it is 1 - (1 - a)^2 (the
+ * opacity correction, Eq. 16), and it is stored back as extinction
+ * sigma' = -ln(1 - a) / step with colour (alpha c) / a. (The transparency
+ * 1 - alpha is what is filtered, which is the same average and keeps float
+ * precision near alpha = 1; 1 - a is kept above 1e-30.) In the paper's example 4 voxels of tau = 4 and 4 of 0
+ * average to a = 0.49, and 0.74 over the coarse voxel, where extinction
+ * averaging keeps 0.98. It loses opacity in general.
+ */
+PyramidLevel downsampleOpacity(const ClassifiedVolumeView& fine, double step, DownsampleFilter filter);
+
+/// Levels 1..levels of the opacity-averaging baseline, level l averaging
+/// opacities for the step step0 * 2^(l-1) (the finer level's voxel size).
+std::vector<PyramidLevel> buildOpacityPyramid(
+  const ClassifiedVolumeView& level0, int levels, double step0, DownsampleFilter filter = DownsampleFilter::Box2);
+
+/**
+ * Pre-classifies one scalar channel through a transfer function into the
+ * float4 layout, with the core's table semantics (TransferFunctionDesc:
+ * K texels over [scalarMin, scalarMax], values outside clamped to the ends,
+ * colour clamped to [0, 1], opacity for unitDistance turned into extinction
+ * by opacityToExtinction, colour and extinction interpolated linearly
+ * between texels as lookupTF does). `out` receives 4 floats per voxel at
+ * out[v * outStride]; with `accumulate` the sample is added to what is
+ * there, so classifying N channels into one array gives their density blend
+ * (Eq. 6/7: extinctions and extinction-weighted colours add). A NaN scalar
+ * gives a transparent voxel (0, 0, 0, 0); note that rendering the scalar
+ * instead blanks the channel wherever its footprint reads the NaN. Float64
+ * data use the source's offset as Scene does. Parallel over voxels
+ * (OpenMP). Throws std::invalid_argument on a bad source or table.
+ */
+void classifyScalars(const ChannelSource& src, const int dims[3], const TransferFunctionDesc& tf, float* out,
+  int64_t outStride = 4, bool accumulate = false);
+} // namespace mcvol
