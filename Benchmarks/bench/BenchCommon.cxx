@@ -264,13 +264,15 @@ mcvol::Camera benchCamera(const Options& o, const mcvol::Scene& scene)
   return mcvol::orbitCamera(scene.dims(), std::array<double, 3>{ 1, 1, 1 }.data(), o.width, o.height, 30, 20);
 }
 
-FrameStats timeFrames(const Options& o, mcvol::Renderer& r, const mcvol::Scene& scene, mcvol::Tracker tracker)
+FrameStats timeFrames(
+  const Options& o, mcvol::Renderer& r, const mcvol::Scene& scene, mcvol::Tracker tracker, mcvol::Estimator estimator)
 {
   const mcvol::Camera cam = benchCamera(o, scene);
   mcvol::Accumulator acc;
   mcvol::RenderSettings st;
   st.samplesPerPixel = 1;
   st.tracker = tracker;
+  st.estimator = estimator;
   st.readBack = false;
   for (int i = 0; i < o.warmup; ++i)
   {

@@ -95,7 +95,11 @@ mcvol::Camera benchCamera(const Options& o, const mcvol::Scene& scene);
 
 /// Times frames of 1 spp. Device backends: render() + finish() per frame with
 /// the image left on the device; then a few frames with it copied back.
-FrameStats timeFrames(const Options& o, mcvol::Renderer& r, const mcvol::Scene& scene, mcvol::Tracker tracker);
+/// Frame times at 1 spp with the given tracker; the collision estimator by
+/// default (the trackers' estimator: the expected-value one makes a single
+/// DDA whatever the tracker).
+FrameStats timeFrames(const Options& o, mcvol::Renderer& r, const mcvol::Scene& scene, mcvol::Tracker tracker,
+  mcvol::Estimator estimator = mcvol::Estimator::Collision);
 
 /// PSNR (peak 1) of the premultiplied RGB (the image over black) against a reference.
 double psnrOf(const mcvol::Accumulator& a, const std::vector<float>& ref);

@@ -11,9 +11,10 @@
 #   rebuild   GPU majorant rebuild after one transfer-function change
 #   block     render-kernel block shapes (NYX-like)
 #   profile   Nsight Compute on the render kernel of the slowest paper case
-#   sequences independent samples against Owen-scrambled Sobol' points: error
+#   sequences independent samples against Owen-scrambled Sobol' points, each
+#             with the collision and the expected-value estimator: error
 #             against spp, slopes, spp and ms to RMSE 0.01 and 35 dB (1024^2,
-#             the four paper-sized datasets; issue 14, item 2)
+#             the four paper-sized datasets; issue 14, items 1 and 2)
 #   big       a volume of FRACTION (default 0.6) of the device's memory
 #             (figure3, 3 x float32, generated cheaply) renders: device bytes
 #             and frame time (issue 14, item 5)
@@ -46,15 +47,17 @@ for stage in "$@"; do
         read -r key ds x y z ch label <<< "$s"
         run "paper-$key" --backend cuda --dataset "$ds" --dims "$x" "$y" "$z" --channels "$ch" --label "$label" \
           --size 1024 1024 --warmup 25 --frames 500 --reference-spp 4096 --sections paper,memory,sampling,converge
-        grep -A4 "^| tracker | FPS" "$out/paper-$key.md" | sed -n 3,4p | sed "s/^/$label /"
+        grep -A5 "^| tracker | FPS" "$out/paper-$key.md" | sed -n 3,5p | sed "s/^/$label /"
+        grep -A7 "^| estimator, tracker, sampler" "$out/paper-$key.md" | sed -n 3,7p | sed "s/^/$label /"
       done
       ;;
     sequences)
       for s in "${sets[@]}"; do
         read -r key ds x y z ch label <<< "$s"
         run "sequences-$key" --backend cuda --dataset "$ds" --dims "$x" "$y" "$z" --channels "$ch" --label "$label" \
-          --size 1024 1024 --reference-spp 4096 --spp-max 256 --sections sequences
-        grep -A3 "^| sampler |" "$out/sequences-$key.md" | sed -n 3,4p | sed "s/^/$label /"
+          --size 1024 1024 --reference-spp 4096 --spp-max 128 --sections sequences \
+          --estimators collision,expected-value
+        grep -A5 "^| sampler |" "$out/sequences-$key.md" | sed -n 3,6p | sed "s/^/$label /"
       done
       ;;
     dense)

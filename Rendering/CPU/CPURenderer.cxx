@@ -34,6 +34,7 @@ void renderRows(const SceneView& s, const CameraView& cam, const FrameParams& fp
   const int H = cam.height;
   Accumulator::ImportancePool* pool = Optimized ? imp.pool : nullptr;
   const int pass = pool ? pool->passes : 0;
+  const bool ev = usesExpectedValue(fp.estimator, Mode, Lit, Optimized);
 #pragma omp parallel num_threads(threads > 0 ? threads : omp_get_max_threads()) \
   reduction(+ : dda, tentative, real, samples, scattering, shadowRays, gradients, importance, overflows)
   {
@@ -66,7 +67,8 @@ void renderRows(const SceneView& s, const CameraView& cam, const FrameParams& fp
         }
         else
         {
-          sum = renderPixel<Mode, Lit>(s, cam, fp, x, y, z, c, nullptr, evenOut);
+          sum = ev ? renderPixel<Mode, Lit, false, true>(s, cam, fp, x, y, z, c, nullptr, evenOut)
+                   : renderPixel<Mode, Lit>(s, cam, fp, x, y, z, c, nullptr, evenOut);
         }
         accumulate(rgba + 4 * p, sum, previous, fp.samplesPerPixel);
         if (even)

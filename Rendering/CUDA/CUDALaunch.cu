@@ -55,7 +55,7 @@ __device__ MCVOL_FORCE_INLINE void accumulateEvenPixel(float4* pixel, const Vec4
 /// running mean in `accum` (and the even samples into `even`, when not
 /// null: the error estimate). Count adds the work counters (warp sums, one
 /// atomic per warp and counter).
-template <BlendMode Mode, bool Count, bool Lit>
+template <BlendMode Mode, bool Count, bool Lit, bool ExpectedValue = false>
 __global__ void renderKernel(const __grid_constant__ SceneView s, const __grid_constant__ CameraView cam,
   const __grid_constant__ FrameParams fp, const float* __restrict__ depth, float4* __restrict__ accum,
   float4* __restrict__ even, uint32_t previous, unsigned long long* __restrict__ counters)
@@ -68,7 +68,8 @@ __global__ void renderKernel(const __grid_constant__ SceneView s, const __grid_c
     const size_t p = size_t(y) * size_t(cam.width) + size_t(x);
     const float z = depth ? depth[p] : 1.f;
     Vec4f evenSum;
-    const Vec4f sum = renderPixel<Mode, Lit>(s, cam, fp, x, y, z, c, nullptr, even ? &evenSum : nullptr);
+    const Vec4f sum =
+      renderPixel<Mode, Lit, false, ExpectedValue>(s, cam, fp, x, y, z, c, nullptr, even ? &evenSum : nullptr);
     accumulatePixel(accum + p, sum, previous, fp.samplesPerPixel);
     if (even)
     {
@@ -201,8 +202,21 @@ void launchRender(bool count, bool lit, dim3 grid, dim3 block, const SceneView& 
   const FrameParams& fp, const float* depth, float4* accum, float4* even, uint32_t previous,
   unsigned long long* counters)
 {
-  // The unlit kernels contain none of the lighting code.
-  if (lit)
+  // The unlit kernels contain none of the lighting code, the collision
+  // kernels none of the expected-value estimator's (registers: ptxas).
+  const bool ev = usesExpectedValue(fp.estimator, Mode, lit, false);
+  if (ev)
+  {
+    if (count)
+    {
+      renderKernel<Mode, true, false, true><<<grid, block>>>(s, cam, fp, depth, accum, even, previous, counters);
+    }
+    else
+    {
+      renderKernel<Mode, false, false, true><<<grid, block>>>(s, cam, fp, depth, accum, even, previous, counters);
+    }
+  }
+  else if (lit)
   {
     if (count)
     {

@@ -9,6 +9,14 @@
 
 namespace mcvol
 {
+/// Whether a render's camera rays use the expected-value estimator: asked
+/// for, unlit, not optimized, and not post-render compositing (these keep
+/// the collision estimator, Estimator's documentation says why).
+MCVOL_FUNC bool usesExpectedValue(Estimator e, BlendMode mode, bool lit, bool optimized)
+{
+  return e == Estimator::ExpectedValue && !lit && !optimized && mode != BlendMode::Composite;
+}
+
 /// What one render asks of every pixel.
 struct FrameParams
 {
@@ -32,8 +40,11 @@ struct FrameParams
  * exactly the unoptimized one (the null list folds away). `even` (optional)
  * receives the sum of the samples of even index firstSample + k, the half
  * the error estimate keeps (Accumulator::estimatedMSE).
+ * ExpectedValue (a compile-time choice too, so that the collision kernels
+ * carry none of its code and registers; usesExpectedValue() decides it)
+ * scores unlit camera rays with trackExpected().
  */
-template <BlendMode Mode, bool Lit = false, bool Optimized = false>
+template <BlendMode Mode, bool Lit = false, bool Optimized = false, bool ExpectedValue = false>
 MCVOL_FUNC Vec4f renderPixel(const SceneView& s, const CameraView& cam, const FrameParams& fp, int x, int y,
   float depth, RayCounters& c, const RayImportance* imp = nullptr, Vec4f* even = nullptr)
 {
@@ -64,7 +75,7 @@ MCVOL_FUNC Vec4f renderPixel(const SceneView& s, const CameraView& cam, const Fr
     {
       v = traceLitSample<Mode>(s, fp.tracker, ray.o, ray.d, ray.world, ray.tmax, rng, c, sc, ri);
     }
-    else if (!Optimized && Mode != BlendMode::Composite && fp.estimator == Estimator::ExpectedValue)
+    else if (ExpectedValue && !Optimized && Mode != BlendMode::Composite)
     {
       v = trackExpected<Mode>(s, ray.o, ray.d, 0.f, ray.tmax, rng, c);
     }

@@ -198,7 +198,7 @@ MCVOL_HOT float sampleChannel(const VolumeView& vol, int n, Vec3f p)
  * clamping of sampleChannel(), colour their ratio. A NaN among the voxels
  * read gives sigma 0 (transparent). Always software sampling (no texture).
  */
-MCVOL_HOT TFSample sampleClassified(const VolumeView& vol, int n, Vec3f p)
+MCVOL_COLD TFSample sampleClassified(const VolumeView& vol, int n, Vec3f p)
 {
   const ChannelView& c = vol.channels[n];
   float acc[4] = { 0.f, 0.f, 0.f, 0.f };
