@@ -17,8 +17,9 @@
 // read voxels through the hardware texture filter, as the Monte Carlo
 // renders do (the reference march never does).
 // --sampler independent|sobol (default sobol, the
-// renderer's default) picks the progressive series' sample sequence; the
-// 4096-spp cross-check uses the same.
+// renderer's default) picks the progressive series' sample sequence, and
+// --estimator expected-value|collision (default expected-value, the
+// renderer's default) its estimator; the 4096-spp cross-check uses the same.
 
 #include "mcvol/CameraMath.h"
 #include "mcvol/DemoData.h"
@@ -69,6 +70,7 @@ struct Options
   bool marchTextures = false; ///< CUDA march: hardware texture filtering (not for the reference)
   bool scoreOnly = false;     ///< no image files: RMSE and PSNR in the CSV instead
   mcvol::Sampler sampler = mcvol::Sampler::Sobol;
+  mcvol::Estimator estimator = mcvol::Estimator::ExpectedValue;
 };
 
 std::vector<double> splitDoubles(const std::string& s)
@@ -156,6 +158,16 @@ Options parse(int argc, char** argv)
     else if (a == "--score-only")
     {
       o.scoreOnly = true;
+    }
+    else if (a == "--estimator")
+    {
+      need(1);
+      const std::string s = argv[++i];
+      if (s != "expected-value" && s != "collision")
+      {
+        throw std::invalid_argument("--estimator takes expected-value or collision, not " + s);
+      }
+      o.estimator = s == "collision" ? mcvol::Estimator::Collision : mcvol::Estimator::ExpectedValue;
     }
     else if (a == "--sampler")
     {
@@ -341,6 +353,7 @@ int main(int argc, char** argv)
     mcvol::RenderSettings rs;
     rs.jitterPixels = false;
     rs.sampler = o.sampler;
+    rs.estimator = o.estimator;
     rs.readBack = false; // device backends: the copy-back is not part of the timed render
     {
       mcvol::Accumulator acc;
@@ -414,7 +427,8 @@ int main(int argc, char** argv)
     m << "dataset " << o.dataset << "\ndims " << v.dims[0] << " " << v.dims[1] << " " << v.dims[2] << "\nchannels "
       << v.numChannels() << "\nblend " << o.blend << "\nsize " << o.width << " " << o.height << "\nthreads " << threads
       << "\nbackend " << r->name() << "\nmarch_backend " << marcher->name() << (o.marchTextures ? " (textures)" : "")
-      << "\nvoxel " << voxel << "\nsampler " << mcvol::toString(o.sampler) << "\n";
+      << "\nvoxel " << voxel << "\nsampler " << mcvol::toString(o.sampler)
+      << "\nestimator " << mcvol::toString(o.estimator) << "\n";
   }
   catch (const std::exception& e)
   {

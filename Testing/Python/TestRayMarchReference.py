@@ -3,8 +3,11 @@ against the ray-marched reference, and the reference's own behaviour.
 
 1. For each blend mode on two datasets (the paper's Figure 3 cubes, float32;
    the microscopy phantom, uint8), the ray-marched image (extinction model,
-   a step of 1/64 voxel, where its own discretization error is far below the
-   Monte Carlo noise: at 1/4 voxel it is not, and this test fails) is compared with a baseline PNG (deterministic: at
+   a step of 1/256 voxel, where its own discretization error is far below the
+   Monte Carlo noise: at 1/64 voxel it is not for the expected-value
+   estimator, whose noise is 3-4 times lower than the collision estimator's
+   (microscopy, 8192 spp: Z = 20 at 1/64 voxel, 0.05 at 1/256), and at 1/4
+   voxel not for either) is compared with a baseline PNG (deterministic: at
    most 2 levels, mean under 0.1), and with the Monte Carlo mapper's image of
    the same scene at a fixed seed and sample count: K = 16 renders of 16 spp
    each (seeds 1..16, pixel jitter off so both sample pixel centres). The
@@ -118,7 +121,7 @@ def grab():
     return vtk_to_numpy(g.GetOutput().GetPointData().GetScalars()).reshape(SIZE, SIZE, 3).astype(np.float64)
 
 
-def reference(scene, step_voxels=1.0 / 64, compositing="Extinction", skipping=True):
+def reference(scene, step_voxels=1.0 / 256, compositing="Extinction", skipping=True):
     m = vtkMultiChannelRayMarchMapper()
     m.SetStepSize(step_voxels * scene.spacing)
     getattr(m, "SetCompositingModelTo" + compositing)()
