@@ -10,7 +10,9 @@
   re-rendering, moving the camera or touching a function without changing
   its values classifies nothing; new data values classify again;
 - float RGBA: constant colour components are taken as they are; NaN voxels
-  are transparent;
+  are transparent; unsigned short RGBA: each colour component is scaled over
+  its finite range (VTK's GPU ray caster); 2 float components with a gray
+  colour function;
 - lighting (ShadeOn) works on the classified channel;
 - 3 components, or channel arrays, with IndependentComponentsOff are a clear
   error (nothing drawn, no crash); 1 component renders as before;
@@ -254,6 +256,44 @@ t.check(np.abs(right[:3] / right[3] - np.array([1.0, 0.5, 0.25])).max() < 1e-3,
         "float RGBA: constant colour components should be taken as they are, got %s"
         % np.round(right[:3] / right[3], 4))
 t.check(left[3] == 0.0, "NaN voxels should be transparent (alpha %.3g)" % left[3])
+
+# unsigned short RGBA: each colour component scaled over its finite range
+# (VTK's GPU ray caster), opacity through the function at the data value.
+from vtkmodules.vtkCommonCore import vtkUnsignedShortArray  # noqa: E402
+
+us = np.zeros((NZ, NY, NX, 4))
+us[..., 0] = 1000 + 2000 * np.arange(NX)[None, None, :] / (NX - 1)  # red 0..1 along x
+us[..., 1] = 500  # constant: clamped to [0, 1] -> 1
+us[..., 2] = 0  # constant 0 -> 0
+us[..., 3] = A8
+up, _, _ = make_property()
+ust = Scene(vtkMultiChannelRayMarchMapper(), up, make_image(us, vtkUnsignedShortArray))
+uimg = ust.render()
+t.check(not ust.errors.errors, "unsigned short RGBA: unexpected errors %s" % ust.errors.errors)
+row = uimg[SIZE // 2]
+cols = [x for x in range(SIZE) if row[x, 3] > 0.5 * expected_alpha]
+mid = row[cols[len(cols) // 2]]
+t.check(abs(mid[3] - expected_alpha) < 1e-3, "unsigned short RGBA: alpha %.4f, expected %.4f" % (mid[3], expected_alpha))
+t.check(abs(mid[1] / mid[3] - 1.0) < 1e-3 and mid[2] == 0.0,
+        "unsigned short RGBA: constant green 500 -> 1 and blue 0 -> 0, got %s" % np.round(mid[:3] / mid[3], 4))
+reds = row[cols, 0] / row[cols, 3]
+t.check(reds[0] < 0.1 and reds[-1] > 0.9 and np.all(np.diff(reds) >= -1e-6),
+        "unsigned short RGBA: red should rise from 0 to 1 across the slab, got %s" % np.round(reds[::4], 3))
+
+# Two float components with a gray colour function.
+gp, _, _ = make_property()
+gray = vtkPiecewiseFunction()
+gray.AddPoint(0.0, 0.25)
+gray.AddPoint(1.0, 0.25)
+gp.SetColor(0, gray)
+two_f = np.zeros((NZ, NY, NX, 2))
+two_f[..., 0] = 0.5
+two_f[..., 1] = A8
+gs = Scene(vtkMultiChannelRayMarchMapper(), gp, make_image(two_f.astype(np.float32), vtkFloatArray))
+got = centre(gs.render())
+t.check(not gs.errors.errors and abs(got[3] - expected_alpha) < 1e-3 and np.abs(got[:3] / got[3] - 0.25).max() < 1e-3,
+        "2 float components, gray function: colour %s alpha %.4f (%s)" % (got[:3] / max(got[3], 1e-9), got[3],
+                                                                          gs.errors.errors))
 
 # --- 5. Lighting --------------------------------------------------------------
 lp, _, _ = make_property()
