@@ -29,8 +29,13 @@ constexpr int kFloatTableSize = 4096;
 constexpr double kMaxExactTableSize = 65536.0;
 
 /// Finite range of one component; [0, 1] when it has no finite value.
+/// Unsigned char: all its values, [0, 255] (an exact table, no scan).
 std::array<double, 2> FiniteRange(vtkDataArray* array, int component)
 {
+  if (array->GetDataType() == VTK_UNSIGNED_CHAR)
+  {
+    return { 0.0, 255.0 };
+  }
   double r[2];
   array->GetFiniteRange(r, component);
   if (!(r[0] <= r[1]) || !std::isfinite(r[0]) || !std::isfinite(r[1]))
