@@ -698,9 +698,9 @@ void vtkMultiChannelVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
   if (!this->BindChannels(pass) ||              // input image -> channels read in place
     !this->ClassifyDependentComponents(pass) || // IndependentComponentsOff: RGBA -> one classified channel
     !this->ResolveTransferFunctions(pass) ||    // VTK functions of each channel
-    !this->EnsureBackend() ||                // CPU or CUDA renderer
-    !this->UpdateScene(pass) ||              // volume, tables, grids, settings, lights
-    !this->SetUpView(pass))                  // camera rays, depth of opaque geometry
+    !this->EnsureBackend() ||                   // CPU or CUDA renderer
+    !this->UpdateScene(pass) ||                 // volume, tables, grids, settings, lights
+    !this->SetUpView(pass))                     // camera rays, depth of opaque geometry
   {
     return;
   }

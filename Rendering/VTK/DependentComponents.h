@@ -100,8 +100,8 @@ private:
   Key LastKey;
   // What the last classification used (a key whose times moved but whose
   // tables did not change reuses the buffer).
-  Table ColorTable;   // 2 components: colour of component 0
-  Table OpacityTable; // opacity of the last component
+  Table ColorTable;                                   // 2 components: colour of component 0
+  Table OpacityTable;                                 // opacity of the last component
   std::array<std::array<double, 2>, 3> ColorRanges{}; // 4 components, not unsigned char
   vtkTimeStamp ClassifiedTime;
   bool Classified = false;
