@@ -37,6 +37,7 @@ list(TRANSFORM classes PREPEND "${_mcvol_rendering_dir}/")
 set(_mcvol_stages
   Accumulation
   ChannelBinding
+  DependentComponents
   FrameCompositor
   RenderBackend
   TransferFunctionTables

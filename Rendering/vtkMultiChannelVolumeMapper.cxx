@@ -16,6 +16,7 @@
 
 #include "VTK/Accumulation.h"
 #include "VTK/ChannelBinding.h"
+#include "VTK/DependentComponents.h"
 #include "VTK/FrameCompositor.h"
 #include "VTK/RenderBackend.h"
 #include "VTK/TransferFunctionTables.h"
@@ -57,6 +58,7 @@ struct vtkMultiChannelVolumeMapper::vtkInternals
 
   // The stages' state.
   mcvol::adapter::ChannelData Data;
+  mcvol::adapter::DependentClassifier Dependent; // IndependentComponentsOff
   mcvol::adapter::TransferFunctionTables Tables;
   mcvol::adapter::RenderBackend Backend;
   mcvol::adapter::Accumulation Accumulation;
@@ -349,6 +351,18 @@ int vtkMultiChannelVolumeMapper::GetNumberOfDataUploads()
 {
   const mcvol::Renderer* renderer = this->Internals->Backend.Get();
   return renderer ? static_cast<int>(renderer->dataUploads()) : 0;
+}
+
+//------------------------------------------------------------------------------
+int vtkMultiChannelVolumeMapper::GetNumberOfClassifications()
+{
+  return this->Internals->Dependent.Classifications();
+}
+
+//------------------------------------------------------------------------------
+double vtkMultiChannelVolumeMapper::GetClassifiedMemory()
+{
+  return static_cast<double>(this->Internals->Dependent.Bytes());
 }
 
 //------------------------------------------------------------------------------
@@ -660,6 +674,8 @@ struct vtkMultiChannelVolumeMapper::RenderPass
   vtkVolumeProperty* Property = nullptr;
   mcvol::adapter::BoundChannels Channels;
   mcvol::adapter::ChannelFunctionSet Functions;
+  /// IndependentComponentsOff: Channels is the one pre-classified channel.
+  bool Classified = false;
   vtkMTimeType LightsMTime = 0;
   mcvol::adapter::Viewport Viewport;
   vtkOpenGLRenderWindow* Window = nullptr;
@@ -679,11 +695,12 @@ void vtkMultiChannelVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
   RenderPass pass;
   pass.Renderer = ren;
   pass.Volume = vol;
-  if (!this->BindChannels(pass) ||           // input image -> channels read in place
-    !this->ResolveTransferFunctions(pass) || // VTK functions of each channel
-    !this->EnsureBackend() ||                // CPU or CUDA renderer
-    !this->UpdateScene(pass) ||              // volume, tables, grids, settings, lights
-    !this->SetUpView(pass))                  // camera rays, depth of opaque geometry
+  if (!this->BindChannels(pass) ||              // input image -> channels read in place
+    !this->ClassifyDependentComponents(pass) || // IndependentComponentsOff: RGBA -> one classified channel
+    !this->ResolveTransferFunctions(pass) ||    // VTK functions of each channel
+    !this->EnsureBackend() ||                   // CPU or CUDA renderer
+    !this->UpdateScene(pass) ||                 // volume, tables, grids, settings, lights
+    !this->SetUpView(pass))                     // camera rays, depth of opaque geometry
   {
     return;
   }
@@ -733,6 +750,44 @@ bool vtkMultiChannelVolumeMapper::BindChannels(RenderPass& pass)
 }
 
 //------------------------------------------------------------------------------
+bool vtkMultiChannelVolumeMapper::ClassifyDependentComponents(RenderPass& pass)
+{
+  vtkVolumeProperty* property = pass.Volume->GetProperty();
+  // One channel is the same whether its components are dependent or not.
+  if (!property || property->GetIndependentComponents() || pass.Channels.Count == 1)
+  {
+    return true;
+  }
+  std::string error;
+  if (!this->Internals->ChannelArrayNames.empty())
+  {
+    vtkErrorMacro("IndependentComponentsOff needs the dependent components in one 2- or 4-component scalar array; "
+                  "the mapper lists "
+      << this->Internals->ChannelArrayNames.size()
+      << " channel arrays (RemoveAllChannelArrays, or use IndependentComponentsOn).");
+    return false;
+  }
+  // Channel 0's functions (the mapper's own where set, else the property's
+  // component 0, VTK's convention for dependent components).
+  mcvol::adapter::ChannelFunctionSet functions;
+  if (pass.Channels.Count == 2 || pass.Channels.Count == 4)
+  {
+    if (!mcvol::adapter::ResolveChannelFunctions(this->Internals->Functions, property, 1, functions, error))
+    {
+      vtkErrorMacro(<< error);
+      return false;
+    }
+  }
+  if (!this->Internals->Dependent.Update(pass.Image, functions[0], pass.Channels, error))
+  {
+    vtkErrorMacro(<< error);
+    return false;
+  }
+  pass.Classified = true;
+  return true;
+}
+
+//------------------------------------------------------------------------------
 bool vtkMultiChannelVolumeMapper::ResolveTransferFunctions(RenderPass& pass)
 {
   pass.Property = pass.Volume->GetProperty();
@@ -743,7 +798,7 @@ bool vtkMultiChannelVolumeMapper::ResolveTransferFunctions(RenderPass& pass)
     vtkErrorMacro(<< error);
     return false;
   }
-  if (this->VisibilityOptimization)
+  if (this->VisibilityOptimization && !pass.Classified)
   {
     for (int c = 0; c < pass.Channels.Count; ++c)
     {
@@ -778,8 +833,19 @@ bool vtkMultiChannelVolumeMapper::UpdateScene(RenderPass& pass)
     mcvol::Renderer* renderer = in.Backend.Get();
     in.Scene.setHostAcceleration(!renderer || !renderer->buildsAccelerationOnDevice());
     in.Data.Update(in.Scene, pass.Image, pass.Channels, [&in] { in.Tables.Forget(); });
-    this->LastTransferFunctionUpdates = in.Tables.Update(in.Scene, pass.Functions, numChannels,
-      this->TransferFunctionRangeMode == FUNCTION_RANGE, [&in](int c) { return in.Data.Range(c); });
+    if (pass.Classified)
+    {
+      // The classified channel reads no table; its changes reach the Scene
+      // (dataModified) and the image (DataMTime) as new data.
+      this->LastTransferFunctionUpdates = 0;
+    }
+    else
+    {
+      // The Scene reads the arrays again: the classified copy can go.
+      in.Dependent.Release();
+      this->LastTransferFunctionUpdates = in.Tables.Update(in.Scene, pass.Functions, numChannels,
+        this->TransferFunctionRangeMode == FUNCTION_RANGE, [&in](int c) { return in.Data.Range(c); });
+    }
 
     // The Scene's setters are cheap and rebuild nothing unless a value
     // changed (a new macrocell size marks the grids for update()).
@@ -808,10 +874,14 @@ bool vtkMultiChannelVolumeMapper::UpdateScene(RenderPass& pass)
     in.Scene.setLighting(
       mcvol::adapter::CollectLighting(pass.Renderer, pass.Property, lighting, numChannels, pass.LightsMTime));
     // Visibility optimization: importance over the colour tables' ranges.
-    in.Tables.UpdateImportance(in.Functions, numChannels);
+    if (!pass.Classified)
+    {
+      in.Tables.UpdateImportance(in.Functions, numChannels);
+    }
     mcvol::ImportanceDesc importance;
     importance.enabled = this->VisibilityOptimization;
-    if (importance.enabled)
+    // A pre-classified channel has no scalar to look importance up by.
+    if (importance.enabled && !pass.Classified)
     {
       importance.tables = in.Tables.ImportanceTables();
     }
@@ -990,6 +1060,8 @@ void vtkMultiChannelVolumeMapper::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "EstimatedError: " << this->GetEstimatedError() << "\n";
   os << indent << "NumberOfChannels: " << this->NumberOfChannels << "\n";
   os << indent << "LastTransferFunctionUpdates: " << this->LastTransferFunctionUpdates << "\n";
+  os << indent << "NumberOfClassifications: " << in.Dependent.Classifications() << "\n";
+  os << indent << "ClassifiedMemory: " << in.Dependent.Bytes() << " bytes\n";
   os << indent << "ChannelArrays:";
   if (in.ChannelArrayNames.empty())
   {

@@ -31,12 +31,34 @@
  *
  * Transfer functions: channel i < 4 takes its colour (RGB or gray), scalar
  * opacity and opacity unit distance from the vtkVolumeProperty's component i,
- * as VTK's other mappers do with IndependentComponentsOn (components are
- * always treated as independent channels here). SetChannelColor,
+ * as VTK's other mappers do with IndependentComponentsOn (the default).
+ * SetChannelColor,
  * SetChannelScalarOpacity and SetChannelScalarOpacityUnitDistance override
  * the property for one channel; channels 4 and above (vtkVolumeProperty holds
  * at most VTK_MAX_VRCOMP = 4) must be given both functions this way. Each
  * function is sampled over the channel's finite data range.
+ *
+ * Dependent components (vtkVolumeProperty::IndependentComponentsOff(), VTK's
+ * convention) render one pre-classified RGBA volume: with 4 components RGB
+ * come from components 0-2 (unsigned char: value / 255; other types: each
+ * component scaled over its finite range to [0, 1], as VTK's GPU ray caster
+ * does, a constant component clamped to [0, 1]) and the opacity from
+ * component 3 through the scalar opacity function of component 0; with 2
+ * components the colour is component 0 through the colour function and the
+ * opacity component 1 through the scalar opacity function (both of
+ * component 0; the mapper's SetChannelColor/SetChannelScalarOpacity/
+ * SetChannelScalarOpacityUnitDistance of channel 0 override them). Each
+ * voxel's opacity a becomes the extinction -ln(1 - min(a, 1 - 2^-20)) / unit
+ * distance and its colour is stored extinction-weighted; sampling then
+ * interpolates extinction and extinction-weighted colour (Kraus and Buerger,
+ * Sec. 3.3). The mapper keeps the classified copy (16 bytes a voxel,
+ * GetClassifiedMemory()) and rebuilds it only when the data, the functions'
+ * values or the unit distance change (GetNumberOfClassifications()). NaN
+ * voxels are transparent. ChannelBlendMode and mix weights do not matter
+ * for the one channel; lighting works as for scalar channels; importance
+ * functions are ignored (there is no scalar to look them up by). One
+ * component renders as with IndependentComponentsOn; 3 components, or
+ * channel arrays listed with AddChannelArray, are an error.
  *
  * How channels combine is SetChannelBlendMode (density, max, mix, composite).
  * This is separate from, and ignores, vtkVolumeMapper::SetBlendMode.
@@ -523,6 +545,18 @@ public:
   double GetImportanceOverflows();
   ///@}
 
+  ///@{
+  /**
+   * Dependent components (IndependentComponentsOff): how many times the
+   * mapper classified the input into its RGBA copy since it was created
+   * (once per change of the data, the functions' values or the unit
+   * distance; re-renders and camera moves classify nothing), and the bytes
+   * of that copy (16 per voxel; 0 when the input is not classified).
+   */
+  int GetNumberOfClassifications();
+  double GetClassifiedMemory();
+  ///@}
+
   /**
    * Samples per pixel accumulated in the current image.
    */
@@ -717,6 +751,7 @@ private:
   // Rendering/VTK/ and reports its own errors (false ends the frame).
   struct RenderPass;
   bool BindChannels(RenderPass& pass);
+  bool ClassifyDependentComponents(RenderPass& pass);
   bool ResolveTransferFunctions(RenderPass& pass);
   bool EnsureBackend();
   bool UpdateScene(RenderPass& pass);
