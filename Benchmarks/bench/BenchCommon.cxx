@@ -323,6 +323,20 @@ FrameStats timeFrames(
   return s;
 }
 
+std::vector<float> renderReference(const Options& o, mcvol::Renderer& r, const mcvol::Scene& scene,
+  const mcvol::Camera& cam, mcvol::Accumulator& ref, mcvol::RenderSettings rs)
+{
+  rs.seed = 12345;
+  rs.readBack = false;
+  for (int k = 0; k < o.referenceSpp; k += rs.samplesPerPixel)
+  {
+    rs.samplesPerPixel = std::min(64, o.referenceSpp - k);
+    r.render(scene, cam, rs, nullptr, ref);
+  }
+  r.readBack(ref);
+  return std::vector<float>(ref.rgba(), ref.rgba() + size_t(4) * ref.width() * ref.height());
+}
+
 double psnrOf(const mcvol::Accumulator& a, const std::vector<float>& ref)
 {
   double se = 0;

@@ -104,6 +104,13 @@ FrameStats timeFrames(const Options& o, mcvol::Renderer& r, const mcvol::Scene& 
 /// PSNR (peak 1) of the premultiplied RGB (the image over black) against a reference.
 double psnrOf(const mcvol::Accumulator& a, const std::vector<float>& ref);
 
+/// A converged reference of the loaded scene: --reference-spp samples of
+/// seed 12345 in batches of at most 64, read back; returns its RGBA image.
+/// `rs` gives everything else (sampler, estimator; its seed and batch size
+/// are set here).
+std::vector<float> renderReference(const Options& o, mcvol::Renderer& r, const mcvol::Scene& scene,
+  const mcvol::Camera& cam, mcvol::Accumulator& ref, mcvol::RenderSettings rs = mcvol::RenderSettings());
+
 #ifdef MCVOL_WITH_CUDA
 mcvol::CUDARenderer* asCuda(mcvol::Renderer& r);
 #endif

@@ -26,16 +26,7 @@ void runConverge(Bench& bench)
   const mcvol::Camera cam = benchCamera(o, s.scene);
   // Converged reference: many samples, another seed, in batches.
   mcvol::Accumulator ref;
-  mcvol::RenderSettings rs;
-  rs.seed = 12345;
-  rs.samplesPerPixel = std::min(64, o.referenceSpp);
-  rs.readBack = false;
-  for (int k = 0; k < o.referenceSpp; k += rs.samplesPerPixel)
-  {
-    r.render(s.scene, cam, rs, nullptr, ref);
-  }
-  r.readBack(ref);
-  const std::vector<float> refImg(ref.rgba(), ref.rgba() + size_t(4) * ref.width() * ref.height());
+  const std::vector<float> refImg = renderReference(o, r, s.scene, cam, ref);
   std::printf("## Time to converge: %s, %dx%d, 1 spp per frame, target PSNR %.1f dB (peak 1, RGB over black) "
               "against %u spp\n\n| estimator, tracker, sampler | frames | ms (rendering only) | PSNR reached | ms per frame back to back "
               "| frames x that |\n|---|---|---|---|---|---|\n",

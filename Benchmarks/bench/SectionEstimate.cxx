@@ -47,14 +47,7 @@ void runEstimate(Bench& bench)
   // Estimate against truth: a reference of --reference-spp samples of
   // another seed, whose own (estimated) MSE is taken off the measured one.
   mcvol::Accumulator ref;
-  mcvol::RenderSettings rs;
-  rs.seed = 12345;
-  rs.samplesPerPixel = std::min(64, o.referenceSpp);
-  for (int k = 0; k < o.referenceSpp; k += rs.samplesPerPixel)
-  {
-    r.render(s.scene, cam, rs, nullptr, ref);
-  }
-  const std::vector<float> refImg(ref.rgba(), ref.rgba() + size_t(4) * ref.width() * ref.height());
+  const std::vector<float> refImg = renderReference(o, r, s.scene, cam, ref);
   const double refMSE = std::max(0.0, ref.estimatedMSE());
   std::printf("## Error estimate: %s, %dx%d, against %u spp (its own estimated RMSE %.5f removed)\n\n"
               "| spp | estimated RMSE | true RMSE | ratio | estimated PSNR (dB) |\n|---|---|---|---|---|\n",

@@ -55,16 +55,9 @@ void runSequences(Bench& bench)
   const mcvol::Camera cam = benchCamera(o, s.scene);
   mcvol::Accumulator ref;
   mcvol::RenderSettings rs;
-  rs.seed = 12345;
   rs.sampler = mcvol::Sampler::Independent;
-  rs.readBack = false;
-  for (int k = 0; k < o.referenceSpp; k += rs.samplesPerPixel)
-  {
-    rs.samplesPerPixel = std::min(64, o.referenceSpp - k);
-    r.render(s.scene, cam, rs, nullptr, ref);
-  }
-  r.readBack(ref);
-  const std::vector<float> refImg(ref.rgba(), ref.rgba() + size_t(4) * ref.width() * ref.height());
+  rs.estimator = mcvol::Estimator::Collision;
+  const std::vector<float> refImg = renderReference(o, r, s.scene, cam, ref, rs);
   struct Config
   {
     mcvol::Sampler sampler;
@@ -153,7 +146,7 @@ void runSequences(Bench& bench)
     }
   }
   std::printf("## Sample sequences: %s, %dx%d, 1-DDA, 1 spp per frame, RMSE (RGB over black) against %u spp of "
-              "the independent sampler (another seed)\n\n| spp |",
+              "the independent sampler and collision estimator (another seed)\n\n| spp |",
     ds.c_str(), o.width, o.height, ref.samples());
   for (const Config& config : configs)
   {

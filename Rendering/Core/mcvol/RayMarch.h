@@ -68,41 +68,6 @@ struct StepOptics
   Vec3f colour; ///< premultiplied
 };
 
-/// The 8 trilinear corners of p (or the nearest voxel, weight 1): voxel
-/// indices and weights, clamped to the grid exactly as sampleChannel() does.
-struct Corners
-{
-  int64_t index[8];
-  float weight[8];
-  int count = 0;
-};
-
-MCVOL_HOT Corners cornersOf(const VolumeView& vol, Vec3f p)
-{
-  Corners c;
-  if (vol.nearest)
-  {
-    c.index[0] = nearestVoxel(vol, p);
-    c.weight[0] = 1.f;
-    c.count = 1;
-    return c;
-  }
-  int i0[3];
-  int i1[3];
-  float f[3];
-  trilinearFootprint(vol, p, i0, i1, f);
-  const int64_t sy = vol.dims[0];
-  const int64_t sz = int64_t(vol.dims[0]) * vol.dims[1];
-  for (int k = 0; k < 8; ++k)
-  {
-    const int bx = k & 1, by = (k >> 1) & 1, bz = (k >> 2) & 1;
-    c.index[k] = (bx ? i1[0] : i0[0]) + (by ? i1[1] : i0[1]) * sy + (bz ? i1[2] : i0[2]) * sz;
-    c.weight[k] = (bx ? f[0] : 1.f - f[0]) * (by ? f[1] : 1.f - f[1]) * (bz ? f[2] : 1.f - f[2]);
-  }
-  c.count = 8;
-  return c;
-}
-
 /// Opacity-based sampling of channel n at the corners: interpolated step
 /// opacity and opacity-weighted colour. A NaN voxel among the corners makes
 /// the channel transparent at p (the core's NaN rule). A pre-classified

@@ -191,24 +191,24 @@ MCVOL_HOT float sampleChannel(const VolumeView& vol, int n, Vec3f p)
 }
 
 
-/**
- * Extinction-based sampling of a pre-classified channel n at continuous index
- * p (Kraus and Buerger Sec. 3.3): sigma and sigma*colour interpolated
- * trilinearly (or the nearest voxel, if vol.nearest) with the footprint and
- * clamping of sampleChannel(), colour their ratio. A NaN among the voxels
- * read gives sigma 0 (transparent). Always software sampling (no texture).
- */
-MCVOL_COLD TFSample sampleClassified(const VolumeView& vol, int n, Vec3f p)
+/// The 8 trilinear corners of p (or the nearest voxel, weight 1): voxel
+/// indices and weights, clamped to the grid exactly as sampleChannel() does.
+struct Corners
 {
-  const ChannelView& c = vol.channels[n];
-  float acc[4] = { 0.f, 0.f, 0.f, 0.f };
+  int64_t index[8];
+  float weight[8];
+  int count = 0;
+};
+
+MCVOL_HOT Corners cornersOf(const VolumeView& vol, Vec3f p)
+{
+  Corners c;
   if (vol.nearest)
   {
-    if (!fetchClassified(c, nearestVoxel(vol, p), acc))
-    {
-      return TFSample();
-    }
-    return classifiedOptics(acc);
+    c.index[0] = nearestVoxel(vol, p);
+    c.weight[0] = 1.f;
+    c.count = 1;
+    return c;
   }
   int i0[3];
   int i1[3];
@@ -219,17 +219,36 @@ MCVOL_COLD TFSample sampleClassified(const VolumeView& vol, int n, Vec3f p)
   for (int k = 0; k < 8; ++k)
   {
     const int bx = k & 1, by = (k >> 1) & 1, bz = (k >> 2) & 1;
-    const int64_t v = (bx ? i1[0] : i0[0]) + (by ? i1[1] : i0[1]) * sy + (bz ? i1[2] : i0[2]) * sz;
-    const float w = (bx ? f[0] : 1.f - f[0]) * (by ? f[1] : 1.f - f[1]) * (bz ? f[2] : 1.f - f[2]);
+    c.index[k] = (bx ? i1[0] : i0[0]) + (by ? i1[1] : i0[1]) * sy + (bz ? i1[2] : i0[2]) * sz;
+    c.weight[k] = (bx ? f[0] : 1.f - f[0]) * (by ? f[1] : 1.f - f[1]) * (bz ? f[2] : 1.f - f[2]);
+  }
+  c.count = 8;
+  return c;
+}
+
+/**
+ * Extinction-based sampling of a pre-classified channel n at continuous index
+ * p (Kraus and Buerger Sec. 3.3): sigma and sigma*colour interpolated
+ * trilinearly (or the nearest voxel, if vol.nearest) with the footprint and
+ * clamping of sampleChannel(), colour their ratio. A NaN among the voxels
+ * read gives sigma 0 (transparent). Always software sampling (no texture).
+ */
+MCVOL_COLD TFSample sampleClassified(const VolumeView& vol, int n, Vec3f p)
+{
+  const ChannelView& c = vol.channels[n];
+  const Corners k = cornersOf(vol, p);
+  float acc[4] = { 0.f, 0.f, 0.f, 0.f };
+  for (int i = 0; i < k.count; ++i)
+  {
     float x[4];
-    if (!fetchClassified(c, v, x))
+    if (!fetchClassified(c, k.index[i], x))
     {
       return TFSample();
     }
-    acc[0] += w * x[0];
-    acc[1] += w * x[1];
-    acc[2] += w * x[2];
-    acc[3] += w * x[3];
+    acc[0] += k.weight[i] * x[0];
+    acc[1] += k.weight[i] * x[1];
+    acc[2] += k.weight[i] * x[2];
+    acc[3] += k.weight[i] * x[3];
   }
   return classifiedOptics(acc);
 }
