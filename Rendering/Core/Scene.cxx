@@ -115,9 +115,10 @@ bool Scene::update()
   }
   if (this->View.tables.size < 2)
   {
-    // Only pre-classified channels and no table set: a transparent
-    // placeholder of 2 texels, so that the tables are never empty for the
-    // backends (they check the size) and no code path reads a null table.
+    // Only pre-classified channels and no table set: the tables become 2
+    // transparent texels per channel. Pre-classified channels never read
+    // them, but the backends require non-empty tables (the size check of
+    // Scene::update's contract) and no code path may read a null table.
     this->Tables.assign(size_t(kMaxChannels) * 2 * 4, 0.f);
     this->View.tables.size = 2;
     for (int n = 0; n < kMaxChannels; ++n)
