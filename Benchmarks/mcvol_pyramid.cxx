@@ -91,6 +91,7 @@ struct Options
 {
   std::vector<std::string> datasets = { "figure3", "microscopy", "cosmology", "weather", "wall", "wall-x", "figure2" };
   std::vector<std::string> sections = { "levels", "far" };
+  std::vector<std::string> farKinds = { "ball", "sheets" };
   std::array<int, 3> dims = { 0, 0, 0 }; ///< all zero: each dataset's default
   int width = 256;
   int height = 256;
@@ -124,8 +125,9 @@ void usage()
 {
   std::puts("usage: mcvol-pyramid [--datasets figure3,microscopy,cosmology,weather,wall,wall-x,figure2]\n"
             "                     [--sections levels,far] [--dims X Y Z] [--size W H] [--levels L]\n"
-            "                     [--step-fraction F] [--reps N] [--far-edge N] [--far-size PX]\n"
-            "                     [--far-coverage PX] [--far-super S] [--far-levels L] [--csv FILE]");
+            "                     [--step-fraction F] [--reps N] [--far-volumes ball,sheets]\n"
+            "                     [--far-edge N] [--far-size PX] [--far-coverage PX]\n"
+            "                     [--far-super S] [--far-levels L] [--csv FILE]");
 }
 
 Options parse(int argc, char** argv)
@@ -177,6 +179,11 @@ Options parse(int argc, char** argv)
     {
       need(1);
       o.reps = std::max(1, std::stoi(argv[++i]));
+    }
+    else if (a == "--far-volumes")
+    {
+      need(1);
+      o.farKinds = split(argv[++i]);
     }
     else if (a == "--far-edge")
     {
@@ -917,30 +924,50 @@ Image downsampleImage(const Image& big, int W, int H, int s)
   return out;
 }
 
-void runFar(const Options& o, mcvol::Renderer& mc, Csv& csv)
+/**
+ * The far-view volumes, N^3 with voxel-scale detail inside a ball of radius
+ * 0.45 N (outside empty):
+ *   "ball"   dense (sigma 0.35 to 1.05 per voxel) with a random colour per
+ *            voxel: the camera sees the ball's first few voxels, i.e.
+ *            per-voxel colour noise that one ray per pixel aliases when a
+ *            pixel covers several voxels and that the pixel's footprint
+ *            averages to a smooth shade;
+ *   "sheets" semi-transparent one-voxel sheets (sigma 0.3 per voxel where
+ *            (i + j) % 4 == 0, diagonal planes 2.8 voxels apart) with a random
+ *            colour per voxel: seen from the study's view, a pattern above
+ *            the pixel rate that one ray per pixel turns into moire.
+ */
+std::vector<float> makeFarVolume(const std::string& kind, int N)
 {
-  // A dense ball (radius 0.45 N) whose every voxel has its own colour and a
-  // density between 0.35 and 1.05 per voxel: what the camera sees is the ball's
-  // first few voxels, i.e. per-voxel colour noise that one ray per pixel
-  // aliases when a pixel covers several voxels, and that the pixel's
-  // footprint averages to a smooth shade.
-  const int N = o.farEdge;
   std::vector<float> vox(size_t(4) * size_t(N) * size_t(N) * size_t(N), 0.f);
   const double c = 0.5 * double(N - 1), rad = 0.45 * double(N);
+  const bool sheets = kind == "sheets";
+  if (!sheets && kind != "ball")
+  {
+    throw std::invalid_argument("unknown far-view volume " + kind + " (ball, sheets)");
+  }
 #pragma omp parallel for schedule(static)
   for (int k = 0; k < N; ++k)
     for (int j = 0; j < N; ++j)
       for (int i = 0; i < N; ++i)
       {
         const double dx = i - c, dy = j - c, dz = k - c;
-        if (dx * dx + dy * dy + dz * dz > rad * rad)
+        if (dx * dx + dy * dy + dz * dz > rad * rad || (sheets && (i + j) % 4 != 0))
           continue;
         const uint64_t id = (uint64_t(k) * uint64_t(N) + uint64_t(j)) * uint64_t(N) + uint64_t(i);
         float* p = vox.data() + 4 * id;
-        p[0] = float(0.35 + 0.7 * hash01(4 * id));
+        p[0] = sheets ? 0.3f : float(0.35 + 0.7 * hash01(4 * id));
         for (int q = 1; q < 4; ++q)
           p[q] = p[0] * float(0.1 + 0.9 * hash01(4 * id + uint64_t(q)));
       }
+  return vox;
+}
+
+void runFar(const Options& o, const std::string& kind, mcvol::Renderer& mc, Csv& csv)
+{
+  const int N = o.farEdge;
+  const std::vector<float> vox = makeFarVolume(kind, N);
+  const double c = 0.5 * double(N - 1);
   mcvol::ClassifiedVolumeView v0;
   v0.voxels = vox.data();
   v0.dims[0] = v0.dims[1] = v0.dims[2] = N;
@@ -969,15 +996,16 @@ void runFar(const Options& o, mcvol::Renderer& mc, Csv& csv)
   double refMs = 0;
   const Image ref = downsampleImage(march(v0, big, 0.25, 1e-4f, &refMs), W, H, S);
 
-  std::printf("## Far view: %d^3 voxel-scale detail at %dx%d (edge over %.0f px; footprint %.2f voxels, automatic "
-              "level %d), box4 pyramid built in %.0f ms\n\n",
-    N, W, H, o.farCoverage, footprint, autoL, buildMs);
+  std::printf("## Far view \"%s\": %d^3 voxel-scale detail at %dx%d (edge over %.0f px; footprint %.2f voxels, "
+              "automatic level %d), box4 pyramid built in %.0f ms\n\n",
+    kind.c_str(), N, W, H, o.farCoverage, footprint, autoL, buildMs);
   std::printf("Reference: %d x %d sub-pixel rays per pixel at level 0 (ray march, step 1/4 voxel), box-filtered "
               "(%.0f ms). Ray march: one ray per pixel centre at the level's Nyquist step, early termination 1e-4 "
               "(median of %d). Monte Carlo: pixel-jittered samples (renderer defaults), cumulative time.\n\n",
     S, S, refMs, o.reps);
   std::printf("| level | grid | MiB | ray march ms | RM RMSE (PSNR) | opacity-pyramid RM RMSE (PSNR) | MC 1 spp ms | MC "
               "16 spp RMSE (PSNR) | MC 64 spp RMSE (PSNR), ms |\n|---|---|---|---|---|---|---|---|---|\n");
+  std::vector<double> rmRmse, rmMs;
   for (int l = 0; l <= levels; ++l)
   {
     const mcvol::ClassifiedVolumeView v = l == 0 ? v0 : pyr[size_t(l - 1)].view();
@@ -986,6 +1014,8 @@ void runFar(const Options& o, mcvol::Renderer& mc, Csv& csv)
     const FrameTimes f = timeFrames(g.scene, cam, mc, o.reps);
     const Image rm = march(v, cam0, 0.0, 1e-4f); // step 0: this grid's Nyquist step
     const Score s = score(rm, ref);
+    rmRmse.push_back(s.rmse);
+    rmMs.push_back(f.marchMs);
     Score so{ 0, 0 };
     if (l > 0)
     {
@@ -1022,22 +1052,27 @@ void runFar(const Options& o, mcvol::Renderer& mc, Csv& csv)
       l == autoL ? " (auto)" : "", v.dims[0], v.dims[1], v.dims[2], mib, f.marchMs, s.rmse, s.psnr, opaText, f.mcMs,
       s16.rmse, s16.psnr, s64.rmse, s64.psnr, mcMs);
     const std::string m = l == autoL ? "auto" : "fixed";
-    csv.add("far", "far", "box4", "raymarch", l, "ms", f.marchMs);
-    csv.add("far", "far", "box4", "raymarch", l, "rmse", s.rmse);
-    csv.add("far", "far", "box4", "raymarch", l, "psnr", s.psnr);
+    csv.add("far", kind, "box4", "raymarch", l, "ms", f.marchMs);
+    csv.add("far", kind, "box4", "raymarch", l, "rmse", s.rmse);
+    csv.add("far", kind, "box4", "raymarch", l, "psnr", s.psnr);
     if (l > 0)
     {
-      csv.add("far", "far", "box4", "raymarch_opacity", l, "rmse", so.rmse);
+      csv.add("far", kind, "box4", "raymarch_opacity", l, "rmse", so.rmse);
     }
-    csv.add("far", "far", "box4", "montecarlo", l, "ms_per_spp", f.mcMs);
-    csv.add("far", "far", "box4", "montecarlo", l, "rmse_16spp", s16.rmse);
-    csv.add("far", "far", "box4", "montecarlo", l, "rmse_64spp", s64.rmse);
-    csv.add("far", "far", "box4", "montecarlo", l, "ms_64spp", mcMs);
-    csv.add("far", "far", "box4", m, l, "mib", mib);
+    csv.add("far", kind, "box4", "montecarlo", l, "ms_per_spp", f.mcMs);
+    csv.add("far", kind, "box4", "montecarlo", l, "rmse_16spp", s16.rmse);
+    csv.add("far", kind, "box4", "montecarlo", l, "rmse_64spp", s64.rmse);
+    csv.add("far", kind, "box4", "montecarlo", l, "ms_64spp", mcMs);
+    csv.add("far", kind, "box4", m, l, "mib", mib);
     std::fflush(stdout);
   }
-  csv.add("far", "far", "box4", "auto", autoL, "footprint_voxels", footprint);
-  std::printf("\n");
+  csv.add("far", kind, "box4", "auto", autoL, "footprint_voxels", footprint);
+  const int best = int(std::min_element(rmRmse.begin(), rmRmse.end()) - rmRmse.begin());
+  std::printf("\nRay march: level 0 RMSE %.4f in %.1f ms; automatic level %d RMSE %.4f in %.1f ms (error x%.2f, time "
+              "x%.2f); lowest error at level %d (RMSE %.4f).\n\n",
+    rmRmse[0], rmMs[0], autoL, rmRmse[size_t(autoL)], rmMs[size_t(autoL)], rmRmse[size_t(autoL)] / rmRmse[0],
+    rmMs[size_t(autoL)] / rmMs[0], best, rmRmse[size_t(best)]);
+  csv.add("far", kind, "box4", "best", best, "rmse", rmRmse[size_t(best)]);
 }
 } // namespace
 
@@ -1115,7 +1150,10 @@ int main(int argc, char** argv)
     }
     if (wants(o, "far"))
     {
-      runFar(o, *mc, csv);
+      for (const std::string& kind : o.farKinds)
+      {
+        runFar(o, kind, *mc, csv);
+      }
     }
     if (!o.csv.empty())
     {
