@@ -1,0 +1,158 @@
+#!/usr/bin/python3
+"""Plots of the levels-of-detail study (mcvol-pyramid --csv, issue 13):
+
+  pyramid-error-conv.png  image error against level, one panel per dataset,
+                          each filter extinction-based (solid) and opacity-
+                          averaged (dashed), against the paper's criterion
+                          (the full-resolution image of the volume blurred by
+                          the level's equivalent convolution)
+  pyramid-error-full.png  the same against the full-resolution image
+  pyramid-time.png        error against frame time: each dataset's box4
+                          levels (ray march, against full resolution), and the
+                          far views' levels against the supersampled image
+                          (ray march per level, Monte Carlo at 64 spp)
+
+    python3 Benchmarks/plot_pyramid.py Benchmarks/results/cpu-pyramid/pyramid.csv \\
+        --out Benchmarks/results/cpu-pyramid
+"""
+import argparse
+import csv
+import os
+from collections import defaultdict
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+FILTERS = [("box2", "tab:blue"), ("box4", "tab:orange"), ("bspline", "tab:green")]
+
+
+def read(path):
+    """{(section, dataset, filter, method, level, metric): value} and the datasets in order."""
+    values = {}
+    datasets = defaultdict(list)
+    with open(path) as f:
+        for r in csv.DictReader(f):
+            key = (r["section"], r["dataset"], r["filter"], r["method"], int(r["level"]), r["metric"])
+            values[key] = float(r["value"])
+            if r["dataset"] not in datasets[r["section"]]:
+                datasets[r["section"]].append(r["dataset"])
+    return values, datasets
+
+
+def error_figure(values, datasets, metric, title, out):
+    names = datasets.get("levels", [])
+    if not names:
+        return
+    cols = min(4, len(names))
+    rows = (len(names) + cols - 1) // cols
+    fig, axes = plt.subplots(rows, cols, figsize=(4 * cols, 3.3 * rows), squeeze=False)
+    for ax, ds in zip(axes.flat, names):
+        for filt, colour in FILTERS:
+            for method, style in (("extinction", "-"), ("opacity", "--")):
+                pts = sorted(
+                    (k[4], v)
+                    for k, v in values.items()
+                    if k[:4] == ("levels", ds, filt, method) and k[5] == metric
+                )
+                if pts:
+                    ax.plot([p[0] for p in pts], [p[1] for p in pts], style, marker="o", color=colour,
+                            label="%s %s" % (filt, method))
+        ax.set_title(ds, fontsize=9)
+        ax.set_xlabel("level")
+        ax.set_ylabel("RMSE")
+        ax.set_yscale("log")
+        ax.grid(True, alpha=0.3)
+    for ax in list(axes.flat)[len(names):]:
+        ax.axis("off")
+    axes.flat[0].legend(fontsize=6)
+    fig.suptitle(title, fontsize=10)
+    plt.tight_layout()
+    plt.savefig(out, dpi=100)
+    print("wrote", out)
+
+
+def time_figure(values, datasets, out):
+    far = datasets.get("far", [])
+    fig, axes = plt.subplots(1, 1 + len(far), figsize=(5 * (1 + len(far)), 4), squeeze=False)
+    ax = axes[0][0]
+    for ds in datasets.get("levels", []):
+        pts = []
+        for level in range(1, 10):
+            ms = values.get(("levels", ds, "box4", "extinction", level, "march_ms"))
+            e = values.get(("levels", ds, "box4", "extinction", level, "rmse_full"))
+            if ms is not None and e is not None:
+                pts.append((level, ms, e))
+        if pts:
+            line, = ax.plot([p[1] for p in pts], [p[2] for p in pts], "o-", label=ds)
+            level0 = values.get(("levels", ds, "-", "scalar", 0, "march_ms"),
+                                values.get(("levels", ds, "-", "classified", 0, "march_ms")))
+            if level0 is not None:
+                ax.axvline(level0, color=line.get_color(), alpha=0.3, lw=1)
+            for level, ms, e in pts:
+                ax.annotate(str(level), (ms, e), textcoords="offset points", xytext=(3, 3), fontsize=7)
+    ax.set_title("box4 levels against full resolution\n(ray march; vertical lines: level 0 time)", fontsize=9)
+    ax.set_xlabel("ray march ms per frame (CPU)")
+    ax.set_ylabel("RMSE against full resolution")
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=7)
+    for ax, ds in zip(axes[0][1:], far):
+        for method, metric, label, style in (
+            ("raymarch", "rmse", "ray march, extinction pyramid", "o-"),
+            ("raymarch_opacity", "rmse", "ray march, opacity pyramid", "s--"),
+        ):
+            pts = []
+            for level in range(0, 10):
+                ms = values.get(("far", ds, "box4", "raymarch", level, "ms"))
+                e = values.get(("far", ds, "box4", method, level, metric))
+                if ms is not None and e is not None:
+                    pts.append((level, ms, e))
+            if pts:
+                ax.plot([p[1] for p in pts], [p[2] for p in pts], style, label=label)
+                for level, ms, e in pts:
+                    ax.annotate(str(level), (ms, e), textcoords="offset points", xytext=(3, 3), fontsize=7)
+        pts = []
+        for level in range(0, 10):
+            ms = values.get(("far", ds, "box4", "montecarlo", level, "ms_64spp"))
+            e = values.get(("far", ds, "box4", "montecarlo", level, "rmse_64spp"))
+            if ms is not None and e is not None:
+                pts.append((level, ms, e))
+        if pts:
+            ax.plot([p[1] for p in pts], [p[2] for p in pts], "^:", label="Monte Carlo, 64 spp (jittered)")
+            for level, ms, e in pts:
+                ax.annotate(str(level), (ms, e), textcoords="offset points", xytext=(3, -9), fontsize=7)
+        auto = [k[4] for k in values if k[:4] == ("far", ds, "box4", "auto") and k[5] == "footprint_voxels"]
+        ax.set_title("far view \"%s\" against the supersampled image%s" %
+                     (ds, "\n(automatic level %d)" % auto[0] if auto else ""), fontsize=9)
+        ax.set_xlabel("ms (CPU)")
+        ax.set_ylabel("RMSE against the footprint-averaged image")
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=7)
+    plt.tight_layout()
+    plt.savefig(out, dpi=100)
+    print("wrote", out)
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("csv")
+    p.add_argument("--out", required=True, help="folder for the PNGs")
+    args = p.parse_args()
+    values, datasets = read(args.csv)
+    os.makedirs(args.out, exist_ok=True)
+    error_figure(values, datasets, "rmse_conv",
+                 "level error against the equivalent convolution (paper's criterion): extinction solid, "
+                 "opacity averaging dashed", os.path.join(args.out, "pyramid-error-conv.png"))
+    error_figure(values, datasets, "rmse_full",
+                 "level error against full resolution: extinction solid, opacity averaging dashed",
+                 os.path.join(args.out, "pyramid-error-full.png"))
+    time_figure(values, datasets, os.path.join(args.out, "pyramid-time.png"))
+
+
+if __name__ == "__main__":
+    main()
