@@ -15,6 +15,7 @@
 #include "BenchCommon.h"
 #include "Sections.h"
 
+#include "mcvol/MarchSetup.h"
 #include "mcvol/Pyramid.h"
 
 #include <algorithm>
@@ -72,6 +73,24 @@ double medianFrameMs(const Options& o, mcvol::Renderer& r, const mcvol::Scene& s
   return median(ms);
 }
 
+/// Median ms of a deterministic ray march (the level's Nyquist step, early
+/// termination 1e-4: MarchSettings' defaults, as the ray-march mapper draws an
+/// interactive frame), over min(--frames, 5) marches after one untimed one.
+double medianMarchMs(const Options& o, mcvol::Renderer& r, const mcvol::Scene& scene, const mcvol::Camera& cam)
+{
+  mcvol::Accumulator acc;
+  const mcvol::MarchSettings ms;
+  r.march(scene, cam, ms, nullptr, acc);
+  std::vector<double> t;
+  for (int i = 0; i < std::max(1, std::min(o.frames, 5)); ++i)
+  {
+    const auto t0 = Clock::now();
+    r.march(scene, cam, ms, nullptr, acc);
+    t.push_back(1e3 * seconds(t0));
+  }
+  return median(t);
+}
+
 struct LevelRow
 {
   std::string name;
@@ -80,6 +99,7 @@ struct LevelRow
   double buildMs = -1; ///< classify (classified level 0) or its downsampling step; -1: none
   double evMs = 0;     ///< expected-value estimator (the renderer's default)
   double colMs = 0;    ///< collision estimator (the paper's protocol)
+  double marchMs = 0;  ///< ray march (includes copying the image back on a device)
   double deviceMiB = 0;
 };
 } // namespace
@@ -103,6 +123,7 @@ void runPyramid(Bench& bench)
   {
     row.evMs = medianFrameMs(o, r, scene, cam, mcvol::Estimator::ExpectedValue);
     row.colMs = medianFrameMs(o, r, scene, cam, mcvol::Estimator::Collision);
+    row.marchMs = medianMarchMs(o, r, scene, cam);
     row.deviceMiB = double(r.deviceBytes()) / MiB;
   };
 
@@ -190,8 +211,8 @@ void runPyramid(Bench& bench)
   std::printf("## Levels of detail (%s, %d channels, density blend, macrocell %d, %dx%d, 1 spp, 1-DDA, %d warm-up + "
               "%d timed frames, median; box4 pyramid)\n\n",
     ds.c_str(), s.volume.numChannels(), o.macrocell, o.width, o.height, o.warmup, o.frames);
-  std::printf("| level | grid | host MiB | classify / build ms (host) | ms expected-value | ms collision | renderer "
-              "device MiB |\n|---|---|---|---|---|---|---|\n");
+  std::printf("| level | grid | host MiB | classify / build ms (host) | MC ms expected-value | MC ms collision | ray "
+              "march ms | renderer device MiB |\n|---|---|---|---|---|---|---|---|\n");
   for (const LevelRow& row : rows)
   {
     char build[32] = "-";
@@ -199,10 +220,11 @@ void runPyramid(Bench& bench)
     {
       std::snprintf(build, sizeof(build), "%.1f", row.buildMs);
     }
-    std::printf("| %s | %dx%dx%d | %.1f | %s | %.3f | %.3f | %.1f |\n", row.name.c_str(), row.dims[0], row.dims[1],
-      row.dims[2], row.hostMiB, build, row.evMs, row.colMs, row.deviceMiB);
+    std::printf("| %s | %dx%dx%d | %.1f | %s | %.3f | %.3f | %.3f | %.1f |\n", row.name.c_str(), row.dims[0],
+      row.dims[1], row.dims[2], row.hostMiB, build, row.evMs, row.colMs, row.marchMs, row.deviceMiB);
     bench.row("pyramid", ds, s.volume.numChannels(), o.macrocell, "expected-value", row.evMs, "ms", row.name);
     bench.row("pyramid", ds, s.volume.numChannels(), o.macrocell, "collision", row.colMs, "ms", row.name);
+    bench.row("pyramid", ds, s.volume.numChannels(), o.macrocell, "raymarch", row.marchMs, "ms", row.name);
     bench.row("pyramid", ds, s.volume.numChannels(), o.macrocell, "-", row.hostMiB, "host_MiB", row.name);
     if (row.buildMs >= 0)
     {
@@ -212,8 +234,11 @@ void runPyramid(Bench& bench)
   if (rows.size() > 2)
   {
     const double ev = rows[0].evMs / rows[2].evMs, col = rows[0].colMs / rows[2].colMs;
-    std::printf("\nLevel 0 (scalar) / level 1 frame time: %.2fx expected-value, %.2fx collision (target >= 4x: %s)\n",
-      ev, col, ev >= 4.0 && col >= 4.0 ? "met" : (ev >= 4.0 || col >= 4.0 ? "met with one estimator" : "not met"));
+    const double rm = rows[0].marchMs / rows[2].marchMs;
+    std::printf("\nLevel 0 (scalar) / level 1 frame time: Monte Carlo %.2fx expected-value, %.2fx collision (target "
+                ">= 4x: %s); ray march %.2fx\n",
+      ev, col, ev >= 4.0 && col >= 4.0 ? "met" : (ev >= 4.0 || col >= 4.0 ? "met with one estimator" : "not met"), rm);
+    bench.row("pyramid", ds, s.volume.numChannels(), o.macrocell, "raymarch", rm, "ratio", "level0/level1");
     bench.row("pyramid", ds, s.volume.numChannels(), o.macrocell, "expected-value", ev, "ratio", "level0/level1");
     bench.row("pyramid", ds, s.volume.numChannels(), o.macrocell, "collision", col, "ratio", "level0/level1");
   }
