@@ -13,7 +13,11 @@
                           (ray march per level, Monte Carlo at 64 spp)
 
     python3 Benchmarks/plot_pyramid.py Benchmarks/results/cpu-pyramid/pyramid.csv \\
-        --out Benchmarks/results/cpu-pyramid
+        --out Benchmarks/results/cpu-pyramid [--summary]
+
+--summary also prints the Markdown summary tables of RESULTS.md (the ratios
+of opacity to extinction error per dataset and level, the frame times per
+level, the far views).
 """
 import argparse
 import csv
@@ -138,12 +142,62 @@ def time_figure(values, datasets, out):
     print("wrote", out)
 
 
+def summary(values, datasets):
+    """Prints RESULTS.md's summary tables from the CSV."""
+    filters = [f for f, _ in FILTERS]
+    print("| dataset | level | ext. RMSE vs conv (box2 / box4 / bspline) | ratio opacity/ext., conv | "
+          "ratio opacity/ext., full |")
+    print("|---|---|---|---|---|")
+    for ds in datasets.get("levels", []):
+        for level in range(1, 10):
+            conv = [values.get(("levels", ds, f, "extinction", level, "rmse_conv")) for f in filters]
+            if conv[0] is None:
+                break
+            rc = [values[("levels", ds, f, "ratio", level, "rmse_conv")] for f in filters]
+            rf = [values[("levels", ds, f, "ratio", level, "rmse_full")] for f in filters]
+            fmt = lambda xs, d: " / ".join(("**%.*f**" if x <= 1.0 else "%.*f") % (d, x) for x in xs)  # noqa: E731
+            print("| %s | %d | %s | %s | %s |" % (ds, level, " / ".join("%.4f" % x for x in conv), fmt(rc, 2),
+                                                  fmt(rf, 2)))
+    print()
+    print("| dataset | level 0 scalar: RM / MC ms | level 0 classified | level 1 | level 2 | level 3 |")
+    print("|---|---|---|---|---|---|")
+    for ds in datasets.get("levels", []):
+        cells = []
+        for method, level in (("scalar", 0), ("classified", 0), ("extinction", 1), ("extinction", 2),
+                              ("extinction", 3)):
+            filt = "-" if level == 0 else "box4"
+            rm = values.get(("levels", ds, filt, method, level, "march_ms"))
+            mc = values.get(("levels", ds, filt, method, level, "mc_ms"))
+            cells.append("-" if rm is None else "%.1f / %.1f" % (rm, mc))
+        print("| %s | %s |" % (ds, " | ".join(cells)))
+    print()
+    for ds in datasets.get("far", []):
+        print("far view %s:" % ds)
+        print("| level | RM ms | RM RMSE | opacity-pyramid RM RMSE | MC ms/spp | MC 64 spp RMSE |")
+        print("|---|---|---|---|---|---|")
+        auto = [k[4] for k in values if k[:4] == ("far", ds, "box4", "auto")]
+        for level in range(0, 10):
+            ms = values.get(("far", ds, "box4", "raymarch", level, "ms"))
+            if ms is None:
+                break
+            opa = values.get(("far", ds, "box4", "raymarch_opacity", level, "rmse"))
+            print("| %d%s | %.1f | %.4f | %s | %.1f | %.4f |" % (
+                level, " (auto)" if auto and auto[0] == level else "", ms,
+                values[("far", ds, "box4", "raymarch", level, "rmse")], "-" if opa is None else "%.4f" % opa,
+                values[("far", ds, "box4", "montecarlo", level, "ms_per_spp")],
+                values[("far", ds, "box4", "montecarlo", level, "rmse_64spp")]))
+        print()
+
+
 def main():
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("csv")
     p.add_argument("--out", required=True, help="folder for the PNGs")
+    p.add_argument("--summary", action="store_true", help="print the summary tables (Markdown)")
     args = p.parse_args()
     values, datasets = read(args.csv)
+    if args.summary:
+        summary(values, datasets)
     os.makedirs(args.out, exist_ok=True)
     error_figure(values, datasets, "rmse_conv",
                  "level error against the equivalent convolution (paper's criterion): extinction solid, "
