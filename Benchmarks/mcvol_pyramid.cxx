@@ -25,7 +25,8 @@
 //     memory per level and build time (classify, each downsampling step).
 //   Datasets: the study's phantoms (figure3, microscopy, cosmology, weather at
 //   their stored sizes), "wall" (a one-voxel wall of tau = 4 per voxel, the
-//   paper's Sec. 3.6 / 4.1 case) and "figure2" (the paper's Figure 2/3
+//   paper's Sec. 3.6 / 4.1 case, facing the view), "wall-x" (the same wall
+//   seen at a grazing angle) and "figure2" (the paper's Figure 2/3
 //   example: every 2x2x2 block of a two-voxel slab holds 4 voxels of tau = 4
 //   and 4 of tau = 0, checkered, so every axis ray through it meets one of
 //   each: extinction averaging keeps alpha = 0.98 there, opacity averaging
@@ -34,12 +35,14 @@
 //   better than the opacity baseline at every level and filter, on both
 //   criteria (the requirement; the other datasets are reported).
 //
-// Section "far": the far-view aliasing case. A 256^3 volume with voxel-scale
-// detail (a dense ball of per-voxel random colour and density) seen small
-// (--far-size, the ball's box covering about --far-coverage pixels), scored
-// against the pixel-footprint-averaged image (a ray march of --far-super^2
-// sub-pixel rays per pixel, box-filtered): ray march and Monte Carlo at level 0
-// against the automatic level (autoLevel() below, the rule the mapper uses).
+// Section "far": the far-view aliasing case. A --far-edge^3 (256^3) volume
+// with voxel-scale detail (makeFarVolume(): "ball", a dense ball of per-voxel
+// random colour and density; "sheets", semi-transparent one-voxel sheets
+// above the pixel rate) seen small (--far-size, its box's edge covering about
+// --far-coverage pixels), scored against the pixel-footprint-averaged image
+// (a ray march of --far-super^2 sub-pixel rays per pixel, box-filtered): ray
+// march and Monte Carlo at every level, level 0 against the automatic level
+// (autoLevel() below, the rule the mapper uses) and the level of lowest error.
 //
 // Output: Markdown tables on stdout; --csv FILE the rows
 // section,dataset,filter,method,level,metric,value.
