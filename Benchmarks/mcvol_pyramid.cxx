@@ -315,8 +315,8 @@ struct GridScene
 
 /// Deterministic ray march of a classified grid through the level-0 camera's
 /// rays. step: world units; terminate: early-termination transmittance.
-Image march(const mcvol::ClassifiedVolumeView& v, const mcvol::Camera& cam0, double step, float terminate,
-  double* ms = nullptr)
+Image march(
+  const mcvol::ClassifiedVolumeView& v, const mcvol::Camera& cam0, double step, float terminate, double* ms = nullptr)
 {
   GridScene g(v);
   const mcvol::Camera cam = forGrid(cam0, v.spacing, v.origin);
@@ -578,8 +578,7 @@ Classified classifyDemo(const std::string& name, std::array<int, 3> dims)
   for (int k = 0; k < v.numChannels(); ++k)
   {
     const std::array<float, 2> r = v.range(k);
-    c.tfs.push_back(
-      mcvol::sampleTransferFunction(v.transferFunctions[size_t(k)], r[0], r[1], 1024, v.spacing[0]));
+    c.tfs.push_back(mcvol::sampleTransferFunction(v.transferFunctions[size_t(k)], r[0], r[1], 1024, v.spacing[0]));
     c.scalarBytes += double(v.channels[size_t(k)].size());
   }
   const auto t0 = Clock::now();
@@ -622,8 +621,7 @@ Classified makeWall(const std::string& name, std::array<int, 3> dims)
         {
           continue;
         }
-        float* p =
-          c.voxels.data() + 4 * ((size_t(k) * size_t(c.dims[1]) + size_t(j)) * size_t(c.dims[0]) + size_t(i));
+        float* p = c.voxels.data() + 4 * ((size_t(k) * size_t(c.dims[1]) + size_t(j)) * size_t(c.dims[0]) + size_t(i));
         p[0] = 4.f;
         for (int q = 0; q < 3; ++q)
           p[q + 1] = 4.f * rgb[q];
@@ -658,8 +656,7 @@ Classified makeFigure2(std::array<int, 3> dims)
         {
           continue;
         }
-        float* p =
-          c.voxels.data() + 4 * ((size_t(k) * size_t(c.dims[1]) + size_t(j)) * size_t(c.dims[0]) + size_t(i));
+        float* p = c.voxels.data() + 4 * ((size_t(k) * size_t(c.dims[1]) + size_t(j)) * size_t(c.dims[0]) + size_t(i));
         p[0] = 4.f;
         for (int q = 0; q < 3; ++q)
           p[q + 1] = 4.f * rgb[q];
@@ -843,8 +840,10 @@ bool runLevels(const Options& o, const std::string& name, mcvol::Renderer& mc, C
     csv.add("levels", name, "box4", "extinction", l, "mib", mib);
     for (int fi = 0; fi < 3; ++fi)
     {
-      csv.add("levels", name, mcvol::toString(kFilters[fi]), "extinction", l, "build_ms", pyr[size_t(fi)].extMs[size_t(l - 1)]);
-      csv.add("levels", name, mcvol::toString(kFilters[fi]), "opacity", l, "build_ms", pyr[size_t(fi)].opaMs[size_t(l - 1)]);
+      csv.add("levels", name, mcvol::toString(kFilters[fi]), "extinction", l, "build_ms",
+        pyr[size_t(fi)].extMs[size_t(l - 1)]);
+      csv.add(
+        "levels", name, mcvol::toString(kFilters[fi]), "opacity", l, "build_ms", pyr[size_t(fi)].opaMs[size_t(l - 1)]);
     }
   }
   std::printf("\n");
@@ -978,8 +977,7 @@ void runFar(const Options& o, const std::string& kind, mcvol::Renderer& mc, Csv&
   auto t0 = Clock::now();
   const std::vector<mcvol::PyramidLevel> pyr = mcvol::buildExtinctionPyramid(v0, levels, DownsampleFilter::Box4);
   const double buildMs = msSince(t0);
-  const std::vector<mcvol::PyramidLevel> opa =
-    mcvol::buildOpacityPyramid(v0, levels, 1.0, DownsampleFilter::Box4);
+  const std::vector<mcvol::PyramidLevel> opa = mcvol::buildOpacityPyramid(v0, levels, 1.0, DownsampleFilter::Box4);
 
   const int W = o.farSize, H = o.farSize;
   const double fovy = 30.0;
@@ -1006,8 +1004,9 @@ void runFar(const Options& o, const std::string& kind, mcvol::Renderer& mc, Csv&
               "(%.0f ms). Ray march: one ray per pixel centre at the level's Nyquist step, early termination 1e-4 "
               "(median of %d). Monte Carlo: pixel-jittered samples (renderer defaults), cumulative time.\n\n",
     S, S, refMs, o.reps);
-  std::printf("| level | grid | MiB | ray march ms | RM RMSE (PSNR) | opacity-pyramid RM RMSE (PSNR) | MC 1 spp ms | MC "
-              "16 spp RMSE (PSNR) | MC 64 spp RMSE (PSNR), ms |\n|---|---|---|---|---|---|---|---|---|\n");
+  std::printf(
+    "| level | grid | MiB | ray march ms | RM RMSE (PSNR) | opacity-pyramid RM RMSE (PSNR) | MC 1 spp ms | MC "
+    "16 spp RMSE (PSNR) | MC 64 spp RMSE (PSNR), ms |\n|---|---|---|---|---|---|---|---|---|\n");
   std::vector<double> rmRmse, rmMs;
   for (int l = 0; l <= levels; ++l)
   {
@@ -1168,8 +1167,9 @@ int main(int argc, char** argv)
     }
     if (!wallOk)
     {
-      std::fprintf(stderr, "mcvol-pyramid: on the one-voxel wall the extinction-based pyramid does not beat opacity "
-                           "averaging at every level and filter\n");
+      std::fprintf(stderr,
+        "mcvol-pyramid: on the one-voxel wall the extinction-based pyramid does not beat opacity "
+        "averaging at every level and filter\n");
       return 1;
     }
   }

@@ -47,8 +47,8 @@ mcvol::Camera forGrid(mcvol::Camera cam, const double spacing[3], const double o
 
 /// Median ms of --frames 1-spp frames after --warmup, the image left on the
 /// device (as timeFrames, with a camera of the caller's).
-double medianFrameMs(const Options& o, mcvol::Renderer& r, const mcvol::Scene& scene, const mcvol::Camera& cam,
-  mcvol::Estimator estimator)
+double medianFrameMs(
+  const Options& o, mcvol::Renderer& r, const mcvol::Scene& scene, const mcvol::Camera& cam, mcvol::Estimator estimator)
 {
   mcvol::Accumulator acc;
   mcvol::RenderSettings st;
@@ -97,10 +97,10 @@ struct LevelRow
   std::string name;
   int dims[3] = { 0, 0, 0 };
   double hostMiB = 0;
-  double buildMs = -1; ///< classify (classified level 0) or its downsampling step; -1: none
-  double evMs = 0;     ///< expected-value estimator (the renderer's default)
-  double colMs = 0;    ///< collision estimator (the paper's protocol)
-  double marchMs = 0;  ///< ray march (includes copying the image back on a device)
+  double buildMs = -1;        ///< classify (classified level 0) or its downsampling step; -1: none
+  double evMs = 0;            ///< expected-value estimator (the renderer's default)
+  double colMs = 0;           ///< collision estimator (the paper's protocol)
+  double marchMs = 0;         ///< ray march (includes copying the image back on a device)
   double tentativePerRay = 0; ///< collision estimator, one counted frame
   double ddaPerRay = 0;       ///< macrocells visited per ray, same frame
   double deviceMiB = 0;
@@ -162,9 +162,8 @@ void runPyramid(Bench& bench)
     level0.assign(4 * n, 0.f);
     for (int k = 0; k < s.volume.numChannels(); ++k)
     {
-      const mcvol::TransferFunctionDesc tf =
-        mcvol::sampleTransferFunction(s.volume.transferFunctions[size_t(k)], s.ranges[size_t(k)][0],
-          s.ranges[size_t(k)][1], o.tableSize, s.volume.spacing[0] / o.density);
+      const mcvol::TransferFunctionDesc tf = mcvol::sampleTransferFunction(s.volume.transferFunctions[size_t(k)],
+        s.ranges[size_t(k)][0], s.ranges[size_t(k)][1], o.tableSize, s.volume.spacing[0] / o.density);
       mcvol::classifyScalars(s.volume.source(k), d, tf, level0.data(), 4, true);
     }
     classifiedRow.buildMs = 1e3 * seconds(t0);
@@ -225,9 +224,10 @@ void runPyramid(Bench& bench)
   std::printf("## Levels of detail (%s, %d channels, density blend, macrocell %d, %dx%d, 1 spp, 1-DDA, %d warm-up + "
               "%d timed frames, median; box4 pyramid)\n\n",
     ds.c_str(), s.volume.numChannels(), o.macrocell, o.width, o.height, o.warmup, o.frames);
-  std::printf("| level | grid | host MiB | classify / build ms (host) | MC ms expected-value | MC ms collision | ray "
-              "march ms | tentative/ray | DDA steps/ray | renderer device MiB |\n|---|---|---|---|---|---|---|---|---|---|"
-              "\n");
+  std::printf(
+    "| level | grid | host MiB | classify / build ms (host) | MC ms expected-value | MC ms collision | ray "
+    "march ms | tentative/ray | DDA steps/ray | renderer device MiB |\n|---|---|---|---|---|---|---|---|---|---|"
+    "\n");
   for (const LevelRow& row : rows)
   {
     char build[32] = "-";
@@ -236,15 +236,15 @@ void runPyramid(Bench& bench)
       std::snprintf(build, sizeof(build), "%.1f", row.buildMs);
     }
     std::printf("| %s | %dx%dx%d | %.1f | %s | %.3f | %.3f | %.3f | %.2f | %.2f | %.1f |\n", row.name.c_str(),
-      row.dims[0], row.dims[1], row.dims[2], row.hostMiB, build, row.evMs, row.colMs, row.marchMs,
-      row.tentativePerRay, row.ddaPerRay, row.deviceMiB);
+      row.dims[0], row.dims[1], row.dims[2], row.hostMiB, build, row.evMs, row.colMs, row.marchMs, row.tentativePerRay,
+      row.ddaPerRay, row.deviceMiB);
     bench.row("pyramid", ds, s.volume.numChannels(), o.macrocell, "expected-value", row.evMs, "ms", row.name);
     bench.row("pyramid", ds, s.volume.numChannels(), o.macrocell, "collision", row.colMs, "ms", row.name);
     bench.row("pyramid", ds, s.volume.numChannels(), o.macrocell, "raymarch", row.marchMs, "ms", row.name);
-    bench.row("pyramid", ds, s.volume.numChannels(), o.macrocell, "collision", row.tentativePerRay,
-      "tentative_per_ray", row.name);
-    bench.row("pyramid", ds, s.volume.numChannels(), o.macrocell, "collision", row.ddaPerRay, "dda_steps_per_ray",
+    bench.row("pyramid", ds, s.volume.numChannels(), o.macrocell, "collision", row.tentativePerRay, "tentative_per_ray",
       row.name);
+    bench.row(
+      "pyramid", ds, s.volume.numChannels(), o.macrocell, "collision", row.ddaPerRay, "dda_steps_per_ray", row.name);
     bench.row("pyramid", ds, s.volume.numChannels(), o.macrocell, "-", row.hostMiB, "host_MiB", row.name);
     if (row.buildMs >= 0)
     {
