@@ -26,6 +26,9 @@
 //   sequences  error against spp for the independent sampler and Owen-scrambled
 //              Sobol' points (--samplers, --spp-max): fitted slopes, spp and
 //              ms to RMSE 0.01 and to --psnr dB (issue 14, item 2)
+//   pyramid    levels of detail (issue 13): 1-spp frame time of level 0 (scalar
+//              channels) against the pre-classified level 0 and box4 pyramid
+//              levels 1 and 2 (density blend), classify/build time, memory
 //
 // On the CUDA backend frames are timed as render() + finish() with the image
 // left on the device (RenderSettings::readBack = false); a separate column
@@ -67,6 +70,7 @@ const Section sections[] = {
   { "visibility", runVisibility },
   { "estimate", runEstimate },
   { "sequences", runSequences },
+  { "pyramid", runPyramid },
 };
 } // namespace
 

@@ -51,7 +51,7 @@ void usage()
             "                   [--samplers independent,sobol] [--spp-max N]\n"
             "                   [--estimators collision,expected-value]\n"
             "sections: trackers channels macrocell rebuild memory paper converge sampling effects visibility estimate\n"
-            "          sequences");
+            "          sequences pyramid");
 }
 
 Options parse(int argc, char** argv)

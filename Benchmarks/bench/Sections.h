@@ -21,4 +21,5 @@ void runConverge(Bench& bench);
 void runVisibility(Bench& bench);
 void runEstimate(Bench& bench);
 void runSequences(Bench& bench);
+void runPyramid(Bench& bench);
 } // namespace mcvolbench

@@ -15,6 +15,11 @@
 #             with the collision and the expected-value estimator: error
 #             against spp, slopes, spp and ms to RMSE 0.01 and 35 dB (1024^2,
 #             the four paper-sized datasets; issue 14, items 1 and 2)
+#   pyramid   levels of detail (issue 13): 1-spp frame time of level 0 (4 x
+#             512^3 float, scalar channels) against the pre-classified level 0
+#             and box4 levels 1 and 2 (density blend), classify/build time and
+#             memory; CUDA at 1024^2 (target: level 1 >= 4x faster than level
+#             0), the CPU at 1024^2 and 512^2
 #   big       a volume of FRACTION (default 0.6) of the device's memory
 #             (figure3, 3 x float32, generated cheaply) renders: device bytes
 #             and frame time (issue 14, item 5)
@@ -143,6 +148,19 @@ for stage in "$@"; do
       run "big-$edge" --backend cuda --dataset figure3 --dims "$edge" "$edge" "$edge" --label "figure3 ${FRACTION:-0.6} of ${mib} MiB" \
         --size 1024 1024 --warmup 5 --frames 50 --sections memory,trackers
       grep -E "^GPU memory|^\| (1-DDA|N-DDA)" "$out/big-$edge.md"
+      ;;
+    pyramid)
+      # Issue 13's target: level 1 at least 4x faster than level 0 for a
+      # 4 x 512^3 float volume at 1024^2 on the GPU, and the CPU figures.
+      run pyramid-cuda --backend cuda --dataset cosmology --dims 512 512 512 --channels 4 --label NYX-like \
+        --size 1024 1024 --warmup 25 --frames 200 --sections pyramid
+      run pyramid-cpu-1024 --backend cpu --dataset cosmology --dims 512 512 512 --channels 4 --label NYX-like \
+        --size 1024 1024 --warmup 1 --frames 5 --sections pyramid
+      run pyramid-cpu-512 --backend cpu --dataset cosmology --dims 512 512 512 --channels 4 --label NYX-like \
+        --size 512 512 --warmup 1 --frames 5 --sections pyramid
+      for f in pyramid-cuda pyramid-cpu-1024 pyramid-cpu-512; do
+        grep -E "^\| (0|1|2)|^Level 0" "$out/$f.md" | sed "s/^/$f /"
+      done
       ;;
     rebuild)
       # One channel's transfer function changes: GPU majorant rebuild time.
