@@ -5,9 +5,14 @@
 #include "mcvol/Pyramid.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <deque>
+#include <limits>
+#include <memory>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 namespace mcvol
 {
@@ -91,8 +96,8 @@ std::vector<float> packChecked(const ClassifiedVolumeView& v)
 
 /// One separable pass along `axis` over packed 4-float voxels: the axis is
 /// halved (ceil) and filtered with clamped taps; an axis of 1 is copied.
-std::vector<float> filterAxis(const std::vector<float>& in, const int din[3], int axis, const FilterTaps& taps,
-  int dout[3])
+std::vector<float> filterAxis(
+  const std::vector<float>& in, const int din[3], int axis, const FilterTaps& taps, int dout[3])
 {
   std::copy(din, din + 3, dout);
   const int n = din[axis];
@@ -180,6 +185,172 @@ void checkLevels(const ClassifiedVolumeView& v, int levels)
       std::to_string(most) + " above level 0");
   }
 }
+/// Rejects values a filter must not spread in `n` packed voxels (as
+/// packChecked does for a whole volume); `first` numbers them for the error.
+void checkPacked(const float* x, int64_t n, int64_t first)
+{
+  int64_t bad = -1;
+#pragma omp parallel for schedule(static)
+  for (int64_t i = 0; i < n; ++i)
+  {
+    const float* v = x + i * 4;
+    bool ok = true;
+    for (int c = 0; c < 4; ++c)
+    {
+      ok = ok && v[c] >= 0.f && std::isfinite(v[c]);
+    }
+    if (!ok)
+    {
+#pragma omp critical(mcvol_pyramid_bad_slice)
+      bad = bad < 0 || i < bad ? i : bad;
+    }
+  }
+  if (bad >= 0)
+  {
+    const float* v = x + bad * 4;
+    throw std::invalid_argument("mcvol: pre-classified voxel " + std::to_string(first + bad) + " is (" +
+      std::to_string(v[0]) + ", " + std::to_string(v[1]) + ", " + std::to_string(v[2]) + ", " + std::to_string(v[3]) +
+      "); a pyramid needs finite sigma >= 0 and finite extinction-weighted colours >= 0");
+  }
+}
+
+/// Bytes held by the streaming stages now, and the most they held.
+struct WorkMeter
+{
+  size_t now = 0;
+  size_t peak = 0;
+  void add(size_t bytes)
+  {
+    this->now += bytes;
+    this->peak = std::max(this->peak, this->now);
+  }
+  void sub(size_t bytes) { this->now -= std::min(bytes, this->now); }
+};
+
+/**
+ * One halving of a stream of z-slices: each slice pushed is filtered along x
+ * and y (filterAxis, as filter3 does), kept while the z taps of a coarse
+ * slice still need it, and each coarse slice is handed to `emit` as soon as
+ * its last tap is in. The arithmetic is filter3's: per axis the taps in
+ * order, accumulated in double and stored as float.
+ */
+class SliceStage
+{
+public:
+  using Emit = std::function<void(const float* slice)>;
+
+  SliceStage(const int inDims[3], const FilterTaps& taps, WorkMeter& meter, Emit emit)
+    : Taps(taps)
+    , Meter(meter)
+    , Out(std::move(emit))
+  {
+    std::copy(inDims, inDims + 3, this->In);
+    for (int a = 0; a < 3; ++a)
+    {
+      this->Coarse[a] = this->In[a] > 1 ? (this->In[a] + 1) / 2 : 1;
+    }
+  }
+
+  const int* coarseDims() const { return this->Coarse; }
+
+  /// Level-0 (or the finer stage's) slice z = the number pushed so far.
+  void push(const float* slice)
+  {
+    const int z = this->Received++;
+    const int sliceDims[3] = { this->In[0], this->In[1], 1 };
+    const size_t inBytes = size_t(this->In[0]) * size_t(this->In[1]) * 4 * sizeof(float);
+    std::vector<float> plane(slice, slice + inBytes / sizeof(float));
+    this->Meter.add(inBytes);
+    int dx[3], dxy[3];
+    std::vector<float> fx = filterAxis(plane, sliceDims, 0, this->Taps, dx);
+    this->Meter.add(fx.size() * sizeof(float));
+    std::vector<float> fxy = filterAxis(fx, dx, 1, this->Taps, dxy);
+    this->Meter.sub(inBytes + fx.size() * sizeof(float));
+    this->Meter.add(fxy.size() * sizeof(float));
+    if (this->In[2] == 1)
+    {
+      // An axis of 1 is not filtered: the xy-filtered slice is the level.
+      this->Out(fxy.data());
+      this->Meter.sub(fxy.size() * sizeof(float));
+      return;
+    }
+    this->Ring.emplace_back(z, std::move(fxy));
+    const int n = this->In[2];
+    while (this->Next < this->Coarse[2])
+    {
+      const int last = std::min(2 * this->Next + this->Taps.first + this->Taps.count - 1, n - 1);
+      if (last > z)
+      {
+        break;
+      }
+      this->emitCoarse(this->Next);
+      ++this->Next;
+      // Slices below the next coarse slice's first tap are done with.
+      const int keepFrom = 2 * this->Next + this->Taps.first;
+      while (!this->Ring.empty() && this->Ring.front().first < keepFrom && this->Ring.front().first < n - 1)
+      {
+        this->Meter.sub(this->Ring.front().second.size() * sizeof(float));
+        this->Ring.pop_front();
+      }
+    }
+  }
+
+private:
+  const std::vector<float>& held(int j) const
+  {
+    for (const auto& entry : this->Ring)
+    {
+      if (entry.first == j)
+      {
+        return entry.second;
+      }
+    }
+    throw std::logic_error("mcvol: streamed pyramid lost slice " + std::to_string(j));
+  }
+
+  void emitCoarse(int c)
+  {
+    const int n = this->In[2];
+    const int64_t voxels = int64_t(this->Coarse[0]) * int64_t(this->Coarse[1]);
+    const float* src[4] = { nullptr, nullptr, nullptr, nullptr };
+    for (int k = 0; k < this->Taps.count; ++k)
+    {
+      int j = 2 * c + this->Taps.first + k;
+      j = j < 0 ? 0 : (j > n - 1 ? n - 1 : j); // clamp to the edge slice
+      src[k] = this->held(j).data();
+    }
+    std::vector<float> out(size_t(voxels) * 4);
+    this->Meter.add(out.size() * sizeof(float));
+#pragma omp parallel for schedule(static)
+    for (int64_t v = 0; v < voxels; ++v)
+    {
+      double acc[4] = { 0, 0, 0, 0 };
+      for (int k = 0; k < this->Taps.count; ++k)
+      {
+        const float* x = src[k] + v * 4;
+        for (int ch = 0; ch < 4; ++ch)
+        {
+          acc[ch] += this->Taps.w[k] * double(x[ch]);
+        }
+      }
+      for (int ch = 0; ch < 4; ++ch)
+      {
+        out[size_t(v) * 4 + size_t(ch)] = float(acc[ch]);
+      }
+    }
+    this->Out(out.data());
+    this->Meter.sub(out.size() * sizeof(float));
+  }
+
+  FilterTaps Taps;
+  WorkMeter& Meter;
+  Emit Out;
+  int In[3] = { 1, 1, 1 };
+  int Coarse[3] = { 1, 1, 1 };
+  int Received = 0;
+  int Next = 0; // the next coarse slice to emit
+  std::deque<std::pair<int, std::vector<float>>> Ring;
+};
 } // namespace
 
 const char* toString(DownsampleFilter f)
@@ -296,6 +467,189 @@ std::vector<PyramidLevel> buildExtinctionPyramid(
     out.push_back(std::move(next));
   }
   return out;
+}
+
+void levelDims(const int dims[3], int level, int out[3])
+{
+  for (int a = 0; a < 3; ++a)
+  {
+    int d = dims[a];
+    for (int l = 0; l < level; ++l)
+    {
+      d = d > 1 ? (d + 1) / 2 : 1;
+    }
+    out[a] = d;
+  }
+}
+
+size_t levelBytes(const int dims[3], int level, int channels)
+{
+  int d[3];
+  levelDims(dims, level, d);
+  return voxelsOf(d) * 4 * sizeof(float) * size_t(std::max(channels, 0));
+}
+
+PyramidLevel streamExtinctionLevel(const int dims[3], const double spacing[3], const double origin[3], int level,
+  DownsampleFilter filter, const std::function<void(int z, float* out)>& slice, size_t* peakWorkBytes)
+{
+  // The geometry is checked as a view's (no voxels are read through it).
+  static const float kNoVoxels[4] = { 0, 0, 0, 0 };
+  ClassifiedVolumeView geometry;
+  geometry.voxels = kNoVoxels;
+  for (int a = 0; a < 3; ++a)
+  {
+    geometry.dims[a] = dims[a];
+    geometry.spacing[a] = spacing[a];
+    geometry.origin[a] = origin[a];
+  }
+  checkView(geometry);
+  if (level < 1 || level > maxPyramidLevels(dims))
+  {
+    throw std::invalid_argument("mcvol: level " + std::to_string(level) + " asked of a streamed pyramid; a volume of " +
+      std::to_string(dims[0]) + "x" + std::to_string(dims[1]) + "x" + std::to_string(dims[2]) + " has levels 1 to " +
+      std::to_string(maxPyramidLevels(dims)));
+  }
+  if (!slice)
+  {
+    throw std::invalid_argument("mcvol: a streamed pyramid needs a slice source");
+  }
+  const FilterTaps taps = filterTaps(filter);
+
+  PyramidLevel out;
+  out.level = level;
+  ClassifiedVolumeView g = geometry;
+  for (int l = 1; l <= level; ++l)
+  {
+    PyramidLevel next;
+    coarseGeometry(g, next);
+    levelDims(g.dims, 1, next.dims);
+    std::copy(next.dims, next.dims + 3, g.dims);
+    std::copy(next.spacing, next.spacing + 3, g.spacing);
+    std::copy(next.origin, next.origin + 3, g.origin);
+  }
+  std::copy(g.dims, g.dims + 3, out.dims);
+  std::copy(g.spacing, g.spacing + 3, out.spacing);
+  std::copy(g.origin, g.origin + 3, out.origin);
+  out.voxels.resize(out.numVoxels() * 4);
+
+  // Stage l halves level l - 1; the last one writes into the level.
+  WorkMeter meter;
+  std::vector<std::unique_ptr<SliceStage>> stages(static_cast<size_t>(level));
+  const size_t outSlice = size_t(out.dims[0]) * size_t(out.dims[1]) * 4;
+  int written = 0;
+  SliceStage::Emit store = [&out, &written, outSlice](const float* s)
+  {
+    std::copy(s, s + outSlice, out.voxels.data() + size_t(written) * outSlice);
+    ++written;
+  };
+  int d[3] = { dims[0], dims[1], dims[2] };
+  std::vector<std::array<int, 3>> stageDims(static_cast<size_t>(level));
+  for (int l = 0; l < level; ++l)
+  {
+    stageDims[size_t(l)] = { d[0], d[1], d[2] };
+    levelDims(d, 1, d);
+  }
+  for (int l = level - 1; l >= 0; --l)
+  {
+    SliceStage::Emit emit =
+      l == level - 1 ? store : SliceStage::Emit([&stages, l](const float* s) { stages[size_t(l) + 1]->push(s); });
+    stages[size_t(l)].reset(new SliceStage(stageDims[size_t(l)].data(), taps, meter, std::move(emit)));
+  }
+  const size_t inSlice = size_t(dims[0]) * size_t(dims[1]) * 4;
+  std::vector<float> buffer(inSlice);
+  meter.add(buffer.size() * sizeof(float));
+  for (int z = 0; z < dims[2]; ++z)
+  {
+    std::fill(buffer.begin(), buffer.end(), 0.f);
+    slice(z, buffer.data());
+    checkPacked(buffer.data(), int64_t(dims[0]) * dims[1], int64_t(z) * dims[0] * dims[1]);
+    stages[0]->push(buffer.data());
+  }
+  if (written != out.dims[2])
+  {
+    throw std::logic_error(
+      "mcvol: streamed pyramid wrote " + std::to_string(written) + " of " + std::to_string(out.dims[2]) + " slices");
+  }
+  if (peakWorkBytes)
+  {
+    *peakWorkBytes = meter.peak;
+  }
+  return out;
+}
+
+PyramidLevel classifyExtinctionLevel(const ClassifyInput* inputs, int numInputs, const int dims[3],
+  const double spacing[3], const double origin[3], int level, DownsampleFilter filter, size_t* peakWorkBytes)
+{
+  if (!inputs || numInputs < 1)
+  {
+    throw std::invalid_argument("mcvol: classifyExtinctionLevel needs at least one channel");
+  }
+  for (int n = 0; n < numInputs; ++n)
+  {
+    if (!inputs[n].tf || !inputs[n].source.data)
+    {
+      throw std::invalid_argument(
+        "mcvol: classifyExtinctionLevel: channel " + std::to_string(n) + " has no data or no transfer function");
+    }
+  }
+  const int64_t sliceVoxels = int64_t(dims[0]) * int64_t(dims[1]);
+  auto classifySlice = [&](int z, float* out)
+  {
+    const int sliceDims[3] = { dims[0], dims[1], 1 };
+    for (int n = 0; n < numInputs; ++n)
+    {
+      // The same source advanced to slice z (stride in elements).
+      ChannelSource s = inputs[n].source;
+      s.data = static_cast<const char*>(s.data) +
+        size_t(z) * size_t(sliceVoxels) * size_t(s.stride) * size_t(scalarTypeSize(s.type));
+      classifyScalars(s, sliceDims, *inputs[n].tf, out, 4, n > 0);
+    }
+  };
+  return streamExtinctionLevel(dims, spacing, origin, level, filter, classifySlice, peakWorkBytes);
+}
+
+int chooseLevelOfDetail(double pixelFootprintWorld, const double spacing[3], int levels)
+{
+  if (levels < 0)
+  {
+    throw std::invalid_argument("mcvol: chooseLevelOfDetail: levels must be >= 0, not " + std::to_string(levels));
+  }
+  if (!(pixelFootprintWorld >= 0.0))
+  {
+    throw std::invalid_argument(
+      "mcvol: chooseLevelOfDetail: the pixel footprint must be >= 0 (got " + std::to_string(pixelFootprintWorld) + ")");
+  }
+  double finest = std::numeric_limits<double>::infinity();
+  for (int a = 0; a < 3; ++a)
+  {
+    if (!(spacing[a] > 0.0) || !std::isfinite(spacing[a]))
+    {
+      throw std::invalid_argument("mcvol: chooseLevelOfDetail: spacing must be positive and finite (axis " +
+        axisText(a) + " is " + std::to_string(spacing[a]) + ")");
+    }
+    finest = std::min(finest, spacing[a]);
+  }
+  if (std::isinf(pixelFootprintWorld))
+  {
+    return levels;
+  }
+  const double ratio = pixelFootprintWorld / finest;
+  if (!(ratio >= 2.0))
+  {
+    return 0; // floor(log2(ratio)) <= 0
+  }
+  // floor(log2) by comparison, exact at powers of two (log2 of 2^k is k in
+  // IEEE arithmetic, but a ratio one ulp below must not round up).
+  int level = int(std::floor(std::log2(ratio)));
+  while (level > 0 && std::ldexp(1.0, level) > ratio)
+  {
+    --level;
+  }
+  while (std::ldexp(1.0, level + 1) <= ratio)
+  {
+    ++level;
+  }
+  return std::min(level, levels);
 }
 
 PyramidLevel downsampleOpacity(const ClassifiedVolumeView& fine, double step, DownsampleFilter filter)
