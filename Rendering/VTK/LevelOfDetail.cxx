@@ -16,9 +16,23 @@ namespace
 {
 std::string MiB(size_t bytes)
 {
+  // Small levels (tests, far views) in KiB or bytes, so they do not read 0.
   std::ostringstream s;
-  s.precision(bytes >= (size_t(100) << 20) ? 0 : 1);
-  s << std::fixed << double(bytes) / 1048576.0 << " MiB";
+  s << std::fixed;
+  if (bytes < 1024)
+  {
+    s << bytes << " bytes";
+  }
+  else if (bytes < (size_t(1) << 20))
+  {
+    s.precision(1);
+    s << double(bytes) / 1024.0 << " KiB";
+  }
+  else
+  {
+    s.precision(bytes >= (size_t(100) << 20) ? 0 : 1);
+    s << double(bytes) / 1048576.0 << " MiB";
+  }
   return s.str();
 }
 
