@@ -4,6 +4,10 @@
 // Sections 3.3 and 4).
 #include "mcvol/Pyramid.h"
 
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -230,17 +234,22 @@ struct WorkMeter
 /**
  * One halving of a stream of z-slices: each slice pushed is filtered along x
  * and y (filterAxis, as filter3 does), kept while the z taps of a coarse
- * slice still need it, and each coarse slice is handed to `emit` as soon as
- * its last tap is in. The arithmetic is filter3's: per axis the taps in
- * order, accumulated in double and stored as float.
+ * slice still need it, and each coarse slice of [first, end) is handed to
+ * `emit` as soon as its last tap is in. Slices are numbered globally (the
+ * whole volume's z), so that a stage can run over one z-range of the volume
+ * (its clamped taps still see the whole volume's ends). The arithmetic is
+ * filter3's: per axis the taps in order, accumulated in double and stored
+ * as float.
  */
 class SliceStage
 {
 public:
-  using Emit = std::function<void(const float* slice)>;
+  using Emit = std::function<void(int c, const float* slice)>;
 
-  SliceStage(const int inDims[3], const FilterTaps& taps, WorkMeter& meter, Emit emit)
+  SliceStage(const int inDims[3], const FilterTaps& taps, int first, int end, WorkMeter& meter, Emit emit)
     : Taps(taps)
+    , Next(first)
+    , End(end)
     , Meter(meter)
     , Out(std::move(emit))
   {
@@ -251,12 +260,22 @@ public:
     }
   }
 
-  const int* coarseDims() const { return this->Coarse; }
-
-  /// Level-0 (or the finer stage's) slice z = the number pushed so far.
-  void push(const float* slice)
+  /// The finer slices [lo, hi) that coarse slices [first, end) read.
+  static void inputRange(int n, const FilterTaps& taps, int first, int end, int& lo, int& hi)
   {
-    const int z = this->Received++;
+    if (n == 1)
+    {
+      lo = 0; // not halved: the one slice is the coarse one
+      hi = 1;
+      return;
+    }
+    lo = std::max(0, 2 * first + taps.first);
+    hi = std::min(n, 2 * (end - 1) + taps.first + taps.count);
+  }
+
+  /// The finer slice z (global), in increasing order.
+  void push(int z, const float* slice)
+  {
     const int sliceDims[3] = { this->In[0], this->In[1], 1 };
     const size_t inBytes = size_t(this->In[0]) * size_t(this->In[1]) * 4 * sizeof(float);
     std::vector<float> plane(slice, slice + inBytes / sizeof(float));
@@ -270,13 +289,13 @@ public:
     if (this->In[2] == 1)
     {
       // An axis of 1 is not filtered: the xy-filtered slice is the level.
-      this->Out(fxy.data());
+      this->Out(0, fxy.data());
       this->Meter.sub(fxy.size() * sizeof(float));
       return;
     }
     this->Ring.emplace_back(z, std::move(fxy));
     const int n = this->In[2];
-    while (this->Next < this->Coarse[2])
+    while (this->Next < this->End)
     {
       const int last = std::min(2 * this->Next + this->Taps.first + this->Taps.count - 1, n - 1);
       if (last > z)
@@ -286,8 +305,8 @@ public:
       this->emitCoarse(this->Next);
       ++this->Next;
       // Slices below the next coarse slice's first tap are done with.
-      const int keepFrom = 2 * this->Next + this->Taps.first;
-      while (!this->Ring.empty() && this->Ring.front().first < keepFrom && this->Ring.front().first < n - 1)
+      const int keepFrom = std::min(2 * this->Next + this->Taps.first, n - 1);
+      while (!this->Ring.empty() && this->Ring.front().first < keepFrom)
       {
         this->Meter.sub(this->Ring.front().second.size() * sizeof(float));
         this->Ring.pop_front();
@@ -321,7 +340,6 @@ private:
     }
     std::vector<float> out(size_t(voxels) * 4);
     this->Meter.add(out.size() * sizeof(float));
-#pragma omp parallel for schedule(static)
     for (int64_t v = 0; v < voxels; ++v)
     {
       double acc[4] = { 0, 0, 0, 0 };
@@ -338,19 +356,20 @@ private:
         out[size_t(v) * 4 + size_t(ch)] = float(acc[ch]);
       }
     }
-    this->Out(out.data());
+    this->Out(c, out.data());
     this->Meter.sub(out.size() * sizeof(float));
   }
 
   FilterTaps Taps;
-  WorkMeter& Meter;
-  Emit Out;
   int In[3] = { 1, 1, 1 };
   int Coarse[3] = { 1, 1, 1 };
-  int Received = 0;
   int Next = 0; // the next coarse slice to emit
+  int End = 0;  // one past the last coarse slice to emit
+  WorkMeter& Meter;
+  Emit Out;
   std::deque<std::pair<int, std::vector<float>>> Ring;
 };
+
 } // namespace
 
 const char* toString(DownsampleFilter f)
@@ -518,8 +537,11 @@ PyramidLevel streamExtinctionLevel(const int dims[3], const double spacing[3], c
   PyramidLevel out;
   out.level = level;
   ClassifiedVolumeView g = geometry;
-  for (int l = 1; l <= level; ++l)
+  // Stage l (0-based) halves the grid of dims stageDims[l].
+  std::vector<std::array<int, 3>> stageDims(static_cast<size_t>(level));
+  for (int l = 0; l < level; ++l)
   {
+    stageDims[size_t(l)] = { g.dims[0], g.dims[1], g.dims[2] };
     PyramidLevel next;
     coarseGeometry(g, next);
     levelDims(g.dims, 1, next.dims);
@@ -531,48 +553,88 @@ PyramidLevel streamExtinctionLevel(const int dims[3], const double spacing[3], c
   std::copy(g.spacing, g.spacing + 3, out.spacing);
   std::copy(g.origin, g.origin + 3, out.origin);
   out.voxels.resize(out.numVoxels() * 4);
-
-  // Stage l halves level l - 1; the last one writes into the level.
-  WorkMeter meter;
-  std::vector<std::unique_ptr<SliceStage>> stages(static_cast<size_t>(level));
   const size_t outSlice = size_t(out.dims[0]) * size_t(out.dims[1]) * 4;
-  int written = 0;
-  SliceStage::Emit store = [&out, &written, outSlice](const float* s)
-  {
-    std::copy(s, s + outSlice, out.voxels.data() + size_t(written) * outSlice);
-    ++written;
-  };
-  int d[3] = { dims[0], dims[1], dims[2] };
-  std::vector<std::array<int, 3>> stageDims(static_cast<size_t>(level));
-  for (int l = 0; l < level; ++l)
-  {
-    stageDims[size_t(l)] = { d[0], d[1], d[2] };
-    levelDims(d, 1, d);
-  }
-  for (int l = level - 1; l >= 0; --l)
-  {
-    SliceStage::Emit emit =
-      l == level - 1 ? store : SliceStage::Emit([&stages, l](const float* s) { stages[size_t(l) + 1]->push(s); });
-    stages[size_t(l)].reset(new SliceStage(stageDims[size_t(l)].data(), taps, meter, std::move(emit)));
-  }
   const size_t inSlice = size_t(dims[0]) * size_t(dims[1]) * 4;
-  std::vector<float> buffer(inSlice);
-  meter.add(buffer.size() * sizeof(float));
-  for (int z = 0; z < dims[2]; ++z)
+
+  // The level's z-slices are split into chunks, each streamed by one thread
+  // from the level-0 slices it needs (its taps' halo included, a few slices
+  // per stage): one parallel region for the whole build rather than several
+  // per slice, whose barriers cost far more than the work on a loaded
+  // machine. Within a chunk everything is serial and in order.
+  int threads = 1;
+#ifdef _OPENMP
+  threads = omp_get_max_threads();
+#endif
+  const int chunks = std::max(1, std::min(out.dims[2], 2 * threads));
+  std::vector<size_t> chunkPeak(static_cast<size_t>(chunks), 0);
+  std::vector<std::string> chunkError(static_cast<size_t>(chunks));
+#pragma omp parallel for schedule(dynamic, 1) if (chunks > 1)
+  for (int t = 0; t < chunks; ++t)
   {
-    std::fill(buffer.begin(), buffer.end(), 0.f);
-    slice(z, buffer.data());
-    checkPacked(buffer.data(), int64_t(dims[0]) * dims[1], int64_t(z) * dims[0] * dims[1]);
-    stages[0]->push(buffer.data());
+    try
+    {
+      // Output slices [c0, c1) and, stage by stage back to level 0, the
+      // slices they read.
+      const int c0 = int(int64_t(out.dims[2]) * t / chunks);
+      const int c1 = int(int64_t(out.dims[2]) * (t + 1) / chunks);
+      if (c0 >= c1)
+      {
+        continue;
+      }
+      std::vector<std::array<int, 2>> range(size_t(level) + 1);
+      range[size_t(level)] = { c0, c1 };
+      for (int l = level - 1; l >= 0; --l)
+      {
+        int lo = 0, hi = 0;
+        SliceStage::inputRange(stageDims[size_t(l)][2], taps, range[size_t(l) + 1][0], range[size_t(l) + 1][1], lo, hi);
+        range[size_t(l)] = { lo, hi };
+      }
+      WorkMeter meter;
+      std::vector<std::unique_ptr<SliceStage>> stages(static_cast<size_t>(level));
+      for (int l = level - 1; l >= 0; --l)
+      {
+        SliceStage::Emit emit;
+        if (l == level - 1)
+        {
+          emit = [&out, outSlice](int c, const float* s)
+          { std::copy(s, s + outSlice, out.voxels.data() + size_t(c) * outSlice); };
+        }
+        else
+        {
+          emit = [&stages, l](int c, const float* s) { stages[size_t(l) + 1]->push(c, s); };
+        }
+        stages[size_t(l)].reset(new SliceStage(
+          stageDims[size_t(l)].data(), taps, range[size_t(l) + 1][0], range[size_t(l) + 1][1], meter, std::move(emit)));
+      }
+      std::vector<float> buffer(inSlice);
+      meter.add(buffer.size() * sizeof(float));
+      for (int z = range[0][0]; z < range[0][1]; ++z)
+      {
+        std::fill(buffer.begin(), buffer.end(), 0.f);
+        slice(z, buffer.data());
+        checkPacked(buffer.data(), int64_t(dims[0]) * dims[1], int64_t(z) * dims[0] * dims[1]);
+        stages[0]->push(z, buffer.data());
+      }
+      chunkPeak[size_t(t)] = meter.peak;
+    }
+    catch (const std::exception& e)
+    {
+      chunkError[size_t(t)] = e.what();
+    }
   }
-  if (written != out.dims[2])
+  for (const std::string& e : chunkError)
   {
-    throw std::logic_error(
-      "mcvol: streamed pyramid wrote " + std::to_string(written) + " of " + std::to_string(out.dims[2]) + " slices");
+    if (!e.empty())
+    {
+      throw std::invalid_argument(e);
+    }
   }
   if (peakWorkBytes)
   {
-    *peakWorkBytes = meter.peak;
+    // At most `threads` chunks run at once: the largest chunk's peak times
+    // that (an upper bound of what the build held at any time).
+    const size_t largest = *std::max_element(chunkPeak.begin(), chunkPeak.end());
+    *peakWorkBytes = largest * size_t(std::min(threads, chunks));
   }
   return out;
 }

@@ -155,18 +155,22 @@ size_t levelBytes(const int dims[3], int level, int channels);
  * maxPyramidLevels(dims)) of the extinction-based pyramid over a level 0 of
  * `dims`, `spacing` and `origin` that is never held whole. `slice(z, out)`
  * writes level 0's z-slice z (dims[0] * dims[1] voxels of 4 floats, x
- * fastest) into `out`; it is called once per z in increasing order. Each
- * slice is filtered along x and y at once, and along z as soon as the
- * filter's taps are in, through one stage per level: a stage keeps only the
- * few xy-filtered slices its z taps still need (4 for Box4 and BSpline, 2
- * for Box2). Working memory is then about one level-0 slice plus 4
- * xy-filtered slices per stage, besides the level itself; `peakWorkBytes`
- * (optional) receives the largest it reached (the output level excluded).
- * The result equals buildExtinctionPyramid(level0, level, filter).back()
- * exactly: the same taps in the same order (x, y, then z) in double,
- * stored as float after each axis. Same errors as downsampleExtinction (bad
- * geometry, a negative, NaN or infinite value in a slice), and a level out
- * of range.
+ * fastest) into `out`. Each slice is filtered along x and y at once, and
+ * along z as soon as the filter's taps are in, through one stage per level:
+ * a stage keeps only the few xy-filtered slices its z taps still need (4
+ * for Box4 and BSpline, 2 for Box2). The level's z-slices are split into
+ * chunks streamed in parallel (OpenMP), one thread per chunk: `slice` is
+ * called from several threads at once (it must be thread-safe), in
+ * increasing z within a chunk, and the few slices at a chunk's border that
+ * both neighbours' taps read are asked for twice. Working memory is about
+ * one level-0 slice plus 4 xy-filtered slices per stage and chunk, besides
+ * the level itself; `peakWorkBytes` (optional) receives the largest
+ * chunk's peak times the chunks that run at once (the output level
+ * excluded). The result equals
+ * buildExtinctionPyramid(level0, level, filter).back() exactly: the same
+ * taps in the same order (x, y, then z) in double, stored as float after
+ * each axis. Same errors as downsampleExtinction (bad geometry, a negative,
+ * NaN or infinite value in a slice), and a level out of range.
  */
 PyramidLevel streamExtinctionLevel(const int dims[3], const double spacing[3], const double origin[3], int level,
   DownsampleFilter filter, const std::function<void(int z, float* out)>& slice, size_t* peakWorkBytes = nullptr);
