@@ -276,15 +276,7 @@ public:
   /// The finer slice z (global), in increasing order.
   void push(int z, const float* slice)
   {
-    const int sliceDims[3] = { this->In[0], this->In[1], 1 };
-    const size_t inBytes = size_t(this->In[0]) * size_t(this->In[1]) * 4 * sizeof(float);
-    std::vector<float> plane(slice, slice + inBytes / sizeof(float));
-    this->Meter.add(inBytes);
-    int dx[3], dxy[3];
-    std::vector<float> fx = filterAxis(plane, sliceDims, 0, this->Taps, dx);
-    this->Meter.add(fx.size() * sizeof(float));
-    std::vector<float> fxy = filterAxis(fx, dx, 1, this->Taps, dxy);
-    this->Meter.sub(inBytes + fx.size() * sizeof(float));
+    std::vector<float> fxy = this->filterXY(slice);
     this->Meter.add(fxy.size() * sizeof(float));
     if (this->In[2] == 1)
     {
@@ -315,6 +307,78 @@ public:
   }
 
 private:
+  /// The slice filtered along x, stored as float, then along y: filterAxis
+  /// on both axes (the same taps in the same order, accumulated in double),
+  /// row by row and without its index arithmetic or copies.
+  std::vector<float> filterXY(const float* in)
+  {
+    const int nx = this->In[0], ny = this->In[1];
+    const int mx = this->Coarse[0], my = this->Coarse[1];
+    const FilterTaps& t = this->Taps;
+    std::vector<float> fx;
+    const float* rows = in;
+    if (nx > 1)
+    {
+      fx.resize(size_t(mx) * size_t(ny) * 4);
+      this->Meter.add(fx.size() * sizeof(float));
+      for (int j = 0; j < ny; ++j)
+      {
+        const float* row = in + size_t(j) * size_t(nx) * 4;
+        float* dst = fx.data() + size_t(j) * size_t(mx) * 4;
+        for (int i = 0; i < mx; ++i)
+        {
+          double acc[4] = { 0, 0, 0, 0 };
+          for (int k = 0; k < t.count; ++k)
+          {
+            int q = 2 * i + t.first + k;
+            q = q < 0 ? 0 : (q > nx - 1 ? nx - 1 : q); // clamp to the edge voxel
+            const float* x = row + size_t(q) * 4;
+            for (int c = 0; c < 4; ++c)
+            {
+              acc[c] += t.w[k] * double(x[c]);
+            }
+          }
+          for (int c = 0; c < 4; ++c)
+          {
+            dst[size_t(i) * 4 + size_t(c)] = float(acc[c]);
+          }
+        }
+      }
+      rows = fx.data();
+    }
+    std::vector<float> out(size_t(mx) * size_t(my) * 4);
+    if (ny == 1)
+    {
+      std::copy(rows, rows + out.size(), out.begin());
+    }
+    else
+    {
+      const size_t rowFloats = size_t(mx) * 4;
+      for (int jj = 0; jj < my; ++jj)
+      {
+        const float* src[4] = { nullptr, nullptr, nullptr, nullptr };
+        for (int k = 0; k < t.count; ++k)
+        {
+          int q = 2 * jj + t.first + k;
+          q = q < 0 ? 0 : (q > ny - 1 ? ny - 1 : q);
+          src[k] = rows + size_t(q) * rowFloats;
+        }
+        float* dst = out.data() + size_t(jj) * rowFloats;
+        for (size_t v = 0; v < rowFloats; ++v)
+        {
+          double acc = 0.0;
+          for (int k = 0; k < t.count; ++k)
+          {
+            acc += t.w[k] * double(src[k][v]);
+          }
+          dst[v] = float(acc);
+        }
+      }
+    }
+    this->Meter.sub(fx.size() * sizeof(float));
+    return out;
+  }
+
   const std::vector<float>& held(int j) const
   {
     for (const auto& entry : this->Ring)
@@ -508,8 +572,13 @@ size_t levelBytes(const int dims[3], int level, int channels)
   return voxelsOf(d) * 4 * sizeof(float) * size_t(std::max(channels, 0));
 }
 
-PyramidLevel streamExtinctionLevel(const int dims[3], const double spacing[3], const double origin[3], int level,
-  DownsampleFilter filter, const std::function<void(int z, float* out)>& slice, size_t* peakWorkBytes)
+namespace
+{
+/// streamExtinctionLevel; `checkSlices` false skips the check of each slice
+/// for the classifier's own slices, which are finite and >= 0 by
+/// construction (classifyScalars checks its table).
+PyramidLevel streamLevel(const int dims[3], const double spacing[3], const double origin[3], int level,
+  DownsampleFilter filter, const std::function<void(int z, float* out)>& slice, size_t* peakWorkBytes, bool checkSlices)
 {
   // The geometry is checked as a view's (no voxels are read through it).
   static const float kNoVoxels[4] = { 0, 0, 0, 0 };
@@ -610,9 +679,12 @@ PyramidLevel streamExtinctionLevel(const int dims[3], const double spacing[3], c
       meter.add(buffer.size() * sizeof(float));
       for (int z = range[0][0]; z < range[0][1]; ++z)
       {
-        std::fill(buffer.begin(), buffer.end(), 0.f);
+        std::fill(buffer.begin(), buffer.end(), 0.f); // what the slice leaves unwritten is empty
         slice(z, buffer.data());
-        checkPacked(buffer.data(), int64_t(dims[0]) * dims[1], int64_t(z) * dims[0] * dims[1]);
+        if (checkSlices)
+        {
+          checkPacked(buffer.data(), int64_t(dims[0]) * dims[1], int64_t(z) * dims[0] * dims[1]);
+        }
         stages[0]->push(z, buffer.data());
       }
       chunkPeak[size_t(t)] = meter.peak;
@@ -637,6 +709,14 @@ PyramidLevel streamExtinctionLevel(const int dims[3], const double spacing[3], c
     *peakWorkBytes = largest * size_t(std::min(threads, chunks));
   }
   return out;
+}
+
+} // namespace
+
+PyramidLevel streamExtinctionLevel(const int dims[3], const double spacing[3], const double origin[3], int level,
+  DownsampleFilter filter, const std::function<void(int z, float* out)>& slice, size_t* peakWorkBytes)
+{
+  return streamLevel(dims, spacing, origin, level, filter, slice, peakWorkBytes, true);
 }
 
 PyramidLevel classifyExtinctionLevel(const ClassifyInput* inputs, int numInputs, const int dims[3],
@@ -667,7 +747,7 @@ PyramidLevel classifyExtinctionLevel(const ClassifyInput* inputs, int numInputs,
       classifyScalars(s, sliceDims, *inputs[n].tf, out, 4, n > 0);
     }
   };
-  return streamExtinctionLevel(dims, spacing, origin, level, filter, classifySlice, peakWorkBytes);
+  return streamLevel(dims, spacing, origin, level, filter, classifySlice, peakWorkBytes, false);
 }
 
 int chooseLevelOfDetail(double pixelFootprintWorld, const double spacing[3], int levels)
