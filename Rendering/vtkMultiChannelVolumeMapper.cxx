@@ -1051,8 +1051,8 @@ bool vtkMultiChannelVolumeMapper::ChooseLevelOfDetail(RenderPass& pass)
   mcvol::adapter::LevelPolicy policy;
   policy.Requested = this->LevelOfDetail;
   policy.MemoryBudget = this->MemoryBudget;
-  // The CUDA backend holds each channel as an array and a texture.
-  policy.HeldTwice = in.Backend.ActiveName(this->UsesRenderBackend(), this->Backend) == "cuda";
+  // The CUDA backend copies the channels (float64 as float32).
+  policy.DeviceCopy = in.Backend.ActiveName(this->UsesRenderBackend(), this->Backend) == "cuda";
 
   // Level 0's voxel size in world units per axis: spacing, direction and
   // the volume's matrix.
@@ -1118,7 +1118,7 @@ bool vtkMultiChannelVolumeMapper::ChooseLevelOfDetail(RenderPass& pass)
     // Once per case, not every frame (a progressive image renders many).
     std::ostringstream key;
     key << this->LevelOfDetail << " " << choice.Wanted << " " << choice.Level << " " << this->MemoryBudget << " "
-        << policy.HeldTwice;
+        << policy.DeviceCopy;
     if (key.str() != in.LevelWarning)
     {
       in.LevelWarning = key.str();

@@ -660,10 +660,10 @@ public:
    * says so and a warning is given once per distinct case (not every frame);
    * where none fits, the coarsest level is rendered with that warning. What
    * counts is the volume as the backend holds it: level 0 the channels as
-   * they are (native type; the CPU reads them in place, the classified copy
+   * they are (native type; the CPU reads them in place, the CUDA backend
+   * holds each channel once with float64 as float32; the classified copy
    * of dependent components is 16 bytes a voxel), a level L > 0 16 bytes a
-   * voxel per pre-classified channel; the CUDA backend holds each channel
-   * twice (array and texture), so there both count. The streamed build's
+   * voxel per pre-classified channel. The streamed build's
    * working memory (a few slices, GetLastLevelOfDetailBuildMemory()) and the
    * acceleration grids are not counted. The CUDA device's free memory is not
    * queried (the backend API has no call for it): set the budget to what

@@ -48,7 +48,7 @@ bool SameSource(const ChannelSource& a, const ChannelSource& b)
 } // namespace
 
 //------------------------------------------------------------------------------
-size_t LevelMemory(const BoundChannels& channels, int level, int outChannels, bool heldTwice)
+size_t LevelMemory(const BoundChannels& channels, int level, int outChannels, bool deviceCopy)
 {
   size_t bytes = 0;
   if (level == 0)
@@ -58,14 +58,15 @@ size_t LevelMemory(const BoundChannels& channels, int level, int outChannels, bo
     {
       const ChannelSource& s = channels.Sources[size_t(c)];
       const size_t values = s.format == ChannelFormat::Extinction ? 4 : 1;
-      bytes += voxels * values * size_t(scalarTypeSize(s.type));
+      const bool narrowed = deviceCopy && s.type == ScalarType::Float64; // the device holds float32
+      bytes += voxels * values * size_t(narrowed ? 4 : scalarTypeSize(s.type));
     }
   }
   else
   {
     bytes = levelBytes(channels.Dims, level, outChannels);
   }
-  return heldTwice ? 2 * bytes : bytes;
+  return bytes;
 }
 
 //------------------------------------------------------------------------------
@@ -98,7 +99,7 @@ LevelChoice ChooseLevel(const LevelPolicy& policy, const BoundChannels& channels
     why << "requested";
   }
   choice.Level = choice.Wanted;
-  choice.WantedBytes = LevelMemory(channels, choice.Wanted, outChannels, policy.HeldTwice);
+  choice.WantedBytes = LevelMemory(channels, choice.Wanted, outChannels, policy.DeviceCopy);
   choice.Bytes = choice.WantedBytes;
   if (policy.MemoryBudget > 0.0 && double(choice.Bytes) > policy.MemoryBudget)
   {
@@ -107,12 +108,12 @@ LevelChoice ChooseLevel(const LevelPolicy& policy, const BoundChannels& channels
     while (choice.Level<choice.Levels&& double(choice.Bytes)> policy.MemoryBudget)
     {
       ++choice.Level;
-      choice.Bytes = LevelMemory(channels, choice.Level, outChannels, policy.HeldTwice);
+      choice.Bytes = LevelMemory(channels, choice.Level, outChannels, policy.DeviceCopy);
     }
     choice.Fallback = true;
     choice.NoneFits = double(choice.Bytes) > policy.MemoryBudget;
     why << "; memory fallback: level " << choice.Wanted << " needs " << MiB(choice.WantedBytes)
-        << (policy.HeldTwice ? " (held twice on the device)" : "") << ", more than the budget of "
+        << (policy.DeviceCopy ? " on the device" : "") << ", more than the budget of "
         << MiB(size_t(policy.MemoryBudget));
     if (choice.NoneFits)
     {

@@ -39,9 +39,10 @@ struct LevelPolicy
 {
   int Requested = 0;         ///< -1 automatic, 0 full resolution, L > 0 level L
   double MemoryBudget = 0.0; ///< bytes the volume may take (0: no cap)
-  /// The backend holds a channel twice (the CUDA backend: a linear array
-  /// and a texture); the budget then counts both.
-  bool HeldTwice = false;
+  /// The backend copies the channels to a device (CUDA: each channel held
+  /// once, as a texture or an array; float64 stored as float32); the CPU
+  /// reads them in place.
+  bool DeviceCopy = false;
 };
 
 /// The level a render uses, and why.
@@ -62,9 +63,10 @@ struct LevelChoice
 };
 
 /// The memory one level of the volume takes in the backend: level 0 the
-/// channels as bound (read in place on the CPU, copied on a device), a
-/// level L > 0 `outChannels` pre-classified channels of 16 bytes a voxel.
-size_t LevelMemory(const BoundChannels& channels, int level, int outChannels, bool heldTwice);
+/// channels as bound (read in place on the CPU; on a device float64 is held
+/// as float32), a level L > 0 `outChannels` pre-classified channels of 16
+/// bytes a voxel.
+size_t LevelMemory(const BoundChannels& channels, int level, int outChannels, bool deviceCopy);
 
 /**
  * Chooses the level: the request (clamped to [0, levels]) or, for -1, the
