@@ -41,6 +41,24 @@
 namespace
 {
 constexpr int kMaxChannels = vtkMultiChannelVolumeMapper::MAX_CHANNELS;
+
+/// What a render's levels of detail depend on: the channels (their data and
+/// values), the transfer-function tables (scalar channels), the filter and
+/// whether the channels are summed.
+mcvol::adapter::LevelOfDetailCache::Key LevelKey(const mcvol::adapter::BoundChannels& channels, bool classified,
+  unsigned long long tablesVersion, int filter, bool summed)
+{
+  mcvol::adapter::LevelOfDetailCache::Key key;
+  key.Sources.assign(channels.Sources.begin(), channels.Sources.begin() + channels.Count);
+  std::copy(channels.Dims, channels.Dims + 3, key.Dims);
+  key.DataMTime = channels.DataMTime;
+  // Dependent components: the classified copy's time already covers its
+  // functions; scalar channels: the tables given to level 0's Scene.
+  key.TablesVersion = classified ? 0 : tablesVersion;
+  key.Filter = filter;
+  key.Summed = summed;
+  return key;
+}
 static_assert(kMaxChannels == mcvol::kMaxChannels, "channel limits of mapper and core differ");
 } // namespace
 
@@ -957,6 +975,13 @@ bool vtkMultiChannelVolumeMapper::UpdateScene(RenderPass& pass)
       this->UpdateLevelScene(pass);
       in.LevelScene.setHostAcceleration(hostAcceleration);
     }
+    else
+    {
+      // Levels kept for interaction stay while they are current; stale ones
+      // (new data or functions) would be rebuilt anyway: free them now.
+      in.Levels.DropIfStale(
+        LevelKey(pass.Channels, pass.Classified, in.Tables.Version(), this->LevelOfDetailFilter, pass.SumChannels));
+    }
     mcvol::Scene& scene = *pass.Scene;
     const int sceneChannels = scene.numChannels();
 
@@ -1136,15 +1161,8 @@ bool vtkMultiChannelVolumeMapper::ChooseLevelOfDetail(RenderPass& pass)
 bool vtkMultiChannelVolumeMapper::UpdateLevelScene(RenderPass& pass)
 {
   vtkInternals& in = *this->Internals;
-  mcvol::adapter::LevelOfDetailCache::Key key;
-  key.Sources.assign(pass.Channels.Sources.begin(), pass.Channels.Sources.begin() + pass.Channels.Count);
-  std::copy(pass.Channels.Dims, pass.Channels.Dims + 3, key.Dims);
-  key.DataMTime = pass.Channels.DataMTime;
-  // Dependent components: the classified copy's time already covers its
-  // functions; scalar channels: the tables given to level 0's Scene.
-  key.TablesVersion = pass.Classified ? 0 : in.Tables.Version();
-  key.Filter = this->LevelOfDetailFilter;
-  key.Summed = pass.SumChannels;
+  const mcvol::adapter::LevelOfDetailCache::Key key =
+    LevelKey(pass.Channels, pass.Classified, in.Tables.Version(), this->LevelOfDetailFilter, pass.SumChannels);
   std::vector<const mcvol::TransferFunctionDesc*> tables;
   if (!pass.Classified)
   {

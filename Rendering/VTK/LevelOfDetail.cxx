@@ -184,6 +184,15 @@ void LevelOfDetailCache::Clear()
 }
 
 //------------------------------------------------------------------------------
+void LevelOfDetailCache::DropIfStale(const Key& key)
+{
+  if (this->HaveKey && !(key == this->Current))
+  {
+    this->Clear();
+  }
+}
+
+//------------------------------------------------------------------------------
 const LevelOfDetailCache::Level& LevelOfDetailCache::Get(
   const Key& key, int level, const BoundChannels& channels, const std::vector<const TransferFunctionDesc*>& tables)
 {

@@ -119,6 +119,11 @@ public:
   /// Drops every level (the mapper's data went away).
   void Clear();
 
+  /// Drops the levels if they were built for another key (a render at level
+  /// 0 after the data or a function changed: they would be rebuilt anyway,
+  /// and would only hold memory meanwhile).
+  void DropIfStale(const Key& key);
+
   int Builds() const { return this->BuildCount; }
   /// Bytes of all cached levels.
   size_t Bytes() const;

@@ -292,6 +292,11 @@ mm.SetLevelOfDetail(0)
 mc.render()
 expect_builds(8, "level 0")
 t.check(mm.GetLastLevelOfDetail() == 0, "back at level 0")
+t.check(mm.GetLevelOfDetailMemory() > 0, "levels 1 and 2 stay while current (for the next interaction)")
+props.GetScalarOpacity(2).AddPoint(0.7, 0.05)
+mc.render()
+t.check(mm.GetLevelOfDetailMemory() == 0, "a function edited at level 0 frees the stale levels")
+expect_builds(8, "an edit at level 0 builds nothing")
 t.check(not mc.errors.errors, "cache checks: unexpected errors %s" % mc.errors.errors)
 
 # --- 4. The automatic level ----------------------------------------------------
