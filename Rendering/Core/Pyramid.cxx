@@ -719,6 +719,115 @@ PyramidLevel streamExtinctionLevel(const int dims[3], const double spacing[3], c
   return streamLevel(dims, spacing, origin, level, filter, slice, peakWorkBytes, true);
 }
 
+namespace
+{
+/// A transfer function as classifyScalars reads it: (r, g, b, extinction)
+/// per texel and the map from a scalar to a texel coordinate.
+struct ClassifyTable
+{
+  std::vector<float> texels; ///< 4 per texel
+  size_t K = 0;
+  double scalarMin = 0.0;
+  double scale = 0.0;
+};
+
+/// Checks `src` and `tf` and tabulates `tf` (the table as Scene builds it).
+ClassifyTable makeClassifyTable(const ChannelSource& src, const TransferFunctionDesc& tf)
+{
+  if (src.format != ChannelFormat::Scalar)
+  {
+    throw std::invalid_argument("mcvol: classifyScalars classifies scalar channels; this one is already classified");
+  }
+  if (src.stride < 1)
+  {
+    throw std::invalid_argument("mcvol: classifyScalars needs an input stride >= 1 and an output stride >= 4");
+  }
+  if (int(src.type) < int(ScalarType::UInt8) || int(src.type) > int(ScalarType::Float64))
+  {
+    throw std::invalid_argument("mcvol: classifyScalars: unknown scalar type");
+  }
+  const size_t K = tf.opacity.size();
+  if (K < 2 || tf.rgb.size() != 3 * K || !(tf.unitDistance > 0.f) || !std::isfinite(tf.unitDistance) ||
+    !std::isfinite(tf.scalarMin) || !std::isfinite(tf.scalarMax) || !(tf.scalarMax >= tf.scalarMin))
+  {
+    throw std::invalid_argument("mcvol: classifyScalars: the transfer function needs >= 2 entries, 3 colour values "
+                                "per entry, a positive unit distance and a finite range");
+  }
+  ClassifyTable t;
+  t.K = K;
+  t.texels.resize(K * 4);
+  for (size_t i = 0; i < K; ++i)
+  {
+    if (!std::isfinite(tf.opacity[i]) || !std::isfinite(tf.rgb[3 * i]) || !std::isfinite(tf.rgb[3 * i + 1]) ||
+      !std::isfinite(tf.rgb[3 * i + 2]))
+    {
+      throw std::invalid_argument("mcvol: classifyScalars: the transfer function has a non-finite entry");
+    }
+    for (int c = 0; c < 3; ++c)
+    {
+      t.texels[4 * i + size_t(c)] = std::min(std::max(tf.rgb[3 * i + size_t(c)], 0.f), 1.f);
+    }
+    t.texels[4 * i + 3] = opacityToExtinction(tf.opacity[i], tf.unitDistance);
+  }
+  double width = tf.scalarMax - tf.scalarMin;
+  const double minWidth = std::max(1e-30, 1e-6 * std::fabs(tf.scalarMin - src.offset));
+  if (!(width >= minWidth))
+  {
+    width = minWidth;
+  }
+  t.scalarMin = tf.scalarMin;
+  t.scale = double(K - 1) / width;
+  return t;
+}
+
+/// Voxels [first, first + count) of `src` through `t` into out[v * outStride]
+/// (v counted from `first`), serially: classifyScalars' loop body.
+template <class T>
+void classifyRangeOf(
+  const ClassifyTable& t, const T* in, int64_t stride, int64_t count, float* out, int64_t outStride, bool accumulate)
+{
+  const size_t K = t.K;
+  for (int64_t v = 0; v < count; ++v)
+  {
+    const double s = double(in[v * stride]);
+    float* y = out + v * outStride;
+    float r[4] = { 0.f, 0.f, 0.f, 0.f };
+    double x = (s - t.scalarMin) * t.scale;
+    if (x == x)
+    {
+      x = std::min(std::max(x, 0.0), double(K - 1));
+      size_t i = size_t(x);
+      i = i > K - 2 ? K - 2 : i;
+      const float f = float(x - double(i));
+      const float* a = t.texels.data() + i * 4;
+      const float* b = a + 4;
+      const float sigma = a[3] + f * (b[3] - a[3]);
+      r[0] = sigma;
+      for (int c = 0; c < 3; ++c)
+      {
+        r[c + 1] = sigma * (a[c] + f * (b[c] - a[c]));
+      }
+    }
+    for (int c = 0; c < 4; ++c)
+    {
+      y[c] = accumulate ? y[c] + r[c] : r[c];
+    }
+  }
+}
+
+void classifyRange(const ClassifyTable& t, const ChannelSource& src, int64_t first, int64_t count, float* out,
+  int64_t outStride, bool accumulate)
+{
+  visitScalarType(src.type,
+    [&](auto tag)
+    {
+      using T = typename decltype(tag)::type;
+      const T* in = static_cast<const T*>(src.data) + first * src.stride;
+      classifyRangeOf(t, in, src.stride, count, out, outStride, accumulate);
+    });
+}
+} // namespace
+
 PyramidLevel classifyExtinctionLevel(const ClassifyInput* inputs, int numInputs, const int dims[3],
   const double spacing[3], const double origin[3], int level, DownsampleFilter filter, size_t* peakWorkBytes)
 {
@@ -734,17 +843,26 @@ PyramidLevel classifyExtinctionLevel(const ClassifyInput* inputs, int numInputs,
         "mcvol: classifyExtinctionLevel: channel " + std::to_string(n) + " has no data or no transfer function");
     }
   }
+  // The tables once, then every slice block by block: all channels of a
+  // block are added while it is in cache (a pass per channel over a whole
+  // slice would stream it through memory once per channel).
+  std::vector<ClassifyTable> tables;
+  for (int n = 0; n < numInputs; ++n)
+  {
+    tables.push_back(makeClassifyTable(inputs[n].source, *inputs[n].tf));
+  }
   const int64_t sliceVoxels = int64_t(dims[0]) * int64_t(dims[1]);
   auto classifySlice = [&](int z, float* out)
   {
-    const int sliceDims[3] = { dims[0], dims[1], 1 };
-    for (int n = 0; n < numInputs; ++n)
+    constexpr int64_t kBlock = 4096; // 64 KiB of output
+    for (int64_t first = 0; first < sliceVoxels; first += kBlock)
     {
-      // The same source advanced to slice z (stride in elements).
-      ChannelSource s = inputs[n].source;
-      s.data = static_cast<const char*>(s.data) +
-        size_t(z) * size_t(sliceVoxels) * size_t(s.stride) * size_t(scalarTypeSize(s.type));
-      classifyScalars(s, sliceDims, *inputs[n].tf, out, 4, n > 0);
+      const int64_t count = std::min(kBlock, sliceVoxels - first);
+      for (int n = 0; n < numInputs; ++n)
+      {
+        classifyRange(
+          tables[size_t(n)], inputs[n].source, int64_t(z) * sliceVoxels + first, count, out + first * 4, 4, n > 0);
+      }
     }
   };
   return streamLevel(dims, spacing, origin, level, filter, classifySlice, peakWorkBytes, false);
@@ -868,17 +986,9 @@ void classifyScalars(const ChannelSource& src, const int dims[3], const Transfer
   {
     throw std::invalid_argument("mcvol: classifyScalars needs input data and an output array");
   }
-  if (src.format != ChannelFormat::Scalar)
-  {
-    throw std::invalid_argument("mcvol: classifyScalars classifies scalar channels; this one is already classified");
-  }
   if (src.stride < 1 || outStride < 4)
   {
     throw std::invalid_argument("mcvol: classifyScalars needs an input stride >= 1 and an output stride >= 4");
-  }
-  if (int(src.type) < int(ScalarType::UInt8) || int(src.type) > int(ScalarType::Float64))
-  {
-    throw std::invalid_argument("mcvol: classifyScalars: unknown scalar type");
   }
   for (int a = 0; a < 3; ++a)
   {
@@ -887,68 +997,18 @@ void classifyScalars(const ChannelSource& src, const int dims[3], const Transfer
       throw std::invalid_argument("mcvol: classifyScalars: the volume has an empty extent");
     }
   }
-  const size_t K = tf.opacity.size();
-  if (K < 2 || tf.rgb.size() != 3 * K || !(tf.unitDistance > 0.f) || !std::isfinite(tf.unitDistance) ||
-    !std::isfinite(tf.scalarMin) || !std::isfinite(tf.scalarMax) || !(tf.scalarMax >= tf.scalarMin))
-  {
-    throw std::invalid_argument("mcvol: classifyScalars: the transfer function needs >= 2 entries, 3 colour values "
-                                "per entry, a positive unit distance and a finite range");
-  }
-  // The table as Scene builds it: (r, g, b, extinction) per texel.
-  std::vector<float> table(K * 4);
-  for (size_t i = 0; i < K; ++i)
-  {
-    if (!std::isfinite(tf.opacity[i]) || !std::isfinite(tf.rgb[3 * i]) || !std::isfinite(tf.rgb[3 * i + 1]) ||
-      !std::isfinite(tf.rgb[3 * i + 2]))
-    {
-      throw std::invalid_argument("mcvol: classifyScalars: the transfer function has a non-finite entry");
-    }
-    for (int c = 0; c < 3; ++c)
-    {
-      table[4 * i + size_t(c)] = std::min(std::max(tf.rgb[3 * i + size_t(c)], 0.f), 1.f);
-    }
-    table[4 * i + 3] = opacityToExtinction(tf.opacity[i], tf.unitDistance);
-  }
-  double width = tf.scalarMax - tf.scalarMin;
-  const double minWidth = std::max(1e-30, 1e-6 * std::fabs(tf.scalarMin - src.offset));
-  if (!(width >= minWidth))
-  {
-    width = minWidth;
-  }
-  const double scale = double(K - 1) / width;
+  const ClassifyTable table = makeClassifyTable(src, tf);
   const int64_t n = int64_t(voxelsOf(dims));
-  visitScalarType(src.type,
-    [&](auto tag)
-    {
-      using T = typename decltype(tag)::type;
-      const T* in = static_cast<const T*>(src.data);
+  // Blocks of voxels, one thread each (the per-voxel work is the same).
+  constexpr int64_t kBlock = 4096;
+  const int64_t blocks = (n + kBlock - 1) / kBlock;
 #pragma omp parallel for schedule(static)
-      for (int64_t v = 0; v < n; ++v)
-      {
-        const double s = double(in[v * src.stride]);
-        float* y = out + v * outStride;
-        float r[4] = { 0.f, 0.f, 0.f, 0.f };
-        double x = (s - tf.scalarMin) * scale;
-        if (x == x)
-        {
-          x = std::min(std::max(x, 0.0), double(K - 1));
-          size_t i = size_t(x);
-          i = i > K - 2 ? K - 2 : i;
-          const float f = float(x - double(i));
-          const float* a = table.data() + i * 4;
-          const float* b = a + 4;
-          const float sigma = a[3] + f * (b[3] - a[3]);
-          r[0] = sigma;
-          for (int c = 0; c < 3; ++c)
-          {
-            r[c + 1] = sigma * (a[c] + f * (b[c] - a[c]));
-          }
-        }
-        for (int c = 0; c < 4; ++c)
-        {
-          y[c] = accumulate ? y[c] + r[c] : r[c];
-        }
-      }
-    });
+  for (int64_t blk = 0; blk < blocks; ++blk)
+  {
+    const int64_t first = blk * kBlock;
+    const int64_t count = std::min(kBlock, n - first);
+    classifyRange(table, src, first, count, out + first * outStride, outStride, accumulate);
+  }
 }
+
 } // namespace mcvol
