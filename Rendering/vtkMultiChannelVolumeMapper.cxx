@@ -41,6 +41,7 @@
 namespace
 {
 constexpr int kMaxChannels = vtkMultiChannelVolumeMapper::MAX_CHANNELS;
+static_assert(kMaxChannels == mcvol::kMaxChannels, "channel limits of mapper and core differ");
 
 /// What a render's levels of detail depend on: the channels (their data and
 /// values), the transfer-function tables (scalar channels), the filter and
@@ -59,7 +60,6 @@ mcvol::adapter::LevelOfDetailCache::Key LevelKey(const mcvol::adapter::BoundChan
   key.Summed = summed;
   return key;
 }
-static_assert(kMaxChannels == mcvol::kMaxChannels, "channel limits of mapper and core differ");
 } // namespace
 
 /**
