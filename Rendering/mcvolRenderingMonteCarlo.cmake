@@ -39,6 +39,7 @@ set(_mcvol_stages
   ChannelBinding
   DependentComponents
   FrameCompositor
+  LevelOfDetail
   RenderBackend
   TransferFunctionTables
   View)

@@ -1,11 +1,14 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "vtkMultiChannelVolumeMapper.h"
 
+#include "vtkCamera.h"
 #include "vtkColorTransferFunction.h"
 #include "vtkDataArray.h"
 #include "vtkFloatArray.h"
 #include "vtkImageData.h"
 #include "vtkMath.h"
+#include "vtkMatrix3x3.h"
+#include "vtkMatrix4x4.h"
 #include "vtkObjectFactory.h"
 #include "vtkOpenGLRenderWindow.h"
 #include "vtkPiecewiseFunction.h"
@@ -18,6 +21,7 @@
 #include "VTK/ChannelBinding.h"
 #include "VTK/DependentComponents.h"
 #include "VTK/FrameCompositor.h"
+#include "VTK/LevelOfDetail.h"
 #include "VTK/RenderBackend.h"
 #include "VTK/TransferFunctionTables.h"
 #include "VTK/View.h"
@@ -30,6 +34,7 @@
 #include <chrono>
 #include <cmath>
 #include <exception>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -37,6 +42,24 @@ namespace
 {
 constexpr int kMaxChannels = vtkMultiChannelVolumeMapper::MAX_CHANNELS;
 static_assert(kMaxChannels == mcvol::kMaxChannels, "channel limits of mapper and core differ");
+
+/// What a render's levels of detail depend on: the channels (their data and
+/// values), the transfer-function tables (scalar channels), the filter and
+/// whether the channels are summed.
+mcvol::adapter::LevelOfDetailCache::Key LevelKey(const mcvol::adapter::BoundChannels& channels, bool classified,
+  unsigned long long tablesVersion, int filter, bool summed)
+{
+  mcvol::adapter::LevelOfDetailCache::Key key;
+  key.Sources.assign(channels.Sources.begin(), channels.Sources.begin() + channels.Count);
+  std::copy(channels.Dims, channels.Dims + 3, key.Dims);
+  key.DataMTime = channels.DataMTime;
+  // Dependent components: the classified copy's time already covers its
+  // functions; scalar channels: the tables given to level 0's Scene.
+  key.TablesVersion = classified ? 0 : tablesVersion;
+  key.Filter = filter;
+  key.Summed = summed;
+  return key;
+}
 } // namespace
 
 /**
@@ -63,6 +86,13 @@ struct vtkMultiChannelVolumeMapper::vtkInternals
   mcvol::adapter::RenderBackend Backend;
   mcvol::adapter::Accumulation Accumulation;
   mcvol::adapter::FrameCompositor Compositor;
+  // Levels of detail: the levels built, and the Scene that renders one
+  // (its own, so that level 0's Scene keeps its grids for the way back).
+  mcvol::adapter::LevelOfDetailCache Levels;
+  mcvol::Scene LevelScene;
+  unsigned long long LevelSceneVersion = 0; // the level LevelScene holds (0: none)
+  std::string LevelReport = "no render yet";
+  std::string LevelWarning; // the last case warned about (warned once)
   std::vector<float> Depth; // this render's depth buffer (reused storage)
 
   // Samples per pixel of the batch being traced (0: SamplesPerPixel).
@@ -89,6 +119,8 @@ struct vtkMultiChannelVolumeMapper::vtkInternals
   {
     this->Data.Forget();
     this->Tables.Forget();
+    this->Levels.Clear();
+    this->LevelSceneVersion = 0;
   }
 };
 
@@ -363,6 +395,81 @@ int vtkMultiChannelVolumeMapper::GetNumberOfClassifications()
 double vtkMultiChannelVolumeMapper::GetClassifiedMemory()
 {
   return static_cast<double>(this->Internals->Dependent.Bytes());
+}
+
+//------------------------------------------------------------------------------
+void vtkMultiChannelVolumeMapper::SetLevelOfDetail(int level)
+{
+  if (level < LEVEL_OF_DETAIL_AUTOMATIC)
+  {
+    vtkErrorMacro(
+      "SetLevelOfDetail: " << level << " is not a level: 0 is full resolution, L > 0 level L, -1 automatic.");
+    return;
+  }
+  if (this->LevelOfDetail != level)
+  {
+    this->LevelOfDetail = level;
+    this->Modified();
+  }
+}
+
+//------------------------------------------------------------------------------
+int vtkMultiChannelVolumeMapper::GetNumberOfLevelsOfDetail()
+{
+  if (this->GetNumberOfInputConnections(0) == 0)
+  {
+    return 0;
+  }
+  this->GetInputAlgorithm()->Update();
+  vtkImageData* image = vtkImageData::SafeDownCast(this->GetInput());
+  if (!image)
+  {
+    return 0;
+  }
+  int extent[6];
+  image->GetExtent(extent);
+  const int dims[3] = { extent[1] - extent[0] + 1, extent[3] - extent[2] + 1, extent[5] - extent[4] + 1 };
+  if (dims[0] < 1 || dims[1] < 1 || dims[2] < 1)
+  {
+    return 0;
+  }
+  return mcvol::maxPyramidLevels(dims);
+}
+
+//------------------------------------------------------------------------------
+const char* vtkMultiChannelVolumeMapper::GetLevelOfDetailReport()
+{
+  return this->Internals->LevelReport.c_str();
+}
+
+//------------------------------------------------------------------------------
+const char* vtkMultiChannelVolumeMapper::GetLevelOfDetailFilterAsString()
+{
+  return mcvol::toString(static_cast<mcvol::DownsampleFilter>(this->LevelOfDetailFilter));
+}
+
+//------------------------------------------------------------------------------
+int vtkMultiChannelVolumeMapper::GetNumberOfLevelOfDetailBuilds()
+{
+  return this->Internals->Levels.Builds();
+}
+
+//------------------------------------------------------------------------------
+double vtkMultiChannelVolumeMapper::GetLevelOfDetailMemory()
+{
+  return static_cast<double>(this->Internals->Levels.Bytes());
+}
+
+//------------------------------------------------------------------------------
+double vtkMultiChannelVolumeMapper::GetLastLevelOfDetailBuildTime()
+{
+  return this->Internals->Levels.LastBuildSeconds();
+}
+
+//------------------------------------------------------------------------------
+double vtkMultiChannelVolumeMapper::GetLastLevelOfDetailBuildMemory()
+{
+  return static_cast<double>(this->Internals->Levels.LastWorkBytes());
 }
 
 //------------------------------------------------------------------------------
@@ -676,6 +783,12 @@ struct vtkMultiChannelVolumeMapper::RenderPass
   mcvol::adapter::ChannelFunctionSet Functions;
   /// IndependentComponentsOff: Channels is the one pre-classified channel.
   bool Classified = false;
+  /// The level of detail rendered, whether its channels are summed, its
+  /// data (level > 0), and the Scene traced (level 0's or the level's).
+  int Level = 0;
+  bool SumChannels = false;
+  const mcvol::adapter::LevelOfDetailCache::Level* LevelData = nullptr;
+  mcvol::Scene* Scene = nullptr;
   vtkMTimeType LightsMTime = 0;
   mcvol::adapter::Viewport Viewport;
   vtkOpenGLRenderWindow* Window = nullptr;
@@ -699,6 +812,7 @@ void vtkMultiChannelVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
     !this->ClassifyDependentComponents(pass) || // IndependentComponentsOff: RGBA -> one classified channel
     !this->ResolveTransferFunctions(pass) ||    // VTK functions of each channel
     !this->EnsureBackend() ||                   // CPU or CUDA renderer
+    !this->ChooseLevelOfDetail(pass) ||         // level asked for, automatic, or the one that fits
     !this->UpdateScene(pass) ||                 // volume, tables, grids, settings, lights
     !this->SetUpView(pass))                     // camera rays, depth of opaque geometry
   {
@@ -710,6 +824,8 @@ void vtkMultiChannelVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
     return;
   }
   this->NumberOfChannels = pass.Channels.Count;
+  this->LastLevelOfDetail = pass.Level;
+  this->LastLevelOfDetailChannels = pass.LevelData ? static_cast<int>(pass.LevelData->Channels.size()) : 0;
   this->DrawImage(pass); // the mean so far, over the framebuffer
 }
 
@@ -831,7 +947,8 @@ bool vtkMultiChannelVolumeMapper::UpdateScene(RenderPass& pass)
     // A device backend builds macrocells and majorants itself from its own
     // copy of the data; the host then spends neither time nor memory on them.
     mcvol::Renderer* renderer = in.Backend.Get();
-    in.Scene.setHostAcceleration(!renderer || !renderer->buildsAccelerationOnDevice());
+    const bool hostAcceleration = !renderer || !renderer->buildsAccelerationOnDevice();
+    in.Scene.setHostAcceleration(hostAcceleration);
     in.Data.Update(in.Scene, pass.Image, pass.Channels, [&in] { in.Tables.Forget(); });
     if (pass.Classified)
     {
@@ -845,23 +962,46 @@ bool vtkMultiChannelVolumeMapper::UpdateScene(RenderPass& pass)
       in.Dependent.Release();
       this->LastTransferFunctionUpdates = in.Tables.Update(in.Scene, pass.Functions, numChannels,
         this->TransferFunctionRangeMode == FUNCTION_RANGE, [&in](int c) { return in.Data.Range(c); });
+      // Visibility optimization: importance over the colour tables' ranges
+      // (before the levels, which key on the tables' version).
+      in.Tables.UpdateImportance(in.Functions, numChannels);
     }
+
+    // Level 0 renders the Scene of the data; a level L > 0 its own Scene of
+    // pre-classified channels (level 0's grids are not built meanwhile).
+    pass.Scene = &in.Scene;
+    if (pass.Level > 0)
+    {
+      this->UpdateLevelScene(pass);
+      in.LevelScene.setHostAcceleration(hostAcceleration);
+    }
+    else
+    {
+      // Levels kept for interaction stay while they are current; stale ones
+      // (new data or functions) would be rebuilt anyway: free them now.
+      in.Levels.DropIfStale(
+        LevelKey(pass.Channels, pass.Classified, in.Tables.Version(), this->LevelOfDetailFilter, pass.SumChannels));
+    }
+    mcvol::Scene& scene = *pass.Scene;
+    const int sceneChannels = scene.numChannels();
 
     // The Scene's setters are cheap and rebuild nothing unless a value
     // changed (a new macrocell size marks the grids for update()).
-    in.Scene.setMacrocellSize(this->MacrocellSize);
-    in.Scene.setBlendMode(static_cast<mcvol::BlendMode>(this->ChannelBlendMode));
+    scene.setMacrocellSize(this->MacrocellSize);
+    scene.setBlendMode(static_cast<mcvol::BlendMode>(this->ChannelBlendMode));
     // vtkVolumeProperty's interpolation type, as VTK's own mappers use it (a
     // property change resets the accumulation through its MTime).
-    in.Scene.setNearestInterpolation(pass.Property->GetInterpolationType() == VTK_NEAREST_INTERPOLATION);
+    scene.setNearestInterpolation(pass.Property->GetInterpolationType() == VTK_NEAREST_INTERPOLATION);
     std::array<float, kMaxChannels> weights{};
-    for (int c = 0; c < numChannels; ++c)
+    for (int c = 0; c < sceneChannels; ++c)
     {
       weights[c] = static_cast<float>(in.MixWeights[c]);
     }
-    in.Scene.setMixWeights(weights.data(), numChannels);
-    in.Scene.setMixAverage(this->MixColorMode == MIX_AVERAGE);
+    scene.setMixWeights(weights.data(), sceneChannels);
+    scene.setMixAverage(this->MixColorMode == MIX_AVERAGE);
     // Lighting: only with ShadeOn (the lights' state joins the reset key).
+    // Summed channels are summed only when their albedos and anisotropies
+    // agree (SumsChannelsAtLevels), so channel 0's stand for all.
     mcvol::adapter::LightingSettings lighting;
     lighting.AmbientRadiance = this->AmbientRadiance;
     lighting.Albedo = in.Albedo.data();
@@ -871,16 +1011,12 @@ bool vtkMultiChannelVolumeMapper::UpdateScene(RenderPass& pass)
     lighting.MaxScatteringDepth = this->MaxScatteringDepth;
     lighting.GradientShading = this->GradientShading;
     lighting.Shininess = this->Shininess;
-    in.Scene.setLighting(
-      mcvol::adapter::CollectLighting(pass.Renderer, pass.Property, lighting, numChannels, pass.LightsMTime));
-    // Visibility optimization: importance over the colour tables' ranges.
-    if (!pass.Classified)
-    {
-      in.Tables.UpdateImportance(in.Functions, numChannels);
-    }
+    scene.setLighting(
+      mcvol::adapter::CollectLighting(pass.Renderer, pass.Property, lighting, sceneChannels, pass.LightsMTime));
     mcvol::ImportanceDesc importance;
-    importance.enabled = this->VisibilityOptimization;
-    // A pre-classified channel has no scalar to look importance up by.
+    // A pre-classified channel (dependent components, or any level above 0)
+    // has no scalar to look importance up by.
+    importance.enabled = this->VisibilityOptimization && pass.Level == 0;
     if (importance.enabled && !pass.Classified)
     {
       importance.tables = in.Tables.ImportanceTables();
@@ -893,16 +1029,161 @@ bool vtkMultiChannelVolumeMapper::UpdateScene(RenderPass& pass)
     importance.samplesPerPass = this->ImportanceSamples;
     importance.lightRays = this->OptimizeLightRays;
     importance.lightRaySamples = this->LightRayImportanceSamples;
-    in.Scene.setImportance(importance);
-    in.Scene.update();
+    scene.setImportance(importance);
+    scene.update();
   }
   catch (const std::exception& e)
   {
-    vtkErrorMacro("Could not set up the volume: " << e.what());
+    vtkErrorMacro(
+      "Could not set up the volume" << (pass.Level > 0 ? " at its level of detail" : "") << ": " << e.what());
     in.ForgetVolume();
     in.Accumulation.Invalidate();
     return false;
   }
+  return true;
+}
+
+//------------------------------------------------------------------------------
+bool vtkMultiChannelVolumeMapper::SumsChannelsAtLevels(RenderPass& pass)
+{
+  if (pass.Classified || pass.Channels.Count < 2 || this->ChannelBlendMode != MC_DENSITY_BLEND)
+  {
+    return false;
+  }
+  vtkVolumeProperty* property = pass.Volume->GetProperty();
+  if (property && property->GetShade())
+  {
+    // Lit: a collision scatters with its channel's albedo and phase
+    // function; a sum keeps only one of each.
+    const vtkInternals& in = *this->Internals;
+    for (int c = 1; c < pass.Channels.Count; ++c)
+    {
+      if (in.Albedo[c] != in.Albedo[0] || in.Anisotropy[c] != in.Anisotropy[0])
+      {
+        return false;
+      }
+    }
+  }
+  return true;
+}
+
+//------------------------------------------------------------------------------
+bool vtkMultiChannelVolumeMapper::ChooseLevelOfDetail(RenderPass& pass)
+{
+  vtkInternals& in = *this->Internals;
+  pass.SumChannels = this->SumsChannelsAtLevels(pass);
+  const int outChannels = pass.SumChannels ? 1 : pass.Channels.Count;
+  mcvol::adapter::LevelPolicy policy;
+  policy.Requested = this->LevelOfDetail;
+  policy.MemoryBudget = this->MemoryBudget;
+  // The CUDA backend copies the channels (float64 as float32).
+  policy.DeviceCopy = in.Backend.ActiveName(this->UsesRenderBackend(), this->Backend) == "cuda";
+
+  // Level 0's voxel size in world units per axis: spacing, direction and
+  // the volume's matrix.
+  double worldSpacing[3] = { 1.0, 1.0, 1.0 };
+  double footprint = 0.0;
+  if (this->LevelOfDetail == LEVEL_OF_DETAIL_AUTOMATIC)
+  {
+    vtkMatrix4x4* prop = pass.Volume->GetMatrix();
+    vtkMatrix3x3* direction = pass.Image->GetDirectionMatrix();
+    const double* spacing = pass.Image->GetSpacing();
+    for (int a = 0; a < 3; ++a)
+    {
+      double w[3] = { 0.0, 0.0, 0.0 };
+      for (int r = 0; r < 3; ++r)
+      {
+        for (int k = 0; k < 3; ++k)
+        {
+          w[r] += prop->GetElement(r, k) * direction->GetElement(k, a) * spacing[a];
+        }
+      }
+      worldSpacing[a] = vtkMath::Norm(w);
+    }
+    // The world size of one pixel where the volume is.
+    const mcvol::adapter::Viewport viewport = mcvol::adapter::GetViewport(pass.Renderer);
+    vtkCamera* camera = pass.Renderer->GetActiveCamera();
+    const int pixels = camera->GetUseHorizontalViewAngle() ? viewport.Width : viewport.Height;
+    double bounds[6];
+    pass.Volume->GetBounds(bounds);
+    const double centre[3] = { 0.5 * (bounds[0] + bounds[1]), 0.5 * (bounds[2] + bounds[3]),
+      0.5 * (bounds[4] + bounds[5]) };
+    if (pixels < 1)
+    {
+      footprint = 0.0;
+    }
+    else if (camera->GetParallelProjection())
+    {
+      footprint = 2.0 * camera->GetParallelScale() / pixels;
+    }
+    else
+    {
+      const double d = std::sqrt(vtkMath::Distance2BetweenPoints(camera->GetPosition(), centre));
+      footprint = 2.0 * d * std::tan(vtkMath::RadiansFromDegrees(camera->GetViewAngle()) / 2.0) / pixels;
+    }
+  }
+  mcvol::adapter::LevelChoice choice;
+  try
+  {
+    choice = mcvol::adapter::ChooseLevel(policy, pass.Channels, outChannels, footprint, worldSpacing);
+  }
+  catch (const std::exception& e)
+  {
+    vtkErrorMacro("Could not choose the level of detail: " << e.what());
+    return false;
+  }
+  pass.Level = choice.Level;
+  in.LevelReport = choice.Report;
+  if (choice.Level > 0 && this->VisibilityOptimization)
+  {
+    in.LevelReport += "; the visibility optimization is off at levels above 0";
+  }
+  if (choice.Clamped || choice.Fallback)
+  {
+    // Once per case, not every frame (a progressive image renders many).
+    std::ostringstream key;
+    key << this->LevelOfDetail << " " << choice.Wanted << " " << choice.Level << " " << this->MemoryBudget << " "
+        << policy.DeviceCopy;
+    if (key.str() != in.LevelWarning)
+    {
+      in.LevelWarning = key.str();
+      vtkWarningMacro("Level of detail: " << in.LevelReport);
+    }
+  }
+  else
+  {
+    in.LevelWarning.clear();
+  }
+  return true;
+}
+
+//------------------------------------------------------------------------------
+bool vtkMultiChannelVolumeMapper::UpdateLevelScene(RenderPass& pass)
+{
+  vtkInternals& in = *this->Internals;
+  const mcvol::adapter::LevelOfDetailCache::Key key =
+    LevelKey(pass.Channels, pass.Classified, in.Tables.Version(), this->LevelOfDetailFilter, pass.SumChannels);
+  std::vector<const mcvol::TransferFunctionDesc*> tables;
+  if (!pass.Classified)
+  {
+    for (int c = 0; c < pass.Channels.Count; ++c)
+    {
+      tables.push_back(&in.Tables.Table(c));
+    }
+  }
+  const mcvol::adapter::LevelOfDetailCache::Level& level = in.Levels.Get(key, pass.Level, pass.Channels, tables);
+  pass.LevelData = &level;
+  if (level.Version != in.LevelSceneVersion)
+  {
+    std::vector<mcvol::ChannelSource> sources;
+    for (const mcvol::PyramidLevel& channel : level.Channels)
+    {
+      sources.push_back(channel.source());
+    }
+    in.LevelScene.setVolume(level.Channels[0].dims, static_cast<int>(sources.size()), sources.data());
+    in.LevelSceneVersion = level.Version;
+  }
+  pass.Scene = &in.LevelScene;
   return true;
 }
 
@@ -927,6 +1208,12 @@ bool vtkMultiChannelVolumeMapper::SetUpView(RenderPass& pass)
   {
     vtkErrorMacro(<< error);
     return false;
+  }
+  if (pass.LevelData)
+  {
+    // Rays into the level's index space, so that its image lines up with
+    // level 0's.
+    mcvol::adapter::ApplyToCamera(pass.LevelData->Channels[0], pass.Camera);
   }
   std::vector<float>& depth = this->Internals->Depth;
   if (!mcvol::adapter::HasOpaqueGeometry(pass.Renderer))
@@ -966,6 +1253,8 @@ void vtkMultiChannelVolumeMapper::UpdateAccumulation(RenderPass& pass)
   std::copy(std::begin(pass.Camera.invViewProj), std::end(pass.Camera.invViewProj), key.InvViewProj);
   std::copy(std::begin(pass.Camera.worldToIndex), std::end(pass.Camera.worldToIndex), key.WorldToIndex);
   key.Backend = in.Backend.Get();
+  key.Level = pass.Level;
+  key.LevelVersion = pass.LevelData ? pass.LevelData->Version : 0;
   if (in.Accumulation.Update(key, in.Depth, in.Accum))
   {
     in.EstimateCurrent = false;
@@ -997,7 +1286,8 @@ bool vtkMultiChannelVolumeMapper::TraceBatch(RenderPass& pass)
   std::string error;
   in.BatchSamples = batch;
   const auto start = std::chrono::steady_clock::now();
-  const bool ok = this->TraceImage(in.Scene, pass.Camera, in.Accumulation.Depth(), in.Backend.Get(), in.Accum, error);
+  const bool ok =
+    this->TraceImage(*pass.Scene, pass.Camera, in.Accumulation.Depth(), in.Backend.Get(), in.Accum, error);
   this->LastTraceTime = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   in.EstimateCurrent = false;
   if (ok && this->AddsSamples())
@@ -1062,6 +1352,15 @@ void vtkMultiChannelVolumeMapper::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "LastTransferFunctionUpdates: " << this->LastTransferFunctionUpdates << "\n";
   os << indent << "NumberOfClassifications: " << in.Dependent.Classifications() << "\n";
   os << indent << "ClassifiedMemory: " << in.Dependent.Bytes() << " bytes\n";
+  os << indent << "LevelOfDetail: " << this->LevelOfDetail
+     << (this->LevelOfDetail == LEVEL_OF_DETAIL_AUTOMATIC ? " (automatic)" : "") << "\n";
+  os << indent << "LevelOfDetailFilter: " << this->GetLevelOfDetailFilterAsString() << "\n";
+  os << indent << "MemoryBudget: " << this->MemoryBudget << " bytes" << (this->MemoryBudget > 0.0 ? "" : " (no cap)")
+     << "\n";
+  os << indent << "LastLevelOfDetail: " << this->LastLevelOfDetail << "\n";
+  os << indent << "LevelOfDetailReport: " << in.LevelReport << "\n";
+  os << indent << "NumberOfLevelOfDetailBuilds: " << in.Levels.Builds() << "\n";
+  os << indent << "LevelOfDetailMemory: " << in.Levels.Bytes() << " bytes\n";
   os << indent << "ChannelArrays:";
   if (in.ChannelArrayNames.empty())
   {

@@ -60,6 +60,12 @@
  * component renders as with IndependentComponentsOn; 3 components, or
  * channel arrays listed with AddChannelArray, are an error.
  *
+ * Levels of detail (SetLevelOfDetail: 0 full resolution, the default; L > 0
+ * a pre-classified copy with every axis halved L times; -1 automatic by the
+ * pixel footprint) trade resolution for speed and memory, and
+ * SetMemoryBudget makes a volume that does not fit render from the finest
+ * level that does (GetLevelOfDetailReport() says which and why).
+ *
  * How channels combine is SetChannelBlendMode (density, max, mix, composite).
  * This is separate from, and ignores, vtkVolumeMapper::SetBlendMode.
  * The vtkVolumeProperty's interpolation type (nearest or linear) selects
@@ -557,6 +563,131 @@ public:
   double GetClassifiedMemory();
   ///@}
 
+  enum LevelOfDetailModes
+  {
+    /// SetLevelOfDetail(LEVEL_OF_DETAIL_AUTOMATIC): the footprint rule.
+    LEVEL_OF_DETAIL_AUTOMATIC = -1
+  };
+
+  enum LevelOfDetailFilters
+  {
+    LOD_FILTER_BOX2 = 0,
+    LOD_FILTER_BOX4 = 1,
+    LOD_FILTER_BSPLINE = 2
+  };
+
+  ///@{
+  /**
+   * Levels of detail (issue 13; Kraus and Buerger, "Interpolating and
+   * Downsampling RGBA Volume Data", Sec. 4). Level 0 (the default) renders
+   * the data as they are. Level L > 0 renders a pre-classified copy of the
+   * volume with every axis halved L times: each scalar channel goes through
+   * the same transfer-function table level 0 uses, into extinction and
+   * extinction-weighted colour (sigma, sigma r, sigma g, sigma b), and that
+   * is downsampled (extinction, never opacity, is averaged: a thin opaque
+   * wall keeps its opacity). The level is built by streaming level 0 z-slab
+   * by z-slab (the full-resolution classified volume is never allocated),
+   * then kept until the data, a transfer function, the volume property's
+   * functions or unit distance, the filter or the channel grouping change;
+   * camera moves and progressive renders reuse it
+   * (GetNumberOfLevelOfDetailBuilds()). A change of the level restarts the
+   * progressive image.
+   *
+   * Channel grouping: with MC_DENSITY_BLEND the channels are summed into
+   * one pre-classified channel (Eq. 6/7: extinctions and extinction-
+   * weighted colours add, so this is the density blend exactly at the
+   * voxels), unless the volume is lit with per-channel albedos or
+   * anisotropies that differ (a sum would lose which channel scatters how).
+   * The other blend modes (max, mix, composite) need each channel's own
+   * extinction: every channel gets its own pre-classified channel (16 bytes
+   * a voxel each at the level). Dependent components
+   * (IndependentComponentsOff) are one classified channel already.
+   *
+   * The level's voxel j along an axis sits, in level 0's index space, at
+   * (2^L - 1) / 2 + 2^L j (cell-centred, Pyramid.h), and the rays are mapped
+   * into the level's index space with that geometry, so a level-L image lines
+   * up with level 0's; the level's box is (2^L - 1) / 2 level-0 voxels
+   * smaller on each side (its outermost voxel centres).
+   *
+   * Values: 0 full resolution; L > 0 level L (above
+   * GetNumberOfLevelsOfDetail() it is clamped to the coarsest level, with a
+   * warning once and the reason in GetLevelOfDetailReport()); -1
+   * (LEVEL_OF_DETAIL_AUTOMATIC) the footprint rule: L = floor(log2(f / s)),
+   * clamped to [0, levels], f the world size of one pixel at the distance
+   * from the camera to the centre of the volume's bounds (perspective:
+   * 2 d tan(viewAngle / 2) / viewport height in pixels; parallel projection:
+   * 2 parallelScale / height) and s the finest world spacing of level 0
+   * (the image's spacing, direction and the volume's matrix included), so a
+   * voxel of the chosen level covers about one pixel. Values below -1 are an
+   * error and are ignored.
+   *
+   * Not at levels above 0: the visibility optimization (a pre-classified
+   * channel has no scalar to look importance up by).
+   */
+  void SetLevelOfDetail(int level);
+  vtkGetMacro(LevelOfDetail, int);
+  /// Levels available above 0 for the current input (every axis halved
+  /// until it is one voxel: 9 for 512^3); 0 without a valid image input.
+  int GetNumberOfLevelsOfDetail();
+  /// The level the last render used (0 before any render).
+  vtkGetMacro(LastLevelOfDetail, int);
+  /// One sentence on the last render's level and why: requested, clamped,
+  /// the automatic footprint (with its numbers), or the memory fallback.
+  const char* GetLevelOfDetailReport();
+  ///@}
+
+  ///@{
+  /**
+   * The downsampling filter of the levels (Kraus and Buerger, Sec. 4.2):
+   * LOD_FILTER_BOX4 (default), the 4-tap box, the paper's recommended
+   * compromise for trilinear sampling; LOD_FILTER_BOX2, the 2x2x2 box of
+   * mipmaps; LOD_FILTER_BSPLINE, (13 19 19 13)/64 for B-spline sampling. A
+   * change rebuilds the levels.
+   */
+  vtkSetClampMacro(LevelOfDetailFilter, int, LOD_FILTER_BOX2, LOD_FILTER_BSPLINE);
+  vtkGetMacro(LevelOfDetailFilter, int);
+  void SetLevelOfDetailFilterToBox2() { this->SetLevelOfDetailFilter(LOD_FILTER_BOX2); }
+  void SetLevelOfDetailFilterToBox4() { this->SetLevelOfDetailFilter(LOD_FILTER_BOX4); }
+  void SetLevelOfDetailFilterToBSpline() { this->SetLevelOfDetailFilter(LOD_FILTER_BSPLINE); }
+  const char* GetLevelOfDetailFilterAsString();
+  ///@}
+
+  ///@{
+  /**
+   * Memory budget of the volume in bytes (0, the default: no cap). Where the
+   * level asked for (0, L or the automatic one) needs more, the finest
+   * coarser level that fits is rendered instead, GetLevelOfDetailReport()
+   * says so and a warning is given once per distinct case (not every frame);
+   * where none fits, the coarsest level is rendered with that warning. What
+   * counts is the volume as the backend holds it: level 0 the channels as
+   * they are (native type; the CPU reads them in place, the CUDA backend
+   * holds each channel once with float64 as float32; the classified copy
+   * of dependent components is 16 bytes a voxel), a level L > 0 16 bytes a
+   * voxel per pre-classified channel. The streamed build's
+   * working memory (a few slices, GetLastLevelOfDetailBuildMemory()) and the
+   * acceleration grids are not counted. The CUDA device's free memory is not
+   * queried (the backend API has no call for it): set the budget to what
+   * the device can hold.
+   */
+  vtkSetClampMacro(MemoryBudget, double, 0.0, VTK_DOUBLE_MAX);
+  vtkGetMacro(MemoryBudget, double);
+  ///@}
+
+  ///@{
+  /**
+   * The levels' cost: how many levels the mapper built since it was
+   * created, the bytes of the levels it keeps, and the last build's seconds
+   * and peak working memory (bytes besides the level itself).
+   */
+  int GetNumberOfLevelOfDetailBuilds();
+  double GetLevelOfDetailMemory();
+  double GetLastLevelOfDetailBuildTime();
+  double GetLastLevelOfDetailBuildMemory();
+  /// Pre-classified channels of the last render's level (1 when summed; 0
+  /// at level 0).
+  vtkGetMacro(LastLevelOfDetailChannels, int);
+  ///@}
+
   /**
    * Samples per pixel accumulated in the current image.
    */
@@ -739,6 +870,11 @@ protected:
   int LightRayImportanceSamples = 200;
   int NumberOfChannels = 0;
   int LastTransferFunctionUpdates = 0;
+  int LevelOfDetail = 0;
+  int LevelOfDetailFilter = LOD_FILTER_BOX4;
+  double MemoryBudget = 0.0;
+  int LastLevelOfDetail = 0;
+  int LastLevelOfDetailChannels = 0;
 
 private:
   vtkMultiChannelVolumeMapper(const vtkMultiChannelVolumeMapper&) = delete;
@@ -754,7 +890,12 @@ private:
   bool ClassifyDependentComponents(RenderPass& pass);
   bool ResolveTransferFunctions(RenderPass& pass);
   bool EnsureBackend();
+  bool ChooseLevelOfDetail(RenderPass& pass);
   bool UpdateScene(RenderPass& pass);
+  /// Level > 0: the level's channels (built or cached) into LevelScene.
+  bool UpdateLevelScene(RenderPass& pass);
+  /// Whether the level sums the channels into one (density blend).
+  bool SumsChannelsAtLevels(RenderPass& pass);
   bool SetUpView(RenderPass& pass);
   void UpdateAccumulation(RenderPass& pass);
   bool TraceBatch(RenderPass& pass);

@@ -119,6 +119,12 @@ def main(argv=None):
     parser.add_argument("--size", type=parse_size, metavar="WxH", help="image size (overrides image_size)")
     parser.add_argument("--backend", choices=BACKENDS, help="overrides backend")
     parser.add_argument(
+        "--level-of-detail",
+        type=int,
+        metavar="L",
+        help="render pyramid level L (0 = full resolution, -1 = automatic; overrides level_of_detail)",
+    )
+    parser.add_argument(
         "--reference",
         action="store_true",
         help="render with the ray-marching reference (vtkMultiChannelRayMarchMapper) instead of Monte Carlo",
@@ -189,6 +195,12 @@ def main(argv=None):
             scene["image_size"] = args.size
         if args.backend is not None:
             scene["backend"] = args.backend
+        if args.level_of_detail is not None:
+            if args.level_of_detail < -1:
+                print("%s: --level-of-detail: %d is not a level (0, L > 0, or -1 automatic)"
+                      % (PROG, args.level_of_detail), file=sys.stderr)
+                return 2
+            scene["level_of_detail"] = args.level_of_detail
         if args.reference:
             scene["renderer"] = "raymarch"
         if args.step is not None:

@@ -5,10 +5,12 @@
 #include "vtkDataArray.h"
 #include "vtkDiscretizableColorTransferFunction.h"
 #include "vtkImageData.h"
+#include "vtkInformation.h"
 #include "vtkMultiChannelVolumeMapper.h"
 #include "vtkMultiProcessController.h"
 #include "vtkObjectFactory.h"
 #include "vtkPVLODVolume.h"
+#include "vtkPVRenderView.h"
 #include "vtkPiecewiseFunction.h"
 #include "vtkPointData.h"
 #include "vtkScalarsToColors.h"
@@ -360,6 +362,72 @@ void vtkMultiChannelVolumeRepresentation::SetLightRayImportanceSamples(int n)
   this->GetMultiChannelMapper()->SetLightRayImportanceSamples(n);
 }
 
+void vtkMultiChannelVolumeRepresentation::SetLevelOfDetail(int level)
+{
+  // Applied in UpdateMapperParameters, which knows whether this render uses
+  // ParaView's level of detail.
+  if (level < vtkMultiChannelVolumeMapper::LEVEL_OF_DETAIL_AUTOMATIC)
+  {
+    vtkErrorMacro("LevelOfDetail " << level << " is not a level: 0 full resolution, L > 0, -1 automatic.");
+    return;
+  }
+  if (this->LevelOfDetail != level)
+  {
+    this->LevelOfDetail = level;
+    this->Modified();
+  }
+}
+
+void vtkMultiChannelVolumeRepresentation::SetInteractiveLevelOfDetail(int level)
+{
+  if (level < vtkMultiChannelVolumeMapper::LEVEL_OF_DETAIL_AUTOMATIC)
+  {
+    vtkErrorMacro("InteractiveLevelOfDetail " << level << " is not a level: L >= 1, -1 automatic, 0 the still level.");
+    return;
+  }
+  if (this->InteractiveLevelOfDetail != level)
+  {
+    this->InteractiveLevelOfDetail = level;
+    this->Modified();
+  }
+}
+
+void vtkMultiChannelVolumeRepresentation::SetLevelOfDetailFilter(int filter)
+{
+  this->GetMultiChannelMapper()->SetLevelOfDetailFilter(filter);
+}
+
+void vtkMultiChannelVolumeRepresentation::SetMemoryBudgetMiB(double mib)
+{
+  this->GetMultiChannelMapper()->SetMemoryBudget(mib > 0.0 ? mib * 1048576.0 : 0.0);
+}
+
+int vtkMultiChannelVolumeRepresentation::GetLastLevelOfDetail()
+{
+  return this->GetMultiChannelMapper()->GetLastLevelOfDetail();
+}
+
+const char* vtkMultiChannelVolumeRepresentation::GetLevelOfDetailReport()
+{
+  this->LevelOfDetailReport = this->GetMultiChannelMapper()->GetLevelOfDetailReport();
+  return this->LevelOfDetailReport.c_str();
+}
+
+//------------------------------------------------------------------------------
+int vtkMultiChannelVolumeRepresentation::ProcessViewRequest(
+  vtkInformationRequestKey* request_type, vtkInformation* inInfo, vtkInformation* outInfo)
+{
+  if (request_type == vtkPVView::REQUEST_RENDER())
+  {
+    // vtkPVRenderView sets USE_LOD for an interactive render when its LOD
+    // threshold is reached; the superclass's REQUEST_RENDER then calls
+    // UpdateMapperParameters.
+    this->RenderingWithLOD =
+      inInfo && inInfo->Has(vtkPVRenderView::USE_LOD()) && inInfo->Get(vtkPVRenderView::USE_LOD()) != 0;
+  }
+  return this->Superclass::ProcessViewRequest(request_type, inInfo, outInfo);
+}
+
 void vtkMultiChannelVolumeRepresentation::SetNumberOfChannelImportanceLevels(int n)
 {
   this->ImportanceLevels.assign(static_cast<size_t>(std::max(0, n)), 0.0);
@@ -472,6 +540,13 @@ void vtkMultiChannelVolumeRepresentation::UpdateMapperParameters()
   vtkMultiProcessController* controller = vtkMultiProcessController::GetGlobalController();
   const unsigned int rank = controller ? static_cast<unsigned int>(controller->GetLocalProcessId()) : 0u;
   mapper->SetSeed(this->Seed + 0x9E3779B9u * rank);
+
+  // ---- Level of detail: coarser while ParaView renders with its LOD ------------
+  // The mapper restarts the image only when the level really changes, so
+  // every interactive frame stays at the interactive level and the first
+  // still render goes back (and refines from there).
+  const bool interactiveLevel = this->RenderingWithLOD && this->InteractiveLevelOfDetail != 0;
+  mapper->SetLevelOfDetail(interactiveLevel ? this->InteractiveLevelOfDetail : this->LevelOfDetail);
 
   // ---- Channels -------------------------------------------------------------
   int numChannels = 0;
@@ -636,4 +711,7 @@ void vtkMultiChannelVolumeRepresentation::PrintSelf(ostream& os, vtkIndent inden
   }
   os << "\n";
   os << indent << "ChannelStatus: " << this->ChannelStatus << "\n";
+  os << indent << "LevelOfDetail: " << this->LevelOfDetail << "\n";
+  os << indent << "InteractiveLevelOfDetail: " << this->InteractiveLevelOfDetail << "\n";
+  os << indent << "RenderingWithLOD: " << this->RenderingWithLOD << "\n";
 }

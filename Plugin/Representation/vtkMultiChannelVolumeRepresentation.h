@@ -19,6 +19,17 @@
  * Every setter only forwards to the mapper: the mapper starts its running
  * mean over when a value really changes and not otherwise, so rendering again
  * with nothing changed refines the image.
+ *
+ * Levels of detail: LevelOfDetail is the mapper's level for still renders
+ * (0 full resolution, L > 0, -1 automatic). While ParaView renders with its
+ * level of detail (vtkPVRenderView::USE_LOD() in the render request: an
+ * interactive render, camera dragging, when the view's LOD threshold is
+ * reached; set the view's LODThreshold to 0 to always use it), the mapper
+ * renders InteractiveLevelOfDetail instead (default 1: 1/8 of the voxels;
+ * -1 automatic; 0: the still level, no LOD). The first still render after
+ * the interaction (the refinement timer's, pqMultiChannelRefinement) goes
+ * back to the still level, which restarts the image there, as any change of
+ * level does, and refines it from then on.
  */
 #ifndef vtkMultiChannelVolumeRepresentation_h
 #define vtkMultiChannelVolumeRepresentation_h
@@ -118,7 +129,29 @@ public:
   void SetImportanceSamples(int n);
   void SetOptimizeLightRays(bool on);
   void SetLightRayImportanceSamples(int n);
+  void SetLevelOfDetail(int level);
+  void SetLevelOfDetailFilter(int filter);
+  /// Mebibytes (the mapper's SetMemoryBudget takes bytes); 0: no cap.
+  void SetMemoryBudgetMiB(double mib);
   ///@}
+
+  ///@{
+  /**
+   * The level the mapper renders while ParaView renders with its level of
+   * detail (see the class description): L >= 1, -1 automatic, or 0 for the
+   * still level.
+   */
+  void SetInteractiveLevelOfDetail(int level);
+  vtkGetMacro(InteractiveLevelOfDetail, int);
+  ///@}
+
+  /**
+   * Notes whether this render uses ParaView's level of detail
+   * (REQUEST_RENDER with vtkPVRenderView::USE_LOD()) before the superclass
+   * hands the mapper its parameters.
+   */
+  int ProcessViewRequest(
+    vtkInformationRequestKey* request_type, vtkInformation* inInfo, vtkInformation* outInfo) override;
 
   ///@{
   /**
@@ -170,6 +203,9 @@ public:
   int GetConverged();
   int GetNumberOfChannels();
   const char* GetBackendReport();
+  /// The level of detail of the mapper's last render, and why.
+  int GetLastLevelOfDetail();
+  const char* GetLevelOfDetailReport();
   const char* GetChannelStatus() { return this->ChannelStatus.c_str(); }
   double GetImportanceMemory();
   double GetImportanceOverflows();
@@ -209,6 +245,10 @@ protected:
   vtkSmartPointer<vtkPiecewiseFunction> ImportanceFunctions[NUMBER_OF_IMPORTANCE_FUNCTIONS];
   std::string ChannelStatus;
   std::string BackendReport;
+  std::string LevelOfDetailReport;
+  int LevelOfDetail = 0;
+  int InteractiveLevelOfDetail = 1;
+  bool RenderingWithLOD = false; // this render is one with ParaView's LOD
 
 private:
   vtkMultiChannelVolumeRepresentation(const vtkMultiChannelVolumeRepresentation&) = delete;

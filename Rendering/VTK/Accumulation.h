@@ -30,6 +30,10 @@ struct AccumulationKey
   double InvViewProj[16] = {};
   double WorldToIndex[12] = {};
   const Renderer* Backend = nullptr;
+  /// The level of detail rendered (0: full resolution) and the version of
+  /// that level's data (a rebuilt level is new data).
+  int Level = 0;
+  unsigned long long LevelVersion = 0;
 
   bool operator==(const AccumulationKey& o) const;
 };

@@ -105,6 +105,10 @@ public:
   /// The Scene holds no tables any more (new volume or an error).
   void Forget();
 
+  /// The table last given to the Scene for channel c (the levels of detail
+  /// pre-classify with the same tables, so level 0 and level L agree).
+  const TransferFunctionDesc& Table(int c) const { return this->Tables[size_t(c)]; }
+
   /// Moves whenever a table given to the Scene changes (accumulation key).
   unsigned long long Version() const { return this->TablesVersion; }
 

@@ -16,6 +16,10 @@
 #include "mcvol/Pyramid.h"
 #include "mcvol/RayMarcher.h"
 
+#include <atomic>
+#ifdef _OPENMP
+#include <omp.h>
+#endif
 #include <cstdio>
 #include <limits>
 #include <stdexcept>
@@ -300,8 +304,8 @@ TEST(Classified, SlabTransmittanceMonteCarlo)
       through += h.found() ? 0 : 1;
     }
     const double z = (through - expected) / std::sqrt(var);
-    EXPECT_GT(normalTwoSided(z), kAlpha / 2) << toString(tracker) << ": " << through << " rays passed, expected "
-                                             << expected << " (z = " << z << ")";
+    EXPECT_GT(normalTwoSided(z), kAlpha / 2)
+      << toString(tracker) << ": " << through << " rays passed, expected " << expected << " (z = " << z << ")";
   }
 }
 
@@ -530,8 +534,8 @@ TEST(Pyramid, OddDimsByHand)
   }
   const std::vector<double> box2 = { 1.5, 3.5, 5.0 };
   const std::vector<double> box4 = { (1 + 1 + 2 + 3) / 4.0, (2 + 3 + 4 + 5) / 4.0, (4 + 5 + 5 + 5) / 4.0 };
-  const std::vector<double> bspl = { (13 * 1 + 19 * 1 + 19 * 2 + 13 * 3) / 64.0, (13 * 2 + 19 * 3 + 19 * 4 + 13 * 5) / 64.0,
-    (13 * 4 + 19 * 5 + 19 * 5 + 13 * 5) / 64.0 };
+  const std::vector<double> bspl = { (13 * 1 + 19 * 1 + 19 * 2 + 13 * 3) / 64.0,
+    (13 * 2 + 19 * 3 + 19 * 4 + 13 * 5) / 64.0, (13 * 4 + 19 * 5 + 19 * 5 + 13 * 5) / 64.0 };
   const std::pair<DownsampleFilter, const std::vector<double>*> cases[] = { { DownsampleFilter::Box2, &box2 },
     { DownsampleFilter::Box4, &box4 }, { DownsampleFilter::BSpline, &bspl } };
   for (const auto& c : cases)
@@ -795,9 +799,8 @@ TEST(Classified, MajorantsBoundSampledSigma)
         cell[a] = clampi(int((p[a] - g.lo[a]) * g.invCellSize[a]), 0, g.dims[a] - 1);
       }
       const size_t c = size_t(cell[0] + g.dims[0] * (cell[1] + g.dims[1] * cell[2]));
-      ASSERT_LE(sigma, g.majorants[c * 2 + 0])
-        << "scene " << sc << (nearest ? " nearest" : " trilinear") << " at (" << p.x << ", " << p.y << ", " << p.z
-        << ")";
+      ASSERT_LE(sigma, g.majorants[c * 2 + 0]) << "scene " << sc << (nearest ? " nearest" : " trilinear") << " at ("
+                                               << p.x << ", " << p.y << ", " << p.z << ")";
     }
   }
 }
@@ -891,4 +894,183 @@ TEST(Classified, BadInputErrors)
   EXPECT_THROW(classifyScalars(ts, d.dims, tf, out.data(), 3), std::invalid_argument);
   tf.opacity.resize(1);
   EXPECT_THROW(classifyScalars(ts, d.dims, tf, out.data()), std::invalid_argument);
+}
+
+// ------------------------------------------- streamed levels (issue 13 item 1)
+
+// The streamed builder gives exactly the level that buildExtinctionPyramid
+// builds from the whole level 0: every filter, every level, odd and
+// even extents, a flat axis, with geometry.
+TEST(StreamedPyramid, EqualsWholeVolumePyramid)
+{
+  TestRand r(2024);
+  const int shapes[][3] = { { 17, 12, 9 }, { 8, 8, 8 }, { 5, 1, 7 }, { 1, 1, 6 }, { 9, 6, 1 } };
+  for (const auto& shape : shapes)
+  {
+    ClassifiedData d(shape[0], shape[1], shape[2]);
+    for (float& x : d.v)
+    {
+      x = float(r.uniform(0.0, 3.0));
+    }
+    ClassifiedVolumeView v = d.view();
+    const double spacing[3] = { 0.5, 1.25, 2.0 };
+    const double origin[3] = { -3.0, 10.0, 0.25 };
+    std::copy(spacing, spacing + 3, v.spacing);
+    std::copy(origin, origin + 3, v.origin);
+    const int most = maxPyramidLevels(d.dims);
+    for (DownsampleFilter f : { DownsampleFilter::Box2, DownsampleFilter::Box4, DownsampleFilter::BSpline })
+    {
+      const std::vector<PyramidLevel> whole = buildExtinctionPyramid(v, most, f);
+      for (int level = 1; level <= most; ++level)
+      {
+        // Slices may come from several threads (one z-range each, in order
+        // within it, halo slices read twice): count them atomically.
+        std::vector<std::atomic<int>> calls(size_t(d.dims[2]));
+        auto slice = [&](int z, float* out)
+        {
+          ++calls[size_t(z)];
+          const size_t n = size_t(d.dims[0]) * size_t(d.dims[1]) * 4;
+          std::copy(d.v.begin() + long(size_t(z) * n), d.v.begin() + long(size_t(z + 1) * n), out);
+        };
+        size_t peak = 0;
+        const PyramidLevel s = streamExtinctionLevel(d.dims, spacing, origin, level, f, slice, &peak);
+        const PyramidLevel& w = whole[size_t(level - 1)];
+        const std::string what = std::string(toString(f)) + " level " + std::to_string(level) + " of " +
+          std::to_string(d.dims[0]) + "x" + std::to_string(d.dims[1]) + "x" + std::to_string(d.dims[2]);
+        int total = 0;
+        for (int z = 0; z < d.dims[2]; ++z)
+        {
+          EXPECT_GE(calls[size_t(z)].load(), 1) << what << ": slice " << z << " never read";
+          total += calls[size_t(z)].load();
+        }
+        // Halos: a few slices per chunk and stage, never the volume twice.
+        EXPECT_LE(total, 2 * d.dims[2] + 16) << what;
+        EXPECT_EQ(s.level, level) << what;
+        for (int a = 0; a < 3; ++a)
+        {
+          EXPECT_EQ(s.dims[a], w.dims[a]) << what;
+          EXPECT_DOUBLE_EQ(s.spacing[a], w.spacing[a]) << what;
+          EXPECT_DOUBLE_EQ(s.origin[a], w.origin[a]) << what;
+        }
+        int ld[3];
+        levelDims(d.dims, level, ld);
+        EXPECT_TRUE(ld[0] == w.dims[0] && ld[1] == w.dims[1] && ld[2] == w.dims[2]) << what;
+        EXPECT_EQ(levelBytes(d.dims, level, 3), 3 * w.bytes()) << what;
+        ASSERT_EQ(s.voxels.size(), w.voxels.size()) << what;
+        // The same taps in the same order: bit for bit.
+        EXPECT_EQ(maxAbsDiff(s.voxels, w.voxels), 0.0) << what;
+        EXPECT_GT(peak, 0u) << what;
+      }
+    }
+  }
+}
+
+// Scalar channels classified slice by slice and summed equal the density
+// blend classified whole and then downsampled, and the working memory stays
+// a small fraction of the full-resolution classified volume that is never
+// built.
+TEST(StreamedPyramid, ClassifiesWithoutTheFullVolume)
+{
+  TestRand r(99);
+  // Tall, so that a few slices are a small part of the volume; two threads
+  // (chunks run at once, each holding its own slices).
+#ifdef _OPENMP
+  const int threads = omp_get_max_threads();
+  omp_set_num_threads(2);
+#endif
+  const int dims[3] = { 48, 40, 256 };
+  const std::vector<float> s0 = smoothField(dims, r);
+  const std::vector<float> s1 = smoothField(dims, r);
+  const TransferFunctionDesc tf0 = randomTF(r, 64, 2.f);
+  const TransferFunctionDesc tf1 = randomTF(r, 32, 0.5f);
+  const size_t V = s0.size();
+  std::vector<float> sum(V * 4);
+  classifyScalars(scalarSource(s0), dims, tf0, sum.data());
+  classifyScalars(scalarSource(s1), dims, tf1, sum.data(), 4, true);
+  ClassifiedVolumeView v;
+  v.voxels = sum.data();
+  std::copy(dims, dims + 3, v.dims);
+  const ClassifyInput inputs[2] = { { scalarSource(s0), &tf0 }, { scalarSource(s1), &tf1 } };
+  const double spacing[3] = { 1, 1, 1 }, origin[3] = { 0, 0, 0 };
+  for (int level : { 1, 2, 3 })
+  {
+    const PyramidLevel whole = buildExtinctionPyramid(v, level, DownsampleFilter::Box4).back();
+    size_t peak = 0;
+    const PyramidLevel s =
+      classifyExtinctionLevel(inputs, 2, dims, spacing, origin, level, DownsampleFilter::Box4, &peak);
+    ASSERT_EQ(s.voxels.size(), whole.voxels.size());
+    EXPECT_EQ(maxAbsDiff(s.voxels, whole.voxels), 0.0) << "level " << level;
+    // Per thread one level-0 slice (30 KiB here) and a few filtered slices
+    // per stage: far below the 7.5 MiB classified level 0.
+    const size_t full = V * 4 * sizeof(float);
+    EXPECT_LT(peak, full / 8) << "level " << level << ": " << peak << " bytes of work against " << full;
+    std::printf("level %d: streamed work %zu bytes, full-resolution classified volume %zu bytes\n", level, peak, full);
+  }
+  // One channel gives its own pre-classified level.
+  std::vector<float> c1(V * 4);
+  classifyScalars(scalarSource(s1), dims, tf1, c1.data());
+  v.voxels = c1.data();
+  const PyramidLevel one = classifyExtinctionLevel(inputs + 1, 1, dims, spacing, origin, 1, DownsampleFilter::BSpline);
+  EXPECT_EQ(maxAbsDiff(one.voxels, downsampleExtinction(v, DownsampleFilter::BSpline).voxels), 0.0);
+#ifdef _OPENMP
+  omp_set_num_threads(threads);
+#endif
+}
+
+TEST(StreamedPyramid, BadInputErrors)
+{
+  const int dims[3] = { 4, 4, 4 };
+  const double spacing[3] = { 1, 1, 1 }, origin[3] = { 0, 0, 0 };
+  auto zeros = [](int, float*) {};
+  EXPECT_THROW(streamExtinctionLevel(dims, spacing, origin, 0, DownsampleFilter::Box4, zeros), std::invalid_argument);
+  EXPECT_THROW(streamExtinctionLevel(dims, spacing, origin, 3, DownsampleFilter::Box4, zeros), std::invalid_argument);
+  EXPECT_NO_THROW(streamExtinctionLevel(dims, spacing, origin, 2, DownsampleFilter::Box4, zeros));
+  const double badSpacing[3] = { 1, 0, 1 };
+  EXPECT_THROW(
+    streamExtinctionLevel(dims, badSpacing, origin, 1, DownsampleFilter::Box4, zeros), std::invalid_argument);
+  EXPECT_THROW(streamExtinctionLevel(dims, spacing, origin, 1, DownsampleFilter::Box4, nullptr), std::invalid_argument);
+  auto negative = [](int z, float* out)
+  {
+    if (z == 2)
+    {
+      out[5 * 4] = -1.f;
+    }
+  };
+  EXPECT_THROW(
+    streamExtinctionLevel(dims, spacing, origin, 1, DownsampleFilter::Box4, negative), std::invalid_argument);
+  auto nan = [](int, float* out) { out[1] = std::numeric_limits<float>::quiet_NaN(); };
+  EXPECT_THROW(streamExtinctionLevel(dims, spacing, origin, 1, DownsampleFilter::Box2, nan), std::invalid_argument);
+  EXPECT_THROW(
+    classifyExtinctionLevel(nullptr, 0, dims, spacing, origin, 1, DownsampleFilter::Box4), std::invalid_argument);
+  const ClassifyInput noTable[1] = { { ChannelSource{}, nullptr } };
+  EXPECT_THROW(
+    classifyExtinctionLevel(noTable, 1, dims, spacing, origin, 1, DownsampleFilter::Box4), std::invalid_argument);
+}
+
+// The automatic level follows L = floor(log2(footprint / min spacing)),
+// clamped to [0, levels].
+TEST(LevelOfDetail, FootprintRule)
+{
+  const double spacing[3] = { 2.0, 0.5, 1.0 }; // the finest is 0.5
+  EXPECT_EQ(chooseLevelOfDetail(0.0, spacing, 5), 0);
+  EXPECT_EQ(chooseLevelOfDetail(0.25, spacing, 5), 0);  // pixel smaller than a voxel
+  EXPECT_EQ(chooseLevelOfDetail(0.5, spacing, 5), 0);   // one voxel a pixel
+  EXPECT_EQ(chooseLevelOfDetail(0.999, spacing, 5), 0); // just under two voxels
+  EXPECT_EQ(chooseLevelOfDetail(1.0, spacing, 5), 1);   // two voxels a pixel: level 1's voxel is the pixel
+  EXPECT_EQ(chooseLevelOfDetail(1.99, spacing, 5), 1);
+  EXPECT_EQ(chooseLevelOfDetail(2.0, spacing, 5), 2);
+  EXPECT_EQ(chooseLevelOfDetail(std::nextafter(4.0, 0.0), spacing, 5), 2);
+  EXPECT_EQ(chooseLevelOfDetail(4.0, spacing, 5), 3);
+  EXPECT_EQ(chooseLevelOfDetail(100.0, spacing, 5), 5); // 2^7.6: clamped
+  EXPECT_EQ(chooseLevelOfDetail(100.0, spacing, 0), 0);
+  EXPECT_EQ(chooseLevelOfDetail(std::numeric_limits<double>::infinity(), spacing, 4), 4);
+  for (int k = 0; k < 12; ++k)
+  {
+    EXPECT_EQ(chooseLevelOfDetail(0.5 * std::ldexp(1.0, k), spacing, 20), k) << "2^" << k << " voxels a pixel";
+  }
+  EXPECT_THROW(chooseLevelOfDetail(-1.0, spacing, 3), std::invalid_argument);
+  EXPECT_THROW(chooseLevelOfDetail(std::numeric_limits<double>::quiet_NaN(), spacing, 3), std::invalid_argument);
+  EXPECT_THROW(chooseLevelOfDetail(1.0, spacing, -1), std::invalid_argument);
+  const double zero[3] = { 1.0, 0.0, 1.0 };
+  EXPECT_THROW(chooseLevelOfDetail(1.0, zero, 3), std::invalid_argument);
 }

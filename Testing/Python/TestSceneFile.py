@@ -101,6 +101,10 @@ BAD_SCENES = [
      "channels[0].unit_distance:"),
     ("bad-mix-weight", {"input": {"demo": "figure3"}, "channels": [{"component": 0, "mix_weight": "heavy"}]},
      "channels[0].mix_weight:"),
+    ("bad-level-of-detail", {"input": {"demo": "figure3"}, "level_of_detail": -2}, "level_of_detail:"),
+    ("bad-level-of-detail-filter", {"input": {"demo": "figure3"}, "level_of_detail_filter": "gauss"},
+     "level_of_detail_filter:"),
+    ("bad-memory-budget", {"input": {"demo": "figure3"}, "memory_budget": -1}, "memory_budget:"),
     ("file-needs-opacity", {"input": "../../Data/figure3.vti", "channels": [{"component": 0, "color": [[0, 1, 0, 0]]}]},
      "channels[0]: missing key 'opacity'"),
 ]
@@ -189,6 +193,24 @@ def main():
         r = run(program, [scenes[0] if scenes else micro, micro, "-o", os.path.join(work, "mixed.png")])
         t.check(r.returncode == 2 and not os.path.exists(os.path.join(work, "mixed.png")),
                 "a scene file and a data file together are refused: %d %r" % (r.returncode, r.stderr))
+
+    # Levels of detail: the keys reach the mapper (the summary carries its
+    # report); a budget in MiB below level 0 falls back to a coarser level.
+    fn = os.path.join(work, "lod.json")
+    with open(fn, "w") as f:
+        json.dump({"input": {"demo": "figure3", "dimensions": [32, 32, 32]}, "level_of_detail": 2,
+                   "level_of_detail_filter": "bspline", "seed": 3}, f)
+    r = run(program, [fn, "-o", os.path.join(work, "lod.png"), "--spp", "2", "--size", "32x32", "--backend", "cpu"])
+    t.check(r.returncode == 0 and "level 2 of 5 (8x8x8" in r.stderr, "level_of_detail 2: %d %r" % (r.returncode, r.stderr))
+    r = run(program, [fn, "-o", os.path.join(work, "lod1.png"), "--spp", "2", "--size", "32x32", "--backend", "cpu",
+                      "--level-of-detail", "1"])
+    t.check(r.returncode == 0 and "level 1 of 5" in r.stderr, "--level-of-detail 1: %d %r" % (r.returncode, r.stderr))
+    with open(fn, "w") as f:
+        json.dump({"input": {"demo": "figure3", "dimensions": [32, 32, 32]}, "memory_budget": 0.1, "seed": 3}, f)
+    r = run(program, [fn, "-o", os.path.join(work, "lodmem.png"), "--spp", "2", "--size", "32x32", "--backend", "cpu"])
+    t.check(r.returncode == 0 and "memory fallback" in r.stderr, "memory_budget 0.1 MiB: %d %r" % (r.returncode, r.stderr))
+    r = run(program, [fn, "-o", os.path.join(work, "lodbad.png"), "--level-of-detail", "-3"])
+    t.check(r.returncode == 2 and "--level-of-detail" in r.stderr, "--level-of-detail -3: %d %r" % (r.returncode, r.stderr))
 
     # mix_color: a channel alone is dimmed by Eq. 10 (3 equal weights: 1/3 of
     # its colour) and not by the default weighted average.

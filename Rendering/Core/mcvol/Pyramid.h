@@ -5,6 +5,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 namespace mcvol
@@ -141,4 +142,71 @@ std::vector<PyramidLevel> buildOpacityPyramid(
  */
 void classifyScalars(const ChannelSource& src, const int dims[3], const TransferFunctionDesc& tf, float* out,
   int64_t outStride = 4, bool accumulate = false);
+/// Voxels per axis of pyramid level `level` (>= 0) over `dims`: every axis
+/// halved (ceil) `level` times, an axis of 1 staying 1.
+void levelDims(const int dims[3], int level, int out[3]);
+
+/// Bytes of level `level` held as `channels` pre-classified channels of 4
+/// floats per voxel (16 bytes a voxel and channel).
+size_t levelBytes(const int dims[3], int level, int channels);
+
+/**
+ * Streamed construction of one level (memory-aware): level `level` (1 ..
+ * maxPyramidLevels(dims)) of the extinction-based pyramid over a level 0 of
+ * `dims`, `spacing` and `origin` that is never held whole. `slice(z, out)`
+ * writes level 0's z-slice z (dims[0] * dims[1] voxels of 4 floats, x
+ * fastest) into `out`. Each slice is filtered along x and y at once, and
+ * along z as soon as the filter's taps are in, through one stage per level:
+ * a stage keeps only the few xy-filtered slices its z taps still need (4
+ * for Box4 and BSpline, 2 for Box2). The level's z-slices are split into
+ * chunks streamed in parallel (OpenMP), one thread per chunk: `slice` is
+ * called from several threads at once (it must be thread-safe), in
+ * increasing z within a chunk, and the few slices at a chunk's border that
+ * both neighbours' taps read are asked for twice. Working memory is about
+ * one level-0 slice plus 4 xy-filtered slices per stage and chunk, besides
+ * the level itself; `peakWorkBytes` (optional) receives the largest
+ * chunk's peak times the chunks that run at once (the output level
+ * excluded). The result equals
+ * buildExtinctionPyramid(level0, level, filter).back() exactly: the same
+ * taps in the same order (x, y, then z) in double, stored as float after
+ * each axis. Same errors as downsampleExtinction (bad geometry, a negative,
+ * NaN or infinite value in a slice), and a level out of range.
+ */
+PyramidLevel streamExtinctionLevel(const int dims[3], const double spacing[3], const double origin[3], int level,
+  DownsampleFilter filter, const std::function<void(int z, float* out)>& slice, size_t* peakWorkBytes = nullptr);
+
+/// One scalar channel and the table that classifies it.
+struct ClassifyInput
+{
+  ChannelSource source;
+  const TransferFunctionDesc* tf = nullptr;
+};
+
+/**
+ * streamExtinctionLevel over scalar channels classified slice by slice:
+ * level 0's slice is the sum of classifyScalars of every input (their
+ * density blend, Eq. 6/7: extinctions and extinction-weighted colours add);
+ * one input gives that channel's own pre-classified level. The full-
+ * resolution classified volume (16 bytes a voxel) is never allocated: the
+ * working memory is one classified level-0 slice and the stages' slices.
+ * Throws what classifyScalars and streamExtinctionLevel throw, and for no
+ * inputs or a missing table.
+ */
+PyramidLevel classifyExtinctionLevel(const ClassifyInput* inputs, int numInputs, const int dims[3],
+  const double spacing[3], const double origin[3], int level, DownsampleFilter filter, size_t* peakWorkBytes = nullptr);
+
+/**
+ * The automatic level of detail (issue 13 item 4): the level whose voxels
+ * are about one pixel, L = floor(log2(pixelFootprintWorld / min(spacing))),
+ * clamped to [0, levels]. `pixelFootprintWorld` is the world size of one
+ * pixel where the volume is (perspective: 2 d tan(viewAngle / 2) / height
+ * in pixels, d the distance from the camera to the centre of the volume's
+ * bounding box; parallel projection: 2 parallelScale / height), `spacing`
+ * level 0's voxel size in world units per axis. A pixel smaller than twice
+ * the finest voxel keeps level 0, since level 1's voxels would then be
+ * larger than a pixel. Throws std::invalid_argument for a footprint that is
+ * negative or NaN, a spacing that is not positive and finite, or levels < 0;
+ * an infinite footprint gives `levels`.
+ */
+int chooseLevelOfDetail(double pixelFootprintWorld, const double spacing[3], int levels);
 } // namespace mcvol

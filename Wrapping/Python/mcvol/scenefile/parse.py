@@ -46,6 +46,7 @@ from .schema import (
     join_key,
     split_extension,
     type_name,
+    LOD_FILTERS,
 )
 
 
@@ -403,6 +404,21 @@ def parse_scene(data, scene_dir, presets):
     s["step_voxels"] = None
     s["compositing"] = (
         get_string(data["compositing"], "compositing", COMPOSITING) if "compositing" in data else "extinction"
+    )
+    # Levels of detail (vtkMultiChannelVolumeMapper::SetLevelOfDetail): 0 full
+    # resolution, L > 0 level L, -1 automatic; the budget in MiB (0: no cap).
+    s["level_of_detail"] = (
+        get_number(data["level_of_detail"], "level_of_detail", lo=-1, hi=64, integer=True)
+        if "level_of_detail" in data
+        else 0
+    )
+    s["level_of_detail_filter"] = (
+        get_string(data["level_of_detail_filter"], "level_of_detail_filter", LOD_FILTERS)
+        if "level_of_detail_filter" in data
+        else LOD_FILTERS[0]
+    )
+    s["memory_budget"] = (
+        get_number(data["memory_budget"], "memory_budget", lo=0.0, hi=1e12) if "memory_budget" in data else 0.0
     )
     s["lighting"] = parse_lighting(data["lighting"]) if "lighting" in data else None
     s["visibility"] = parse_visibility(data["visibility"]) if "visibility" in data else None

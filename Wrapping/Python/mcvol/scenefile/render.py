@@ -63,5 +63,7 @@ def render(scene, output, raw=None, raw_alpha=None, errors=None, prog="mcvol-ren
             method += ", target error %g %s" % (target, "reached" if reached else "not reached (capped)")
         if rmse >= 0.0:
             method += ", estimated RMSE %.4g (PSNR %.1f dB)" % (rmse, mapper.GetEstimatedPSNR())
+    if scene.get("level_of_detail", 0) != 0 or scene.get("memory_budget", 0.0) > 0.0:
+        method += ", " + mapper.GetLevelOfDetailReport()
     return "%s at %dx%d, %d channel(s), %s blend, %s: %.2f s -> %s" % (
         method, w, h, len(pipeline.channels), scene["blend"], backend, seconds, output)

@@ -23,6 +23,7 @@ ESTIMATORS = ("expected-value", "collision")
 BACKENDS = ("auto", "cpu", "cuda")
 RENDERERS = ("montecarlo", "raymarch")
 COMPOSITING = ("extinction", "opacity")
+LOD_FILTERS = ("box4", "box2", "bspline")  # the first is the default
 SHADOWS = ("ratio", "delta", "none")
 MAX_CHANNELS = 32
 
@@ -68,6 +69,9 @@ TOP_KEYS = {
     "step",
     "compositing",
     "pixel_jitter",
+    "level_of_detail",
+    "level_of_detail_filter",
+    "memory_budget",
     "lighting",
     "visibility",
 }
