@@ -263,6 +263,22 @@ def cheapest_reaching(s, psnr):
     return min(ok, key=lambda r: r["ms"]) if ok else None
 
 
+def time_to(s, psnr):
+    """Time to reach `psnr`, interpolated: log(time) linear in PSNR between
+    the cheapest point reaching it and the point before it in time (which
+    does not reach it). The measured points are a factor of about 2 apart
+    (spp doubles, steps halve), too coarse for a ratio of two series."""
+    r = cheapest_reaching(s, psnr)
+    if r is None:
+        return None
+    before = [x for x in s if x["ms"] < r["ms"]]
+    if not before:
+        return r["ms"]
+    p = max(before, key=lambda x: x["ms"])
+    f = (psnr - p["psnr"]) / (r["psnr"] - p["psnr"])
+    return math.exp(math.log(p["ms"]) + f * (math.log(r["ms"]) - math.log(p["ms"])))
+
+
 def best_within(s, ms):
     ok = [r for r in s if r["ms"] <= ms]
     return max(ok, key=lambda r: r["psnr"]) if ok else None
@@ -373,6 +389,8 @@ def main():
     ap.add_argument("--no-peers", action="store_true", help="do not time VTK's mappers (reuse vtk-peers.csv if present)")
     ap.add_argument("--gpu", default="", help="folder of CUDA series (<dataset>-<mode>.csv)")
     ap.add_argument("--gpu-label", default="GPU", help="how the plots name the GPU")
+    ap.add_argument("--note", default="", help="a paragraph for ACCURACY.md's header (e.g. what else loaded the "
+                    "machine while it ran: the CPU times depend on it)")
     args = ap.parse_args()
     datasets = args.datasets.split(",")
     modes = args.modes.split(",")
@@ -459,7 +477,7 @@ def reach(s, q):
 
 
 def ratio_range(pairs):
-    v = sorted(b["ms"] / a["ms"] for a, b in pairs if a is not None and b is not None)
+    v = sorted(b / a for a, b in pairs if a is not None and b is not None)
     if not v:
         return None
     return ("%.1f" % v[0]) if len(v) == 1 or "%.1f" % v[0] == "%.1f" % v[-1] else "%.1f to %.1f" % (v[0], v[-1])
@@ -486,9 +504,9 @@ def headline(rows, datasets, args, target=35.0):
             cells.append(reach(ss[(k, gpu)], target))
             if not ss[(k, gpu)]:
                 missing.add(name)
-        at = {kg: cheapest_reaching(s, target) if s else None for kg, s in ss.items()}
+        at = {kg: time_to(s, target) if s else None for kg, s in ss.items()}
         new, old, rm = at[("new", False)], at[("old", False)], at[("extinction", False)]
-        ratio = "%.1f×" % (old["ms"] / new["ms"]) if new and old else "—"
+        ratio = "%.1f×" % (old / new) if new and old else "—"
         lines.append("| %s | %s | %s |" % (ds, " | ".join(cells), ratio))
         pairs["old-new"].append((new, old))
         pairs["new-rm"].append((rm, new))
@@ -496,8 +514,10 @@ def headline(rows, datasets, args, target=35.0):
         pairs["gnew-grm"].append((at[("extinction", True)], at[("new", True)]))
     lines += ["", "Each time is that of the first point of the series at or above %.0f dB: Monte Carlo points are "
               "1, 2, 4, ... spp (cumulative progressive time), ray-march points the steps %s voxels, so a time "
-              "is resolved to a factor of about 2. \"never\": no point of the series reaches it." %
-              (target, ", ".join("%g" % x for x in STEPS))]
+              "is resolved to a factor of about 2. \"never\": no point of the series reaches it. The ratios (last column "
+              "and below) use times interpolated between the two points around %.0f dB (log time linear in "
+              "PSNR)." %
+              (target, ", ".join("%g" % x for x in STEPS), target)]
     if missing:
         lines += ["", "n/a: %s — no such series%s." % (", ".join(sorted(missing)), (
             " in the --gpu folder (%s: older series name no estimator and sampler, so only collision + "
@@ -533,8 +553,10 @@ def write_summary(rows, peers, datasets, modes, args, started, notes):
              "the premultiplied RGB over black clipped to [0, 1]: RMSE, PSNR (peak 1) and SSIM (scikit-image). "
              "Monte Carlo samples pixel centres (no pixel jitter), like the ray marcher; its time is the cumulative "
              "render time of the progressive image. Ray-march steps are in voxels (of the smallest spacing); "
-             "those runs stop rays at transmittance 1e-4, the mapper's default.", "",
-             "Monte Carlo series (`mcvol-accuracy --mc-configs %s`, one run and one reference per dataset and "
+             "those runs stop rays at transmittance 1e-4, the mapper's default.", ""]
+    if args.note:
+        lines += [args.note, ""]
+    lines += ["Monte Carlo series (`mcvol-accuracy --mc-configs %s`, one run and one reference per dataset and "
              "mode):" % mc_configs_arg(), ""]
     for est, smp, trk, key, label, _, _ in MC_CONFIGS:
         lines.append("- %s: `%s:%s:%s`" % (label, est, smp, trk))
