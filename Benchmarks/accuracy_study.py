@@ -494,7 +494,8 @@ def headline(rows, datasets, args, target=35.0):
             ("MC old default, %s" % g, "old", True), ("RM extinction, %s" % g, "extinction", True)]
     lines = ["| dataset | " + " | ".join(c[0] for c in cols) + " | old / new MC, CPU |",
              "|---|" + "---|" * (len(cols) + 1)]
-    pairs = {k: [] for k in ("old-new", "new-rm", "gold-gnew", "gnew-grm")}
+    pairs = {k: [] for k in ("old-new", "new-rm", "old-rm", "gold-gnew", "gnew-grm")}
+    spp, cost = [], []
     missing = set()
     for ds in datasets:
         rs = [r for r in rows if r["dataset"] == ds and r["mode"] == "density"]
@@ -510,6 +511,16 @@ def headline(rows, datasets, args, target=35.0):
         lines.append("| %s | %s | %s |" % (ds, " | ".join(cells), ratio))
         pairs["old-new"].append((new, old))
         pairs["new-rm"].append((rm, new))
+        pairs["old-rm"].append((rm, old))
+        sn, so = cheapest_reaching(ss[("new", False)], target), cheapest_reaching(ss[("old", False)], target)
+        if sn and so:
+            spp.append(so["param"] / sn["param"])
+        # Cost per sample: cumulative times at the largest spp both series have.
+        common = {r["param"]: r["ms"] for r in ss[("new", False)]}
+        both = [(p, r["ms"]) for r in ss[("old", False)] for p in [r["param"]] if p in common]
+        if both:
+            p, ms = max(both)
+            cost.append((ms, common[p]))
         pairs["gold-gnew"].append((at[("new", True)], at[("old", True)]))
         pairs["gnew-grm"].append((at[("extinction", True)], at[("new", True)]))
     lines += ["", "Each time is that of the first point of the series at or above %.0f dB: Monte Carlo points are "
@@ -528,9 +539,15 @@ def headline(rows, datasets, args, target=35.0):
     if r:
         said.append("On the CPU the new Monte Carlo default reaches %.0f dB %s times sooner than the old default "
                     "(1-DDA)." % (target, r))
+    if spp:
+        said.append("It needs %s times fewer samples (%s), and a sample costs %s times an old one (cumulative "
+                    "times at the same spp)." % (
+                        ("%.0f" % min(spp)) if min(spp) == max(spp) else "%.0f to %.0f" % (min(spp), max(spp)),
+                        "powers of 2: coarse", ratio_range(cost)))
     r = ratio_range(pairs["new-rm"])
     if r:
-        said.append("It takes %s times as long as the CPU ray marcher (extinction model) to get there." % r)
+        said.append("It takes %s times as long as the CPU ray marcher (extinction model) to get there (the old "
+                    "default: %s)." % (r, ratio_range(pairs["old-rm"]) or "never, within its series"))
     r = ratio_range(pairs["gold-gnew"])
     if r:
         said.append("On the %s the new default is %s times sooner than the old." % (g, r))
