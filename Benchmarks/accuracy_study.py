@@ -6,7 +6,7 @@ For each demo dataset and blend mode, `mcvol-accuracy` renders (one run):
   - the reference: a ray march with the extinction model at a fine step (1/16
     voxel), cross-checked against a high-sample Monte Carlo image (the
     renderer's default estimator and sampler);
-  - Monte Carlo at 1, 2, 4, ..., 1024 spp (cumulative time), one series per
+  - Monte Carlo at 1, 2, 4, ... --spp-max spp (cumulative time), one series per
     configuration of MC_CONFIGS (--mc-configs): the renderer's default since
     issue 14 (expected-value estimator, Owen-scrambled Sobol' points, 1-DDA),
     the collision estimator with Sobol' points, and the default before it
@@ -28,6 +28,7 @@ and needs no VTK), and writes:
 Usage (from the repository, after building):
   PYTHONPATH=build/lib/python3.11/site-packages xvfb-run -a /usr/bin/python3 \\
       Benchmarks/accuracy_study.py --bin build/bin --out Benchmarks/results/accuracy
+or, without VTK (a build of the mcvol-accuracy target only), add --no-peers.
 --gpu <folder> merges the series of Benchmarks/gpu/bench.sh's accuracy stage
 (<dataset>-<mode>.csv, scored on the GPU machine against its own reference).
 """
