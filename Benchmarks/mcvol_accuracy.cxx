@@ -449,6 +449,12 @@ int main(int argc, char** argv)
     for (McConfig c : configs)
     {
       c.estimator = effective(c.estimator);
+      if (c.estimator == mcvol::Estimator::ExpectedValue)
+      {
+        // trackExpected walks one DDA over the macrocells whatever the
+        // tracker: an N-DDA series of it would be the 1-DDA one again.
+        c.tracker = mcvol::Tracker::OneDDA;
+      }
       const bool again = std::any_of(done.begin(), done.end(),
         [&](const McConfig& d)
         { return d.estimator == c.estimator && d.sampler == c.sampler && d.tracker == c.tracker; });
