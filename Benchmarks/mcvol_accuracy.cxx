@@ -5,10 +5,14 @@
 // for every dataset and mode and scores the images):
 //   reference.f32        ray march, extinction model, --ref-step voxels
 //   reference_mc.f32     Monte Carlo (1-DDA) at --ref-spp, the cross-check
-//   mc_<tracker>_<spp>.f32  progressive Monte Carlo, spp = 1, 2, 4, ... --spp-max
+//   mc_<estimator>_<sampler>_<tracker>_<spp>.f32
+//                        progressive Monte Carlo, spp = 1, 2, 4, ... --spp-max,
+//                        one series per --mc-configs entry
 //   rm_<model>_<step>.f32   ray march at each --steps (voxels), both models
-//   timings.csv          method,variant,param,ms[,rmse,psnr],backend (MC:
-//                        cumulative render time; backend: where it ran)
+//   timings.csv          method,variant,param,ms[,rmse,psnr],backend,estimator,
+//                        sampler (MC: cumulative render time; backend: where
+//                        it ran; variant: the tracker or march model, as
+//                        before the estimator and sampler columns existed)
 // Images are W x H premultiplied RGBA float32, rows from the bottom. Monte
 // Carlo samples pixel centres (no pixel jitter) like the ray marcher, so both
 // estimate the same image. --backend picks where Monte Carlo runs and
@@ -20,9 +24,18 @@
 // renderer's default) picks the progressive series' sample sequence, and
 // --estimator expected-value|collision (default expected-value, the
 // renderer's default) its estimator; the 4096-spp cross-check uses the same.
+// Without --mc-configs the series are that estimator and sampler with both
+// trackers; --mc-configs lists estimator:sampler:tracker triples instead
+// (e.g. expected-value:sobol:1dda,collision:independent:1dda), so that one
+// run, with one reference, times several Monte Carlo configurations. A
+// configuration the renderer would not run as asked (the expected-value
+// estimator under the composite blend, which keeps the collision estimator)
+// is recorded under the estimator it runs, once: the CSV never holds two
+// copies of one series under different names.
 
 #include "mcvol/CameraMath.h"
 #include "mcvol/DemoData.h"
+#include "mcvol/Integrator.h"
 #include "mcvol/MarchSetup.h"
 #include "mcvol/RayMarch.h"
 #include "mcvol/Renderer.h"
@@ -51,6 +64,14 @@ double msSince(Clock::time_point t0)
   return 1e3 * std::chrono::duration<double>(Clock::now() - t0).count();
 }
 
+/// One Monte Carlo series of the study.
+struct McConfig
+{
+  mcvol::Estimator estimator;
+  mcvol::Sampler sampler;
+  mcvol::Tracker tracker;
+};
+
 struct Options
 {
   std::string dataset = "cosmology";
@@ -71,7 +92,52 @@ struct Options
   bool scoreOnly = false;     ///< no image files: RMSE and PSNR in the CSV instead
   mcvol::Sampler sampler = mcvol::Sampler::Sobol;
   mcvol::Estimator estimator = mcvol::Estimator::ExpectedValue;
+  std::vector<McConfig> mcConfigs; ///< empty: estimator and sampler, both trackers
 };
+
+mcvol::Estimator estimatorOf(const std::string& s, const std::string& option)
+{
+  if (s != "expected-value" && s != "collision")
+  {
+    throw std::invalid_argument(option + " takes expected-value or collision, not " + s);
+  }
+  return s == "collision" ? mcvol::Estimator::Collision : mcvol::Estimator::ExpectedValue;
+}
+
+mcvol::Sampler samplerOf(const std::string& s, const std::string& option)
+{
+  if (s != "independent" && s != "sobol")
+  {
+    throw std::invalid_argument(option + " takes independent or sobol, not " + s);
+  }
+  return s == "sobol" ? mcvol::Sampler::Sobol : mcvol::Sampler::Independent;
+}
+
+/// "estimator:sampler:tracker,..." (tracker 1dda or ndda).
+std::vector<McConfig> splitConfigs(const std::string& s)
+{
+  std::vector<McConfig> v;
+  std::stringstream ss(s);
+  std::string item;
+  while (std::getline(ss, item, ','))
+  {
+    const size_t a = item.find(':');
+    const size_t b = a == std::string::npos ? a : item.find(':', a + 1);
+    if (b == std::string::npos)
+    {
+      throw std::invalid_argument("--mc-configs takes estimator:sampler:tracker entries, not " + item);
+    }
+    const std::string t = item.substr(b + 1);
+    if (t != "1dda" && t != "ndda")
+    {
+      throw std::invalid_argument("--mc-configs: tracker 1dda or ndda, not " + t);
+    }
+    v.push_back(
+      { estimatorOf(item.substr(0, a), "--mc-configs"), samplerOf(item.substr(a + 1, b - a - 1), "--mc-configs"),
+        t == "ndda" ? mcvol::Tracker::NDDA : mcvol::Tracker::OneDDA });
+  }
+  return v;
+}
 
 std::vector<double> splitDoubles(const std::string& s)
 {
@@ -162,22 +228,17 @@ Options parse(int argc, char** argv)
     else if (a == "--estimator")
     {
       need(1);
-      const std::string s = argv[++i];
-      if (s != "expected-value" && s != "collision")
-      {
-        throw std::invalid_argument("--estimator takes expected-value or collision, not " + s);
-      }
-      o.estimator = s == "collision" ? mcvol::Estimator::Collision : mcvol::Estimator::ExpectedValue;
+      o.estimator = estimatorOf(argv[++i], a);
     }
     else if (a == "--sampler")
     {
       need(1);
-      const std::string s = argv[++i];
-      if (s != "independent" && s != "sobol")
-      {
-        throw std::invalid_argument("--sampler takes independent or sobol, not " + s);
-      }
-      o.sampler = s == "sobol" ? mcvol::Sampler::Sobol : mcvol::Sampler::Independent;
+      o.sampler = samplerOf(argv[++i], a);
+    }
+    else if (a == "--mc-configs")
+    {
+      need(1);
+      o.mcConfigs = splitConfigs(argv[++i]);
     }
     else if (a == "--backend")
     {
@@ -305,12 +366,19 @@ int main(int argc, char** argv)
       ownMarcher = mcvol::Renderer::create(marchBackend);
     }
     mcvol::Renderer* marcher = ownMarcher ? ownMarcher.get() : r.get();
-    std::vector<std::string> rows = { o.scoreOnly ? "method,variant,param,ms,rmse,psnr,backend"
-                                                  : "method,variant,param,ms,backend" };
+    // The estimator and sampler columns come last, so that readers of the
+    // older layout (column names, not positions) read the new one.
+    std::vector<std::string> rows = { o.scoreOnly ? "method,variant,param,ms,rmse,psnr,backend,estimator,sampler"
+                                                  : "method,variant,param,ms,backend,estimator,sampler" };
     std::vector<float> refImage;
-    // Writes the image (or, with --score-only, scores it) and adds its row.
+    const mcvol::BlendMode blend = blendOf(o.blend);
+    // The estimator a render asked for `e` runs (unlit, not optimized).
+    auto effective = [&](mcvol::Estimator e)
+    { return mcvol::usesExpectedValue(e, blend, false, false) ? e : mcvol::Estimator::Collision; };
+    // Writes the image (or, with --score-only, scores it) and adds its row;
+    // `mc` (Monte Carlo rows) names the estimator and sampler that ran.
     auto emit = [&](const std::string& m, const std::string& var, double p, double ms, const std::string& file,
-                  const mcvol::Accumulator& a)
+                  const mcvol::Accumulator& a, const McConfig* mc = nullptr)
     {
       std::ostringstream s;
       s << m << "," << var << "," << p << "," << ms;
@@ -323,9 +391,11 @@ int main(int argc, char** argv)
       {
         writeImage(o.out + "/" + file, a);
       }
-      const bool mc = m == "montecarlo" || var == "montecarlo";
+      const bool isMc = m == "montecarlo" || var == "montecarlo";
       const bool textures = m == "raymarch" && o.marchTextures && std::string(marcher->name()) == "cuda";
-      s << "," << (mc ? r->name() : marcher->name()) << (textures ? "+textures" : "");
+      s << "," << (isMc ? r->name() : marcher->name()) << (textures ? "+textures" : "");
+      s << "," << (mc ? mcvol::toString(effective(mc->estimator)) : "") << ","
+        << (mc ? mcvol::toString(mc->sampler) : "");
       rows.push_back(s.str());
     };
     int threads = 1;
@@ -366,21 +436,49 @@ int main(int argc, char** argv)
         r->render(scene, cam, rs, nullptr, acc);
       }
       r->readBack(acc);
-      emit("reference", "montecarlo", o.refSpp, msSince(t0), "reference_mc.f32", acc);
+      const McConfig cross = { o.estimator, o.sampler, mcvol::Tracker::OneDDA };
+      emit("reference", "montecarlo", o.refSpp, msSince(t0), "reference_mc.f32", acc, &cross);
     }
-    for (auto t : { mcvol::Tracker::OneDDA, mcvol::Tracker::NDDA })
+    std::vector<McConfig> configs = o.mcConfigs;
+    if (configs.empty())
     {
-      const std::string name = t == mcvol::Tracker::OneDDA ? "1dda" : "ndda";
+      configs = { { o.estimator, o.sampler, mcvol::Tracker::OneDDA },
+        { o.estimator, o.sampler, mcvol::Tracker::NDDA } };
+    }
+    std::vector<McConfig> done;
+    for (McConfig c : configs)
+    {
+      c.estimator = effective(c.estimator);
+      if (c.estimator == mcvol::Estimator::ExpectedValue)
+      {
+        // trackExpected walks one DDA over the macrocells whatever the
+        // tracker: an N-DDA series of it would be the 1-DDA one again.
+        c.tracker = mcvol::Tracker::OneDDA;
+      }
+      const bool again = std::any_of(done.begin(), done.end(),
+        [&](const McConfig& d)
+        { return d.estimator == c.estimator && d.sampler == c.sampler && d.tracker == c.tracker; });
+      const std::string trk = c.tracker == mcvol::Tracker::OneDDA ? "1dda" : "ndda";
+      const std::string tag = std::string(mcvol::toString(c.estimator)) + "_" + mcvol::toString(c.sampler) + "_" + trk;
+      if (again)
+      {
+        std::fprintf(stderr, "mcvol-accuracy: %s: the same series as an earlier configuration here (%s blend)\n",
+          tag.c_str(), o.blend.c_str());
+        continue;
+      }
+      done.push_back(c);
+      rs.estimator = c.estimator;
+      rs.sampler = c.sampler;
       // Warm-up (threads, caches) on a throw-away image.
       {
         mcvol::Accumulator w;
         rs.samplesPerPixel = 2;
-        rs.tracker = t;
+        rs.tracker = c.tracker;
         r->render(scene, cam, rs, nullptr, w);
       }
       mcvol::Accumulator acc;
       rs.seed = 1;
-      rs.tracker = t;
+      rs.tracker = c.tracker;
       double total = 0;
       for (int spp = 1; spp <= o.sppMax; spp *= 2)
       {
@@ -390,7 +488,7 @@ int main(int argc, char** argv)
         r->finish();
         total += msSince(t0);
         r->readBack(acc);
-        emit("montecarlo", name, spp, total, "mc_" + name + "_" + std::to_string(spp) + ".f32", acc);
+        emit("montecarlo", trk, spp, total, "mc_" + tag + "_" + std::to_string(spp) + ".f32", acc, &c);
       }
     }
 
@@ -427,8 +525,13 @@ int main(int argc, char** argv)
     m << "dataset " << o.dataset << "\ndims " << v.dims[0] << " " << v.dims[1] << " " << v.dims[2] << "\nchannels "
       << v.numChannels() << "\nblend " << o.blend << "\nsize " << o.width << " " << o.height << "\nthreads " << threads
       << "\nbackend " << r->name() << "\nmarch_backend " << marcher->name() << (o.marchTextures ? " (textures)" : "")
-      << "\nvoxel " << voxel << "\nsampler " << mcvol::toString(o.sampler)
-      << "\nestimator " << mcvol::toString(o.estimator) << "\n";
+      << "\nvoxel " << voxel << "\nsampler " << mcvol::toString(o.sampler) << "\nestimator "
+      << mcvol::toString(o.estimator) << "\n";
+    for (const McConfig& c : done)
+    {
+      m << "mc_series " << mcvol::toString(c.estimator) << " " << mcvol::toString(c.sampler) << " "
+        << mcvol::toString(c.tracker) << "\n";
+    }
   }
   catch (const std::exception& e)
   {

@@ -7,7 +7,8 @@
 #   dense     the paper stage's frame rates with opacities 8x denser
 #   macrocell frame rate against macrocell size (paper Fig. 8), CUDA and CPU
 #   channels  frame rate against channel count 1..16 (paper Fig. 9), CUDA and CPU
-#   accuracy  the accuracy study's Monte Carlo series with the CUDA backend
+#   accuracy  the accuracy study's series with the CUDA backend (Monte Carlo,
+#             new and old defaults, and the ray marches): accuracy.tgz
 #   rebuild   GPU majorant rebuild after one transfer-function change
 #   block     render-kernel block shapes (NYX-like)
 #   profile   Nsight Compute on the render kernel of the slowest paper case
@@ -96,20 +97,39 @@ for stage in "$@"; do
       # the ray marches both on CUDA (--march-backend follows --backend; the
       # reference march interpolates in software, so it is the CPU's image to
       # float rounding): merged by accuracy_study.py --gpu.
-      # Writes accuracy/<dataset>-<mode>.csv, the layout accuracy_study.py --gpu reads.
+      # The Monte Carlo configurations are the study's (accuracy_study.py
+      # MC_CONFIGS): the new default (expected value, Sobol', 1-DDA),
+      # collision + Sobol', and the old default (collision, independent,
+      # 1-DDA and N-DDA). Writes accuracy/<dataset>-<mode>.csv, the layout
+      # accuracy_study.py --gpu reads, and packs them with their logs into
+      # accuracy.tgz, one file to bring back. ACCURACY_MODES (default: all
+      # four) shortens the stage.
       mkdir -p "$out/accuracy"
+      configs="expected-value:sobol:1dda,collision:sobol:1dda,collision:independent:1dda,collision:independent:ndda"
       for ds in figure3 microscopy cosmology weather; do
-        for mode in density max mix composite; do
+        for mode in ${ACCURACY_MODES:-density max mix composite}; do
           work="$(mktemp -d)"
+          t0=$SECONDS
           if "$b/bin/mcvol-accuracy" --backend cuda --score-only --dataset "$ds" --blend "$mode" --size 256 256 \
-            --ref-spp 2048 --spp-max 1024 --out "$work" 2> "$out/accuracy/$ds-$mode.log"; then
+            --ref-spp 2048 --spp-max 1024 --mc-configs "$configs" --out "$work" 2> "$out/accuracy/$ds-$mode.log"; then
             cp "$work/timings.csv" "$out/accuracy/$ds-$mode.csv"
+            cp "$work/meta.txt" "$out/accuracy/$ds-$mode.meta.txt"
           else
             echo "accuracy $ds $mode failed"; tail -3 "$out/accuracy/$ds-$mode.log"
           fi
+          echo "accuracy $ds $mode: $((SECONDS - t0)) s" >&2
+          rm -rf "$work"
         done
       done
-      grep -h "montecarlo,1dda,1024" "$out"/accuracy/*.csv | head -4
+      nvidia-smi --query-gpu=name,driver_version --format=csv,noheader > "$out/accuracy/device.txt" 2>&1
+      tar -czf "$out/accuracy.tgz" -C "$out" accuracy
+      # The first density row of each series at 35 dB or more, per dataset.
+      for f in "$out"/accuracy/*-density.csv; do
+        awk -F, -v f="$(basename "$f")" 'NR == 1 { for (i = 1; i <= NF; i++) c[$i] = i; next }
+          $1 != "reference" && $(c["psnr"]) >= 35 {
+            k = $1 " " $2 " " $(c["estimator"]) " " $(c["sampler"]); if (!(k in seen)) { seen[k] = 1;
+            printf "%s %s: %s ms (%s)\n", f, k, $(c["ms"]), $(c["param"]) } }' "$f"
+      done
       ;;
     effects)
       # Issue 6: each lighting effect's cost and effect, CUDA and CPU.
