@@ -222,12 +222,22 @@ bool vtkMultiChannelVolumeMapper::TraceImage(const mcvol::Scene& scene, const mc
   settings.tracker = this->TrackingMethod == N_DDA ? mcvol::Tracker::NDDA : mcvol::Tracker::OneDDA;
   settings.jitterPixels = this->PixelJitter;
   settings.readBackEven = false; // GetEstimatedError() reads it back when asked
+  // A device backend keeps the image on the device: DrawImage() copies an
+  // 8-bit display image (a quarter of the float image), and the float image
+  // comes back only when asked (GetAccumulatedImage, GetEstimatedError).
+  settings.readBack = !renderer->hasDisplayImage();
   settings.sampler = this->SampleSequence == INDEPENDENT_SEQUENCE ? mcvol::Sampler::Independent : mcvol::Sampler::Sobol;
   settings.estimator =
     this->Estimator == COLLISION_ESTIMATOR ? mcvol::Estimator::Collision : mcvol::Estimator::ExpectedValue;
   try
   {
     renderer->render(scene, camera, settings, depth, accum);
+    if (!settings.readBack)
+    {
+      // Wait for the kernel: the trace time feeds the frame-time budget
+      // (SetInteractiveFrameTime), which must see the render's real cost.
+      renderer->finish();
+    }
   }
   catch (const std::exception& e)
   {
@@ -485,7 +495,9 @@ double vtkMultiChannelVolumeMapper::GetEstimatedError()
   if (!in.EstimateCurrent)
   {
     // One pass over the image (a few ms at 1080p); kept until the next trace.
-    // A device backend copies the even half only now (not every frame).
+    // A device backend copies the image and its even half only now (not
+    // every frame).
+    this->ReadBackImage();
     if (in.Accum.evenPendingOnDevice() && in.Backend.Get())
     {
       try
@@ -553,6 +565,7 @@ void vtkMultiChannelVolumeMapper::GetAccumulatedImage(vtkFloatArray* rgba)
   {
     return;
   }
+  this->ReadBackImage();
   const mcvol::Accumulator& acc = this->Internals->Accum;
   const vtkIdType pixels = static_cast<vtkIdType>(acc.width()) * acc.height();
   rgba->SetNumberOfComponents(4);
@@ -1306,12 +1319,48 @@ bool vtkMultiChannelVolumeMapper::TraceBatch(RenderPass& pass)
 }
 
 //------------------------------------------------------------------------------
+void vtkMultiChannelVolumeMapper::ReadBackImage()
+{
+  vtkInternals& in = *this->Internals;
+  if (!in.Accum.pendingOnDevice() || !in.Backend.Get())
+  {
+    return;
+  }
+  try
+  {
+    in.Backend.Get()->readBack(in.Accum);
+  }
+  catch (const std::exception& e)
+  {
+    vtkWarningMacro("The accumulated image could not be read back from the device: " << e.what());
+  }
+}
+
+//------------------------------------------------------------------------------
 void vtkMultiChannelVolumeMapper::DrawImage(RenderPass& pass)
 {
   const auto start = std::chrono::steady_clock::now();
   std::string error;
-  if (!this->Internals->Compositor.Draw(
-        pass.Window, pass.Viewport.Width, pass.Viewport.Height, this->Internals->Accum.rgba(), error))
+  vtkInternals& in = *this->Internals;
+  // A device backend's image is drawn from its 8-bit display copy; the
+  // float image is drawn where it is on the host (the CPU, or read back).
+  const unsigned char* display = nullptr;
+  if (in.Accum.pendingOnDevice() && in.Backend.Get())
+  {
+    try
+    {
+      display = in.Backend.Get()->displayImage(in.Accum);
+    }
+    catch (const std::exception& e)
+    {
+      vtkErrorMacro("The image could not be copied from the device: " << e.what());
+      return;
+    }
+  }
+  const bool drawn = display
+    ? in.Compositor.Draw(pass.Window, pass.Viewport.Width, pass.Viewport.Height, display, error)
+    : in.Compositor.Draw(pass.Window, pass.Viewport.Width, pass.Viewport.Height, in.Accum.rgba(), error);
+  if (!drawn)
   {
     vtkErrorMacro(<< error);
   }

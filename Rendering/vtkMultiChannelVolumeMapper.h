@@ -902,6 +902,9 @@ private:
   /// Whether TargetError stops the current image (estimate at most the target).
   bool ReachedTargetError();
   void DrawImage(RenderPass& pass);
+  /// Copies the accumulated float image to the host if it is still on the
+  /// device (readers of the image call it; drawing does not need it).
+  void ReadBackImage();
 };
 
 #endif

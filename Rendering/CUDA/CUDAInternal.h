@@ -163,6 +163,10 @@ struct CUDARenderer::Internal
   DeviceBuffer<float4> Even;
   bool AccumEven = false;
   bool SkipEvenReadBack = false; ///< set by render() for RenderSettings::readBackEven off
+  /// displayImage(): the 8-bit image on the device and its page-locked host copy.
+  DeviceBuffer<uchar4> Display;
+  uint8_t* DisplayHost = nullptr;
+  size_t DisplayHostBytes = 0;
   DeviceBuffer<float> Depth;
   std::vector<float> LastDepth;
   bool HaveDepth = false;
@@ -186,6 +190,10 @@ struct CUDARenderer::Internal
   ~Internal()
   {
     cudaSetDevice(this->Device);
+    if (this->DisplayHost)
+    {
+      cudaFreeHost(this->DisplayHost);
+    }
     if (this->Start)
     {
       cudaEventDestroy(this->Start);

@@ -55,10 +55,10 @@ __device__ MCVOL_FORCE_INLINE void accumulateEvenPixel(float4* pixel, const Vec4
 /// running mean in `accum` (and the even samples into `even`, when not
 /// null: the error estimate). Count adds the work counters (warp sums, one
 /// atomic per warp and counter).
-template <BlendMode Mode, bool Count, bool Lit, bool ExpectedValue = false>
-__global__ void renderKernel(const __grid_constant__ SceneView s, const __grid_constant__ CameraView cam,
-  const __grid_constant__ FrameParams fp, const float* __restrict__ depth, float4* __restrict__ accum,
-  float4* __restrict__ even, uint32_t previous, unsigned long long* __restrict__ counters)
+template <BlendMode Mode, bool Count, bool Lit, bool ExpectedValue>
+__device__ __forceinline__ void renderKernelBody(const SceneView& s, const CameraView& cam, const FrameParams& fp,
+  const float* __restrict__ depth, float4* __restrict__ accum, float4* __restrict__ even, uint32_t previous,
+  unsigned long long* __restrict__ counters)
 {
   const int x = int(blockIdx.x * blockDim.x + threadIdx.x);
   const int y = int(blockIdx.y * blockDim.y + threadIdx.y);
@@ -100,6 +100,35 @@ __global__ void renderKernel(const __grid_constant__ SceneView s, const __grid_c
       }
     }
   }
+}
+
+template <BlendMode Mode, bool Count, bool Lit, bool ExpectedValue = false>
+__global__ void renderKernel(const __grid_constant__ SceneView s, const __grid_constant__ CameraView cam,
+  const __grid_constant__ FrameParams fp, const float* __restrict__ depth, float4* __restrict__ accum,
+  float4* __restrict__ even, uint32_t previous, unsigned long long* __restrict__ counters)
+{
+  renderKernelBody<Mode, Count, Lit, ExpectedValue>(s, cam, fp, depth, accum, even, previous, counters);
+}
+
+/// The unlit kernels, a separate entry so that a build can cap their registers
+/// without touching the lit ones: -DMCVOL_UNLIT_MAXREG=N (off by default).
+/// Measured on the H100 (NYX-like, 1024^2; unlit kernels at 114-118
+/// registers): a cap of 96 (spilling 140-200 bytes) made the 1-DDA frame 0.83
+/// -> 0.77 ms and the expected-value one 1.24 -> 1.13 ms; 112 changed
+/// nothing; 80 spilled too much (1-DDA 1.37 ms). Without float4 texture reads
+/// in the kernels (the default build) they need 96-106 registers and
+/// the expected-value frame takes 1.05 ms uncapped.
+#if defined(MCVOL_UNLIT_MAXREG) && MCVOL_UNLIT_MAXREG > 0
+#define MCVOL_UNLIT_BOUNDS __maxnreg__(MCVOL_UNLIT_MAXREG)
+#else
+#define MCVOL_UNLIT_BOUNDS
+#endif
+template <BlendMode Mode, bool Count, bool ExpectedValue>
+__global__ void MCVOL_UNLIT_BOUNDS renderKernelUnlit(const __grid_constant__ SceneView s,
+  const __grid_constant__ CameraView cam, const __grid_constant__ FrameParams fp, const float* __restrict__ depth,
+  float4* __restrict__ accum, float4* __restrict__ even, uint32_t previous, unsigned long long* __restrict__ counters)
+{
+  renderKernelBody<Mode, Count, false, ExpectedValue>(s, cam, fp, depth, accum, even, previous, counters);
 }
 
 /**
@@ -209,11 +238,11 @@ void launchRender(bool count, bool lit, dim3 grid, dim3 block, const SceneView& 
   {
     if (count)
     {
-      renderKernel<Mode, true, false, true><<<grid, block>>>(s, cam, fp, depth, accum, even, previous, counters);
+      renderKernelUnlit<Mode, true, true><<<grid, block>>>(s, cam, fp, depth, accum, even, previous, counters);
     }
     else
     {
-      renderKernel<Mode, false, false, true><<<grid, block>>>(s, cam, fp, depth, accum, even, previous, counters);
+      renderKernelUnlit<Mode, false, true><<<grid, block>>>(s, cam, fp, depth, accum, even, previous, counters);
     }
   }
   else if (lit)
@@ -229,11 +258,11 @@ void launchRender(bool count, bool lit, dim3 grid, dim3 block, const SceneView& 
   }
   else if (count)
   {
-    renderKernel<Mode, true, false><<<grid, block>>>(s, cam, fp, depth, accum, even, previous, counters);
+    renderKernelUnlit<Mode, true, false><<<grid, block>>>(s, cam, fp, depth, accum, even, previous, counters);
   }
   else
   {
-    renderKernel<Mode, false, false><<<grid, block>>>(s, cam, fp, depth, accum, even, previous, counters);
+    renderKernelUnlit<Mode, false, false><<<grid, block>>>(s, cam, fp, depth, accum, even, previous, counters);
   }
 }
 } // namespace
@@ -253,7 +282,7 @@ SceneView CUDARenderer::Internal::renderView(const Scene& scene, bool textures)
     ChannelView& c = s.volume.channels[n];
     c.data = dc.bytes.ptr; // null for a texture-held channel
     c.format = dc.format;
-    c.stride = dc.format == ChannelFormat::Extinction ? 4 : 1;
+    c.stride = dc.format == ChannelFormat::Extinction ? 4 : 1; // elements per voxel of `data`
     c.type = dc.type;
     c.offset = 0.0;
     // Texture-held channels: hardware filtering when `textures`, else exact

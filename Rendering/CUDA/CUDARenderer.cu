@@ -24,6 +24,21 @@ namespace
 {
 __global__ void probeKernel() {}
 
+/// displayImage(): the running mean as premultiplied RGBA8 (clamped to [0, 1],
+/// rounded to nearest).
+__global__ void displayKernel(const float4* __restrict__ mean, uchar4* __restrict__ out, size_t n)
+{
+  const size_t i = size_t(blockIdx.x) * blockDim.x + threadIdx.x;
+  if (i >= n)
+  {
+    return;
+  }
+  const float4 v = mean[i];
+  auto q = [](float x) -> unsigned char
+  { return static_cast<unsigned char>(__float2int_rn(255.f * fminf(fmaxf(x, 0.f), 1.f))); };
+  out[i] = make_uchar4(q(v.x), q(v.y), q(v.z), q(v.w));
+}
+
 /// Whether the NVIDIA driver's user-space library is on this machine.
 bool driverInstalled()
 {
@@ -219,7 +234,8 @@ CudaMemoryStats CUDARenderer::memory() const
   }
   m.macrocellBytes = this->In->Ranges.bytes();
   m.majorantBytes = this->In->Majorants.bytes();
-  m.imageBytes = this->In->Accum.bytes() + this->In->Even.bytes() + this->In->Depth.bytes();
+  m.imageBytes =
+    this->In->Accum.bytes() + this->In->Even.bytes() + this->In->Depth.bytes() + this->In->Display.bytes();
   return m;
 }
 
@@ -337,5 +353,42 @@ void CUDARenderer::finish()
 {
   MCVOL_CUDA(cudaSetDevice(this->In->Device));
   MCVOL_CUDA(cudaDeviceSynchronize());
+}
+
+const uint8_t* CUDARenderer::displayImage(Accumulator& accum)
+{
+  Internal& in = *this->In;
+  const size_t P = size_t(accum.width()) * size_t(accum.height());
+  const bool mine = in.AccumId == accum.id() && in.AccumSamples == accum.samples() && in.Accum.count == P;
+  if (!mine)
+  {
+    if (accum.pendingOnDevice())
+    {
+      throw std::logic_error("mcvol: this Accumulator's image is no longer on the device (another Accumulator "
+                             "was rendered since); it cannot be displayed");
+    }
+    return nullptr; // nothing of it on the device: the host image is the one to draw
+  }
+  MCVOL_CUDA(cudaSetDevice(in.Device));
+  in.Display.resize(P);
+  if (in.DisplayHostBytes != P * 4)
+  {
+    if (in.DisplayHost)
+    {
+      MCVOL_CUDA(cudaFreeHost(in.DisplayHost));
+      in.DisplayHost = nullptr;
+      in.DisplayHostBytes = 0;
+    }
+    MCVOL_CUDA(cudaMallocHost(reinterpret_cast<void**>(&in.DisplayHost), P * 4));
+    in.DisplayHostBytes = P * 4;
+  }
+  const unsigned threads = 256;
+  displayKernel<<<unsigned((P + threads - 1) / threads), threads>>>(in.Accum.ptr, in.Display.ptr, P);
+  MCVOL_CUDA(cudaGetLastError());
+  // Page-locked destination: the copy runs at the bus's speed, not through
+  // the driver's staging of pageable memory.
+  MCVOL_CUDA(cudaMemcpy(in.DisplayHost, in.Display.ptr, P * 4, cudaMemcpyDeviceToHost));
+  ++in.Updates.imageDownloads;
+  return in.DisplayHost;
 }
 } // namespace mcvol

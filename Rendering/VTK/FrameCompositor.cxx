@@ -20,6 +20,20 @@ FrameCompositor::~FrameCompositor() = default;
 //------------------------------------------------------------------------------
 bool FrameCompositor::Draw(vtkOpenGLRenderWindow* window, int width, int height, const float* rgba, std::string& error)
 {
+  return this->DrawImage(window, width, height, VTK_FLOAT, rgba, error);
+}
+
+//------------------------------------------------------------------------------
+bool FrameCompositor::Draw(
+  vtkOpenGLRenderWindow* window, int width, int height, const unsigned char* rgba8, std::string& error)
+{
+  return this->DrawImage(window, width, height, VTK_UNSIGNED_CHAR, rgba8, error);
+}
+
+//------------------------------------------------------------------------------
+bool FrameCompositor::DrawImage(
+  vtkOpenGLRenderWindow* window, int width, int height, int type, const void* rgba, std::string& error)
+{
   if (!this->Texture)
   {
     this->Texture = vtkSmartPointer<vtkTextureObject>::New();
@@ -30,9 +44,9 @@ bool FrameCompositor::Draw(vtkOpenGLRenderWindow* window, int width, int height,
   this->Texture->SetWrapS(vtkTextureObject::ClampToEdge);
   this->Texture->SetWrapT(vtkTextureObject::ClampToEdge);
   if (!this->Texture->Create2DFromRaw(
-        static_cast<unsigned int>(width), static_cast<unsigned int>(height), 4, VTK_FLOAT, const_cast<float*>(rgba)))
+        static_cast<unsigned int>(width), static_cast<unsigned int>(height), 4, type, const_cast<void*>(rgba)))
   {
-    error = "Could not upload the image to a float texture.";
+    error = "Could not upload the image to a texture.";
     return false;
   }
 

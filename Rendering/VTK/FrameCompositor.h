@@ -29,10 +29,15 @@ public:
 
   /// False, with `error`, when the texture or the shader cannot be made.
   bool Draw(vtkOpenGLRenderWindow* window, int width, int height, const float* rgba, std::string& error);
+  /// The same from premultiplied RGBA8 (a device backend's display image:
+  /// a quarter of the bytes to copy and upload).
+  bool Draw(vtkOpenGLRenderWindow* window, int width, int height, const unsigned char* rgba8, std::string& error);
 
   void ReleaseGraphicsResources(vtkWindow* window);
 
 private:
+  bool DrawImage(vtkOpenGLRenderWindow* window, int width, int height, int type, const void* rgba, std::string& error);
+
   vtkSmartPointer<vtkTextureObject> Texture;
   std::unique_ptr<vtkOpenGLQuadHelper> Quad;
 };

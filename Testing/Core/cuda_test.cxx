@@ -10,6 +10,8 @@
 
 #include "mcvol/CUDARenderer.h"
 
+#include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <limits>
 #include <sstream>
@@ -588,6 +590,53 @@ TEST(CudaAccumulation, ProgressiveDeviceMeanAndReset)
   {
     ASSERT_EQ(progressive.rgba()[i], once[i]) << "value " << i;
   }
+}
+
+// The display image (what the VTK mapper draws from a device backend): the
+// device mean as premultiplied RGBA8, each component clamped and rounded to
+// nearest, copied without reading the float image back; a replaced image is
+// an error, as for readBack().
+TEST(CudaAccumulation, DisplayImageIsTheRoundedMean)
+{
+  const TypedVolume v(ScalarType::Float32, 3, 30, 28, 26);
+  Scene scene;
+  v.configure(scene, BlendMode::Density);
+  const Camera cam = orbitCamera(v.dims, std::array<double, 3>{ 1, 1, 1 }.data(), 24, 24, 30, 20);
+  CUDARenderer g;
+  ASSERT_TRUE(g.hasDisplayImage());
+  Accumulator acc;
+  RenderSettings rs;
+  rs.seed = 3;
+  rs.readBack = false;
+  rs.samplesPerPixel = 4;
+  g.render(scene, cam, rs, nullptr, acc);
+  const uint64_t downloads = g.updateCounters().imageDownloads;
+  const uint8_t* display = g.displayImage(acc);
+  ASSERT_NE(display, nullptr);
+  EXPECT_TRUE(acc.pendingOnDevice()); // the float image stays on the device
+  EXPECT_EQ(g.updateCounters().imageDownloads, downloads + 1);
+  const std::vector<uint8_t> shown(display, display + size_t(cam.width) * cam.height * 4);
+  g.readBack(acc);
+  int visible = 0;
+  for (size_t i = 0; i < shown.size(); ++i)
+  {
+    const float x = std::min(std::max(acc.rgba()[i], 0.f), 1.f);
+    // Rounded to nearest: within half a level (plus float rounding).
+    ASSERT_LE(std::abs(float(shown[i]) - 255.f * x), 0.5f + 1e-3f) << "component " << i;
+    visible += (i % 4 == 3 && shown[i] > 0) ? 1 : 0;
+  }
+  EXPECT_GT(visible, int(cam.width) * cam.height / 10); // the volume covers the view
+  // Still valid after the read-back (the device keeps the image).
+  EXPECT_NE(g.displayImage(acc), nullptr);
+  // Another Accumulator's render replaces the device image.
+  Accumulator other;
+  g.render(scene, cam, rs, nullptr, other);
+  EXPECT_EQ(g.displayImage(acc), nullptr); // acc is on the host: draw its float image
+  Accumulator lost, next;
+  g.render(scene, cam, rs, nullptr, lost);
+  g.render(scene, cam, rs, nullptr, next);
+  EXPECT_THROW(g.displayImage(lost), std::logic_error);
+  g.finish();
 }
 
 // Depth clipping and counters on the device: geometry at mid-depth stops the

@@ -73,6 +73,8 @@ public:
   const char* name() const override { return "cuda"; }
   void readBack(Accumulator& accum) override;
   void readBackEven(Accumulator& accum) override;
+  const uint8_t* displayImage(Accumulator& accum) override;
+  bool hasDisplayImage() const override { return true; }
   void finish() override;
   bool buildsAccelerationOnDevice() const override { return true; }
   size_t deviceBytes() const override;

@@ -224,6 +224,26 @@ public:
   /// Device backends: copies the error estimate's even half of the image
   /// last rendered into `accum` (see RenderSettings::readBackEven).
   virtual void readBackEven(Accumulator& accum) { (void)accum; }
+  /**
+   * Device backends: the accumulated image of `accum` (the one this renderer
+   * rendered last, read back or not) as premultiplied RGBA with 8 bits per
+   * component, for display: each component clamped to [0, 1] and rounded to
+   * the nearest of 256 levels, converted on the device so that a quarter of
+   * the float image's bytes cross the bus, into page-locked host memory.
+   * `accum` keeps its state (pendingOnDevice() stays as it was). The pointer
+   * is valid until the next call or the renderer's destruction. nullptr
+   * where the backend has no such path (the CPU, whose image is on the
+   * host: draw accum.rgba()). Throws std::logic_error if `accum`'s image is
+   * not the one on the device.
+   */
+  virtual const uint8_t* displayImage(Accumulator& accum)
+  {
+    (void)accum;
+    return nullptr;
+  }
+  /// True if displayImage() serves this backend's images: a caller that only
+  /// draws them can then render with RenderSettings::readBack off.
+  virtual bool hasDisplayImage() const { return false; }
   /// Waits until every render issued so far has finished.
   virtual void finish() {}
   /// True if the backend builds macrocells and majorants itself (on the
