@@ -404,6 +404,9 @@ def parse_scene(data, scene_dir, presets):
     s["compositing"] = (
         get_string(data["compositing"], "compositing", COMPOSITING) if "compositing" in data else "extinction"
     )
+    if s["interpolation"] == "cubic" and s["renderer"] == "raymarch" and s["compositing"] == "opacity":
+        # The opacity model interpolates voxel opacities trilinearly; it has no B-spline variant.
+        raise SceneError("interpolation", 'cubic needs "compositing": "extinction" with the ray marcher')
     s["lighting"] = parse_lighting(data["lighting"]) if "lighting" in data else None
     s["visibility"] = parse_visibility(data["visibility"]) if "visibility" in data else None
     if "pixel_jitter" in data:
