@@ -1002,9 +1002,14 @@ bool vtkMultiChannelVolumeMapper::UpdateScene(RenderPass& pass)
     // changed (a new macrocell size marks the grids for update()).
     scene.setMacrocellSize(this->MacrocellSize);
     scene.setBlendMode(static_cast<mcvol::BlendMode>(this->ChannelBlendMode));
-    // vtkVolumeProperty's interpolation type, as VTK's own mappers use it (a
-    // property change resets the accumulation through its MTime).
-    scene.setNearestInterpolation(pass.Property->GetInterpolationType() == VTK_NEAREST_INTERPOLATION);
+    // The mapper's interpolation type, else vtkVolumeProperty's, as VTK's own
+    // mappers use it (a change resets the accumulation through the mapper's
+    // or the property's MTime).
+    const int interpolation =
+      this->InterpolationType >= 0 ? this->InterpolationType : pass.Property->GetInterpolationType();
+    scene.setInterpolation(interpolation == VTK_NEAREST_INTERPOLATION ? mcvol::Interpolation::Nearest
+        : interpolation == VTK_CUBIC_INTERPOLATION                       ? mcvol::Interpolation::Cubic
+                                                                         : mcvol::Interpolation::Linear);
     std::array<float, kMaxChannels> weights{};
     for (int c = 0; c < sceneChannels; ++c)
     {
@@ -1374,6 +1379,12 @@ void vtkMultiChannelVolumeMapper::PrintSelf(ostream& os, vtkIndent indent)
   vtkInternals& in = *this->Internals;
   os << indent << "ChannelBlendMode: " << this->GetChannelBlendModeAsString() << "\n";
   os << indent << "MixColorMode: " << (this->MixColorMode == MIX_AVERAGE ? "Average" : "Equation10") << "\n";
+  os << indent << "InterpolationType: "
+     << (this->InterpolationType < 0                               ? "Property"
+            : this->InterpolationType == VTK_NEAREST_INTERPOLATION ? "Nearest"
+            : this->InterpolationType == VTK_LINEAR_INTERPOLATION  ? "Linear"
+                                                                   : "Cubic")
+     << "\n";
   os << indent << "TrackingMethod: " << this->GetTrackingMethodAsString() << "\n";
   os << indent << "SampleSequence: " << this->GetSampleSequenceAsString() << "\n";
   os << indent << "Estimator: " << this->GetEstimatorAsString() << "\n";

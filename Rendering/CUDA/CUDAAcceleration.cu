@@ -58,7 +58,7 @@ struct TextureVoxels
 /// Scalar range of channel n over each macrocell's voxels (NaN voxels
 /// skipped, as on the host): one thread per cell.
 template <typename Voxels>
-__global__ void rangeKernel(const Voxels voxel, int3 dims, int3 gdims, int macrocell, int numChannels, int n,
+__global__ void rangeKernel(const Voxels voxel, int3 dims, int3 gdims, int macrocell, int apron, int numChannels, int n,
   int64_t cells, float2* __restrict__ ranges, unsigned* __restrict__ nonFiniteFlags)
 {
   const int64_t c = int64_t(blockIdx.x) * blockDim.x + threadIdx.x;
@@ -71,7 +71,7 @@ __global__ void rangeKernel(const Voxels voxel, int3 dims, int3 gdims, int macro
   const int cell[3] = { cc.x, cc.y, cc.z };
   int lo[3];
   int hi[3];
-  cellVoxelBounds(d, macrocell, cell, lo, hi);
+  cellVoxelBounds(d, macrocell, cell, apron, lo, hi);
   float mn = __int_as_float(0x7f800000);  // +inf
   float mx = -__int_as_float(0x7f800000); // -inf
   bool nonFinite = false;
@@ -100,7 +100,7 @@ __global__ void rangeKernel(const Voxels voxel, int3 dims, int3 gdims, int macro
 
 /// Range of a pre-classified channel's sanitised sigma (classifiedVoxel, as
 /// the host build and the per-ray sampling read it) over each macrocell.
-__global__ void classifiedRangeKernel(const float* __restrict__ data, int3 dims, int3 gdims, int macrocell,
+__global__ void classifiedRangeKernel(const float* __restrict__ data, int3 dims, int3 gdims, int macrocell, int apron,
   int numChannels, int n, int64_t cells, float2* __restrict__ ranges)
 {
   const int64_t c = int64_t(blockIdx.x) * blockDim.x + threadIdx.x;
@@ -113,7 +113,7 @@ __global__ void classifiedRangeKernel(const float* __restrict__ data, int3 dims,
   const int cell[3] = { cc.x, cc.y, cc.z };
   int lo[3];
   int hi[3];
-  cellVoxelBounds(d, macrocell, cell, lo, hi);
+  cellVoxelBounds(d, macrocell, cell, apron, lo, hi);
   float mn = __int_as_float(0x7f800000);  // +inf
   float mx = -__int_as_float(0x7f800000); // -inf
   for (int k = lo[2]; k <= hi[2]; ++k)
@@ -159,7 +159,7 @@ __global__ void majorantKernel(const __grid_constant__ TableView tv, int n, int 
 }
 } // namespace
 
-void CUDARenderer::Internal::buildRanges(int macrocell)
+void CUDARenderer::Internal::buildRanges(int macrocell, int apron)
 {
   const GridView& g = this->View.grid;
   const int64_t cells = int64_t(g.dims[0]) * g.dims[1] * g.dims[2];
@@ -179,13 +179,13 @@ void CUDARenderer::Internal::buildRanges(int macrocell)
     if (dc.format == ChannelFormat::Extinction)
     {
       classifiedRangeKernel<<<blocks, threads>>>(
-        reinterpret_cast<const float*>(dc.bytes.ptr), dims, gd, M, N, n, cells, this->Ranges.ptr);
+        reinterpret_cast<const float*>(dc.bytes.ptr), dims, gd, M, apron, N, n, cells, this->Ranges.ptr);
       MCVOL_CUDA(cudaGetLastError());
       continue;
     }
     if (dc.array)
     {
-      rangeKernel<<<blocks, threads>>>(TextureVoxels{ dc.point, dc.textureScale }, dims, gd, M, N, n, cells,
+      rangeKernel<<<blocks, threads>>>(TextureVoxels{ dc.point, dc.textureScale }, dims, gd, M, apron, N, n, cells,
         this->Ranges.ptr, this->NaNFlags.ptr);
     }
     else
@@ -195,7 +195,8 @@ void CUDARenderer::Internal::buildRanges(int macrocell)
         {
           using T = DeviceScalar<typename decltype(tag)::type>;
           const ArrayVoxels<T> voxels{ reinterpret_cast<const T*>(dc.bytes.ptr), dims.x, dims.y };
-          rangeKernel<<<blocks, threads>>>(voxels, dims, gd, M, N, n, cells, this->Ranges.ptr, this->NaNFlags.ptr);
+          rangeKernel<<<blocks, threads>>>(
+            voxels, dims, gd, M, apron, N, n, cells, this->Ranges.ptr, this->NaNFlags.ptr);
         });
     }
     MCVOL_CUDA(cudaGetLastError());

@@ -212,7 +212,8 @@ struct CUDARenderer::Internal
   /// After buildRanges(): texture-held channels with NaN or Inf voxels move
   /// to dense arrays (the core's NaN rule needs unfiltered reads).
   void moveNonFiniteToArrays(const Scene& scene);
-  void buildRanges(int macrocell);
+  /// apron: footprintApron() of the scene's interpolation (Acceleration.h).
+  void buildRanges(int macrocell, int apron);
   void buildMajorants(const Scene& scene, const bool* which);
   void sync(const Scene& scene);
   // CUDALaunch.cu: what a Monte Carlo render and a march both need.

@@ -276,6 +276,7 @@ SceneView CUDARenderer::Internal::renderView(const Scene& scene, bool textures)
   const SceneView& hv = scene.view();
   s.blend = hv.blend;
   s.volume.nearest = hv.volume.nearest;
+  s.volume.cubic = hv.volume.cubic;
   for (int n = 0; n < this->NumChannels; ++n)
   {
     const DeviceChannel& dc = this->Channels[n];
@@ -287,7 +288,9 @@ SceneView CUDARenderer::Internal::renderView(const Scene& scene, bool textures)
     c.offset = 0.0;
     // Texture-held channels: hardware filtering when `textures`, else exact
     // voxel reads through the point object (the reference march).
-    // Pre-classified channels are always arrays (software sampling).
+    // Pre-classified channels are always arrays (software sampling). Cubic
+    // sampling combines 8 linear fetches (Sigg and Hadwiger), so it takes the
+    // linear object too.
     c.texture = textures && !dc.nonFinite && dc.array ? (hv.volume.nearest ? dc.point : dc.linear) : 0;
     c.voxelTexture = dc.array ? dc.point : 0;
     c.voxelTextureDims[0] = this->Dims[0];

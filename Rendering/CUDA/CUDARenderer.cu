@@ -9,6 +9,8 @@
 // CUDAInternal.h holds the state they share (CUDARenderer::Internal).
 #include "CUDAInternal.h"
 
+#include "mcvol/Acceleration.h" // footprintApron
+
 #include <algorithm>
 #include <dlfcn.h>
 #include <iterator>
@@ -307,7 +309,8 @@ void CUDARenderer::Internal::sync(const Scene& scene)
   v.grid.majorants = nullptr;
   if (newGrid)
   {
-    this->buildRanges(scene.macrocellSize());
+    // Switching to or from cubic sampling bumps dataVersion (Scene::setInterpolation).
+    this->buildRanges(scene.macrocellSize(), footprintApron(hv.volume.cubic));
     if (newData)
     {
       this->moveNonFiniteToArrays(scene);

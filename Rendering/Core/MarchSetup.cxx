@@ -82,6 +82,14 @@ MarchParams prepareMarch(const Camera& camera, const MarchSettings& settings, Sc
         std::to_string(samples) + " samples per ray (at most 2^22 are allowed); use a larger step");
     }
   }
+  if (s.volume.cubic && settings.compositing == Compositing::Opacity)
+  {
+    // The opacity model interpolates per-voxel opacities over the trilinear
+    // corners (cornersOf()); it is kept only as Kraus and Buerger's
+    // comparison baseline and has no B-spline variant.
+    throw std::invalid_argument("mcvol: the opacity compositing model samples trilinearly; cubic interpolation "
+                                "needs the extinction model (or use linear or nearest interpolation)");
+  }
   const CameraView cam = toView(camera);
   s.sigmaLimit = extinctionLimit(cam);
   if (s.lighting.enabled)

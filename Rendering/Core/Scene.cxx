@@ -42,6 +42,26 @@ void Scene::setBlendMode(BlendMode mode)
   this->View.blend.mode = mode;
 }
 
+void Scene::setInterpolation(Interpolation interpolation)
+{
+  if (interpolation != Interpolation::Nearest && interpolation != Interpolation::Linear &&
+    interpolation != Interpolation::Cubic)
+  {
+    throw std::invalid_argument(
+      "mcvol: unknown interpolation type " + std::to_string(int(interpolation)) + " (nearest, linear or cubic)");
+  }
+  const bool cubic = interpolation == Interpolation::Cubic;
+  if (cubic != this->View.volume.cubic)
+  {
+    // The macrocell ranges cover the filter's footprint (cellVoxelBounds'
+    // apron), which the cubic B-spline widens by one voxel per side.
+    this->MacrocellsDirty = true;
+  }
+  this->InterpolationType = interpolation;
+  this->View.volume.nearest = interpolation == Interpolation::Nearest;
+  this->View.volume.cubic = cubic;
+}
+
 void Scene::setMixWeights(const float* weights, int count)
 {
   if (count < 0 || count > kMaxChannels)

@@ -138,13 +138,14 @@ void Scene::rebuildMacrocells()
   float* ranges = this->Ranges.data();
   const ChannelSource* ch = this->Channels.data();
   const int gd0 = g.dims[0], gd1 = g.dims[1];
+  const int apron = footprintApron(this->View.volume.cubic);
 #pragma omp parallel for schedule(dynamic, 4)
   for (int64_t c = 0; c < cells; ++c)
   {
     const int cell[3] = { int(c % gd0), int((c / gd0) % gd1), int(c / (int64_t(gd0) * gd1)) };
     int lo[3];
     int hi[3];
-    cellVoxelBounds(D, M, cell, lo, hi);
+    cellVoxelBounds(D, M, cell, apron, lo, hi);
     for (int n = 0; n < N; ++n)
     {
       float mn = std::numeric_limits<float>::infinity();

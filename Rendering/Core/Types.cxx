@@ -64,6 +64,20 @@ const char* toString(Estimator e)
   return e == Estimator::ExpectedValue ? "expected-value" : "collision";
 }
 
+const char* toString(Interpolation i)
+{
+  switch (i)
+  {
+    case Interpolation::Nearest:
+      return "nearest";
+    case Interpolation::Linear:
+      return "linear";
+    case Interpolation::Cubic:
+      return "cubic";
+  }
+  return "unknown";
+}
+
 const char* toString(Backend b)
 {
   switch (b)

@@ -13,11 +13,22 @@ namespace mcvol
  * share, so both produce the same grids.
  */
 
-/// Voxels whose values a point of macrocell `cell` can read: the voxels whose
-/// trilinear footprint reaches the cell plus one more on each side (the
-/// 27-neighbourhood), so a range stays conservative under interpolation and
-/// under rounding of the DDA's cell boundaries. Inclusive bounds.
-MCVOL_FUNC void cellVoxelBounds(const int dims[3], int macrocell, const int cell[3], int lo[3], int hi[3])
+/// Voxels beyond a macrocell's own that its ranges cover, per side
+/// (cellVoxelBounds): the reconstruction filter's reach past the cell plus
+/// one voxel for the rounding of the DDA's cell boundaries. Trilinear (and
+/// nearest) points read voxels floor(x) .. floor(x) + 1, the cubic B-spline
+/// floor(x) - 1 .. floor(x) + 2: one voxel more per side.
+MCVOL_FUNC int footprintApron(bool cubic)
+{
+  return cubic ? 2 : 1;
+}
+
+/// Voxels whose values a point of macrocell `cell` can read: the cell's
+/// voxels widened by `apron` voxels per side (footprintApron(): 1 for
+/// trilinear, the 27-neighbourhood; 2 for the cubic B-spline), so a range
+/// stays conservative under interpolation and under rounding of the DDA's
+/// cell boundaries. Inclusive bounds.
+MCVOL_FUNC void cellVoxelBounds(const int dims[3], int macrocell, const int cell[3], int apron, int lo[3], int hi[3])
 {
   for (int a = 0; a < 3; ++a)
   {
@@ -26,8 +37,8 @@ MCVOL_FUNC void cellVoxelBounds(const int dims[3], int macrocell, const int cell
       lo[a] = hi[a] = 0;
       continue;
     }
-    const int l = cell[a] * macrocell - 1;
-    const int h = (cell[a] + 1) * macrocell + 1;
+    const int l = cell[a] * macrocell - apron;
+    const int h = (cell[a] + 1) * macrocell + apron;
     lo[a] = l > 0 ? l : 0;
     hi[a] = h < dims[a] - 1 ? h : dims[a] - 1;
   }

@@ -39,16 +39,31 @@ MCVOL_HOT Vec3f mixColour(const BlendView& b, Vec3f weighted, float weightedSigm
   return weighted * (1.f / maxSigma);
 }
 
+/// The optics of channel n at p on the paths most scenes never take, out of
+/// line: a pre-classified channel (sampleClassified, any interpolation) or a
+/// scalar channel with cubic B-spline interpolation (sampleChannelCubic,
+/// then its transfer function).
+MCVOL_COLD TFSample coldChannelOptics(const SceneView& s, int n, Vec3f p)
+{
+  if (s.volume.channels[n].format == ChannelFormat::Extinction)
+  {
+    return sampleClassified(s.volume, n, p);
+  }
+  return lookupTF(s.tables, n, sampleChannelCubic(s.volume, n, p));
+}
+
 /// One channel's optics at p (extinction clamped to the render's limit, as
 /// the trackers clamp it): a scalar channel's interpolated value through its
 /// transfer function, or a pre-classified channel's interpolated extinction
 /// and extinction-weighted colour (sampleClassified). Every tracker, blend
 /// mode, the lighting (extinction gradient) and the extinction-model march
-/// read channels through here.
+/// read channels through here. Pre-classified channels and cubic
+/// interpolation share one out-of-line call (coldChannelOptics), so the
+/// render kernels hold as many call sites as without cubic sampling.
 MCVOL_HOT TFSample channelOptics(const SceneView& s, int n, Vec3f p)
 {
-  TFSample t = s.volume.channels[n].format == ChannelFormat::Extinction
-    ? sampleClassified(s.volume, n, p)
+  TFSample t = s.volume.channels[n].format == ChannelFormat::Extinction || s.volume.cubic
+    ? coldChannelOptics(s, n, p)
     : lookupTF(s.tables, n, sampleChannel(s.volume, n, p));
   t.sigma = minf(t.sigma, s.sigmaLimit);
   return t;

@@ -40,6 +40,15 @@
 #define MCVOL_COLD inline
 #endif
 
+/// Keeps the loop that follows rolled on the device (nvcc unrolls small
+/// constant loops by itself): the out-of-line cubic samplers stay
+/// register-light (Sampling.h, sampleChannelCubic).
+#if defined(__CUDA_ARCH__)
+#define MCVOL_NO_UNROLL _Pragma("unroll 1")
+#else
+#define MCVOL_NO_UNROLL
+#endif
+
 namespace mcvol
 {
 /// Upper bound on channels; fixed so per-ray code needs no heap memory.

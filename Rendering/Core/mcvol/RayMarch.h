@@ -33,6 +33,8 @@ namespace mcvol
  *   (density: summed, opacity clamped to 1; max: the channel of largest
  *   opacity; mix: largest opacity, weighted opacity-weighted colours). It
  *   converges only as d -> 0 and shows the artifacts the paper describes.
+ *   Its interpolation is trilinear or nearest: with cubic (B-spline)
+ *   interpolation prepareMarch() refuses it (std::invalid_argument).
  *
  * Samples lie on the lattice t_k = (k + phase) d along each ray (phase 0.5,
  * the midpoint rule, or a per-pixel hash with jitter). Macrocells whose

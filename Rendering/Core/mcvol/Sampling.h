@@ -174,11 +174,156 @@ MCVOL_HOT float fetchVoxelAt(const VolumeView& vol, const ChannelView& c, int i,
 }
 
 /**
+ * Uniform cubic B-spline weight of tap k (0..3: voxel floor(x) - 1 + k) at
+ * fraction t in [0, 1) past voxel floor(x) (Kraus and Buerger Sec. 4's
+ * B-spline reconstruction filter): B(d) at the tap's distance d = |t - k + 1|.
+ * The four are >= 0 and sum to 1, so a sample is a convex combination of
+ * the voxels it reads.
+ */
+MCVOL_FUNC float bsplineWeight(float t, int k)
+{
+  const float d = fabsf(t - float(k - 1));
+  if (d < 1.f)
+  {
+    return (4.f + d * d * (3.f * d - 6.f)) * (1.f / 6.f);
+  }
+  const float e = d < 2.f ? 2.f - d : 0.f;
+  return e * e * e * (1.f / 6.f);
+}
+
+/// The four weights bsplineWeight(t, 0..3).
+MCVOL_FUNC void bsplineWeights(float t, float w[4])
+{
+  for (int k = 0; k < 4; ++k)
+  {
+    w[k] = bsplineWeight(t, k);
+  }
+}
+
+/// One axis of a cubic B-spline footprint: voxel i = floor(x) of the point
+/// clamped to [0, last] and the fraction t past it (cubicTap() gives the taps).
+struct CubicAxis
+{
+  int i = 0;
+  int last = 0;
+  float t = 0.f;
+};
+
+MCVOL_FUNC CubicAxis cubicAxis(float p, int dim)
+{
+  CubicAxis a;
+  a.last = dim - 1;
+  const float x = clampf(p, 0.f, float(a.last));
+  const float fl = floorf(x);
+  a.i = int(fl);
+  a.t = x - fl;
+  return a;
+}
+
+/// Tap k (0..3) of axis a: voxel i - 1 + k clamped to the grid as the
+/// trilinear path clamps (edge voxels repeat; an axis with one voxel reads
+/// it four times, so it is constant).
+MCVOL_FUNC int cubicTap(const CubicAxis& a, int k)
+{
+  const int v = a.i - 1 + k;
+  return v < 0 ? 0 : (v > a.last ? a.last : v);
+}
+
+/**
+ * Cubic B-spline sample of scalar channel n at continuous index p
+ * (Interpolation::Cubic), clamped to the grid as sampleChannel() clamps. A
+ * NaN voxel among the 64 read gives NaN (the transfer function maps it to
+ * zero extinction), as among trilinear's 8. The weights are convex, so the
+ * sample stays within the range of the voxels read, which the macrocell
+ * ranges cover (footprintApron(true)).
+ *
+ * Out of line (MCVOL_COLD), and register-light: on the device a call's
+ * callee clobbers the caller's registers, so a callee that holds many
+ * values (its loops unrolled, 24 weights and indices) made the lit and
+ * optimized render kernels spill around the call (ptxas -warn-spills,
+ * sm_90). The loops stay rolled and weights are computed per tap.
+ *
+ * On the device, a channel with a (linear-filtered) texture combines 8
+ * hardware trilinear fetches (Sigg and Hadwiger, GPU Gems 2 ch. 20): per
+ * axis, the taps (w0, w1) are one linear fetch at i - 1 + w1 / (w0 + w1)
+ * weighted w0 + w1, and (w2, w3) one at i + 1 + w3 / (w2 + w3) weighted
+ * w2 + w3 (both sums >= 1/6); the clamp address mode repeats the edge
+ * texels as cubicTap() does. The hardware's 8-bit fractional weights make
+ * it differ from the 64-tap sum by a fraction of the voxels' local
+ * differences. Elsewhere (CPU, arrays, texture-held voxels read exactly
+ * through the point object) it sums the 64 voxels.
+ */
+MCVOL_COLD float sampleChannelCubic(const VolumeView& vol, int n, Vec3f p)
+{
+  const ChannelView& c = vol.channels[n];
+  const CubicAxis ax = cubicAxis(p.x, vol.dims[0]);
+  const CubicAxis ay = cubicAxis(p.y, vol.dims[1]);
+  const CubicAxis az = cubicAxis(p.z, vol.dims[2]);
+#if defined(__CUDA_ARCH__)
+  if (c.texture != 0)
+  {
+    float g0[3];
+    float h0[3];
+    float h1[3];
+    const CubicAxis* axes[3] = { &ax, &ay, &az };
+#pragma unroll
+    for (int a = 0; a < 3; ++a)
+    {
+      const float t = axes[a]->t;
+      const float w0 = bsplineWeight(t, 0), w1 = bsplineWeight(t, 1);
+      const float w2 = bsplineWeight(t, 2), w3 = bsplineWeight(t, 3);
+      g0[a] = w0 + w1;
+      // Texel coordinates: index + 0.5 (texel centres).
+      h0[a] = float(axes[a]->i) - 0.5f + w1 / g0[a];
+      h1[a] = float(axes[a]->i) + 1.5f + w3 / (w2 + w3);
+    }
+    const cudaTextureObject_t tex = c.texture;
+    // g1 = 1 - g0 (the four weights sum to 1).
+    const float y0 = g0[1] *
+        (g0[0] * tex3D<float>(tex, h0[0], h0[1], h0[2]) + (1.f - g0[0]) * tex3D<float>(tex, h1[0], h0[1], h0[2])) +
+      (1.f - g0[1]) *
+        (g0[0] * tex3D<float>(tex, h0[0], h1[1], h0[2]) + (1.f - g0[0]) * tex3D<float>(tex, h1[0], h1[1], h0[2]));
+    const float y1 = g0[1] *
+        (g0[0] * tex3D<float>(tex, h0[0], h0[1], h1[2]) + (1.f - g0[0]) * tex3D<float>(tex, h1[0], h0[1], h1[2])) +
+      (1.f - g0[1]) *
+        (g0[0] * tex3D<float>(tex, h0[0], h1[1], h1[2]) + (1.f - g0[0]) * tex3D<float>(tex, h1[0], h1[1], h1[2]));
+    return c.textureScale * (g0[2] * y0 + (1.f - g0[2]) * y1);
+  }
+#endif
+  float sum = 0.f;
+  MCVOL_NO_UNROLL
+  for (int k = 0; k < 4; ++k)
+  {
+    const int z = cubicTap(az, k);
+    float plane = 0.f;
+    MCVOL_NO_UNROLL
+    for (int j = 0; j < 4; ++j)
+    {
+      const int y = cubicTap(ay, j);
+      float row = 0.f;
+      MCVOL_NO_UNROLL
+      for (int i = 0; i < 4; ++i)
+      {
+        row += bsplineWeight(ax.t, i) * fetchVoxelAt(vol, c, cubicTap(ax, i), y, z);
+      }
+      plane += bsplineWeight(ay.t, j) * row;
+    }
+    sum += bsplineWeight(az.t, k) * plane;
+  }
+  return sum;
+}
+
+/**
  * Trilinear interpolation (or the nearest voxel, if vol.nearest) of channel n
  * at continuous index p, clamped to the grid (axes with one voxel are
  * constant). Both stay within the macrocell ranges, which cover every voxel
  * a cell's points can read. A NaN voxel among the 8 corners
  * gives NaN, which the transfer-function lookup maps to zero extinction.
+ * It ignores vol.cubic: channelOptics() sends cubic sampling to
+ * sampleChannelCubic() on its out-of-line path, so that this inlined code
+ * (and the render kernels around it) stays as it is. A check and call here
+ * made the render kernels spill registers (ptxas -warn-spills, sm_90: up to
+ * 176 bytes in the max and mix kernels).
  */
 MCVOL_HOT float sampleChannel(const VolumeView& vol, int n, Vec3f p)
 {
@@ -261,9 +406,55 @@ MCVOL_HOT Corners cornersOf(const VolumeView& vol, Vec3f p)
 }
 
 /**
+ * Cubic B-spline variant of sampleClassified() (vol.cubic): sigma and
+ * sigma*colour each filtered over the 64 voxels of the footprint
+ * (cubicTap()), colour their ratio (Kraus and Buerger Sec. 3.3 with the
+ * B-spline filter of Sec. 4). Convex weights keep sigma within the voxels'
+ * sigma range (the macrocell majorants) and sigma*colour within [0, sigma].
+ * A NaN among the voxels read gives sigma 0 (transparent), as in the
+ * trilinear variant. Register-light, as sampleChannelCubic() explains.
+ */
+MCVOL_COLD TFSample sampleClassifiedCubic(const VolumeView& vol, int n, Vec3f p)
+{
+  const ChannelView& c = vol.channels[n];
+  const CubicAxis ax = cubicAxis(p.x, vol.dims[0]);
+  const CubicAxis ay = cubicAxis(p.y, vol.dims[1]);
+  const CubicAxis az = cubicAxis(p.z, vol.dims[2]);
+  const int64_t sy = vol.dims[0];
+  const int64_t sz = int64_t(vol.dims[0]) * vol.dims[1];
+  float acc[4] = { 0.f, 0.f, 0.f, 0.f };
+  MCVOL_NO_UNROLL
+  for (int k = 0; k < 4; ++k)
+  {
+    MCVOL_NO_UNROLL
+    for (int j = 0; j < 4; ++j)
+    {
+      const float wjk = bsplineWeight(ay.t, j) * bsplineWeight(az.t, k);
+      const int64_t row = cubicTap(ay, j) * sy + cubicTap(az, k) * sz;
+      MCVOL_NO_UNROLL
+      for (int i = 0; i < 4; ++i)
+      {
+        float x[4];
+        if (!fetchClassified(c, row + cubicTap(ax, i), x))
+        {
+          return TFSample();
+        }
+        const float w = bsplineWeight(ax.t, i) * wjk;
+        acc[0] += w * x[0];
+        acc[1] += w * x[1];
+        acc[2] += w * x[2];
+        acc[3] += w * x[3];
+      }
+    }
+  }
+  return classifiedOptics(acc);
+}
+
+/**
  * Extinction-based sampling of a pre-classified channel n at continuous index
  * p (Kraus and Buerger Sec. 3.3): sigma and sigma*colour interpolated
- * trilinearly (or the nearest voxel, if vol.nearest) with the footprint and
+ * trilinearly (or the nearest voxel, if vol.nearest; the cubic B-spline, if
+ * vol.cubic: sampleClassifiedCubic) with the footprint and
  * clamping of sampleChannel(), colour their ratio. A NaN among the voxels
  * read gives sigma 0 (transparent). Always software sampling (no texture).
  * It walks the corners itself rather than through cornersOf(): built on
@@ -273,6 +464,12 @@ MCVOL_HOT Corners cornersOf(const VolumeView& vol, Vec3f p)
  */
 MCVOL_COLD TFSample sampleClassified(const VolumeView& vol, int n, Vec3f p)
 {
+  if (vol.cubic)
+  {
+    // Dispatched here rather than in channelOptics(), which is inlined into
+    // every render kernel: this function is already out of line.
+    return sampleClassifiedCubic(vol, n, p);
+  }
   const ChannelView& c = vol.channels[n];
   float acc[4] = { 0.f, 0.f, 0.f, 0.f };
   if (vol.nearest)

@@ -163,8 +163,18 @@ public:
   /// Macrocell edge in voxels (>= 1).
   void setMacrocellSize(int voxels);
   void setBlendMode(BlendMode mode);
-  /// Nearest-voxel sampling instead of trilinear (default false).
-  void setNearestInterpolation(bool nearest) { this->View.volume.nearest = nearest; }
+  /// Reconstruction filter between voxels (default Linear). Switching to or
+  /// from Cubic rebuilds the macrocell ranges at the next update(): the
+  /// cubic footprint is one voxel wider (cellVoxelBounds' apron). Throws
+  /// std::invalid_argument for a value outside the enum.
+  void setInterpolation(Interpolation interpolation);
+  Interpolation interpolation() const { return this->InterpolationType; }
+  /// Nearest-voxel sampling (true) or trilinear (false); kept for callers
+  /// that know only the two (setInterpolation(Nearest or Linear)).
+  void setNearestInterpolation(bool nearest)
+  {
+    this->setInterpolation(nearest ? Interpolation::Nearest : Interpolation::Linear);
+  }
   /// Non-negative weights, one per channel; normalised to sum 1 (Eq. 10).
   /// All zero means equal weights.
   void setMixWeights(const float* weights, int count);
@@ -247,6 +257,7 @@ private:
   uint64_t ContentVersion = 0;
   std::array<uint64_t, kMaxChannels> ChannelTableVersion{};
   int MacrocellSize = 8;
+  Interpolation InterpolationType = Interpolation::Linear;
   std::array<float, kMaxChannels> MixWeights{};
 
   std::vector<float> Tables; ///< [channel][K][4]: r, g, b, extinction

@@ -48,6 +48,10 @@ struct VolumeView
   /// Nearest-voxel instead of trilinear sampling (vtkVolumeProperty's
   /// VTK_NEAREST_INTERPOLATION).
   bool nearest = false;
+  /// Cubic B-spline instead of trilinear sampling (Interpolation::Cubic;
+  /// never together with nearest). Sampled out of line
+  /// (sampleChannelCubic, sampleClassifiedCubic).
+  bool cubic = false;
 };
 
 /// Transfer-function tables: per channel K texels of (r, g, b, extinction).

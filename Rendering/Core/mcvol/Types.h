@@ -97,6 +97,27 @@ enum class Estimator : int
   ExpectedValue = 1
 };
 
+/**
+ * How a channel is reconstructed between voxels (vtkVolumeProperty's
+ * interpolation types, with cubic as VTK_CUBIC_INTERPOLATION).
+ * - Nearest: the nearest voxel.
+ * - Linear: trilinear interpolation of the 8 surrounding voxels.
+ * - Cubic: the uniform cubic B-spline over the 64 surrounding voxels
+ *   (issue 13 item 3; Kraus and Buerger's third reconstruction filter). It
+ *   approximates rather than interpolates (a sample at a voxel centre is
+ *   (v_-1 + 4 v_0 + v_+1) / 6 per axis) and is C2 smooth. Its weights are
+ *   non-negative and sum to 1, so a sample stays within the range of the
+ *   voxels it reads, which keeps the macrocell majorants valid (the
+ *   footprint is one voxel wider than trilinear's, and the macrocell ranges
+ *   widen with it).
+ */
+enum class Interpolation : int
+{
+  Nearest = 0,
+  Linear = 1,
+  Cubic = 2
+};
+
 enum class Backend : int
 {
   Auto = 0,
@@ -148,6 +169,7 @@ const char* toString(BlendMode m);
 const char* toString(Tracker t);
 const char* toString(Sampler s);
 const char* toString(Estimator e);
+const char* toString(Interpolation i);
 const char* toString(Backend b);
 int scalarTypeSize(ScalarType t);
 } // namespace mcvol

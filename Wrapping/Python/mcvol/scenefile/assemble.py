@@ -538,6 +538,9 @@ def assemble(scene, errors, prog):
         prop.SetInterpolationTypeToNearest()
     else:
         prop.SetInterpolationTypeToLinear()
+    if scene["interpolation"] == "cubic":
+        # The mapper holds the cubic choice (VTK 9.1's property clamps its type to linear).
+        mapper.SetInterpolationTypeToCubic()
     total, per_render = setup_mapper(mapper, prop, scene, channels, tfs, render_image, reference)
 
     volume = vtkVolume()

@@ -420,6 +420,9 @@ def parse_scene(data, scene_dir, presets):
     s["memory_budget"] = (
         get_number(data["memory_budget"], "memory_budget", lo=0.0, hi=1e12) if "memory_budget" in data else 0.0
     )
+    if s["interpolation"] == "cubic" and s["renderer"] == "raymarch" and s["compositing"] == "opacity":
+        # The opacity model interpolates voxel opacities trilinearly; it has no B-spline variant.
+        raise SceneError("interpolation", 'cubic needs "compositing": "extinction" with the ray marcher')
     s["lighting"] = parse_lighting(data["lighting"]) if "lighting" in data else None
     s["visibility"] = parse_visibility(data["visibility"]) if "visibility" in data else None
     if "pixel_jitter" in data:

@@ -15,7 +15,7 @@ from .errors import SceneError
 DEMO_NAMES = ("figure3", "microscopy", "cosmology", "weather")
 BLEND_MODES = ("density", "max", "mix", "composite")
 MIX_COLORS = ("average", "equation10")
-INTERPOLATIONS = ("linear", "nearest")
+INTERPOLATIONS = ("linear", "nearest", "cubic")
 RANGE_MODES = ("auto", "data")  # a channel's "range" as a word
 TRACKING = ("1-dda", "n-dda")
 SAMPLE_SEQUENCES = ("sobol", "independent")
