@@ -216,6 +216,11 @@ void vtkMultiChannelVolumeRepresentation::SetEstimator(int estimator)
   this->GetMultiChannelMapper()->SetEstimator(estimator);
 }
 
+void vtkMultiChannelVolumeRepresentation::SetMultiChannelInterpolation(int type)
+{
+  this->GetMultiChannelMapper()->SetInterpolationType(type);
+}
+
 void vtkMultiChannelVolumeRepresentation::SetSampleSequence(int sequence)
 {
   this->GetMultiChannelMapper()->SetSampleSequence(sequence);

@@ -88,6 +88,11 @@ reference = image()
 expect_property("Seed", 8, True)
 expect_property("SampleSequence", "Sobol", True)
 expect_property("Estimator", "Expected Value", True)
+expect_property("MultiChannelInterpolation", "Cubic B-Spline", True)
+expect_property("MultiChannelInterpolation", "Nearest", True)
+# The override set to what the volume property already says (Linear) draws
+# the image the property draws.
+expect_property("MultiChannelInterpolation", "Linear", False, "MultiChannelInterpolation = the property's Linear")
 expect_property("SamplesPerRender", 4, False, "SamplesPerRender (same total)")
 expect_property("MaximumTotalSamples", 64, True)
 expect_property("ChannelBlendMode", "Mix", True)
