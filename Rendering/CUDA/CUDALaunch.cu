@@ -6,9 +6,7 @@
 // from the core (Integrator.h -> Tracking.h -> DDA.h, Sampling.h), the same
 // functions the OpenMP backend runs, compiled for the device through
 // MCVOL_HOST_DEVICE.
-#include "CUDAInternal.h"
-
-#include "mcvol/RenderSetup.h"
+#include "CUDARenderKernels.h"
 
 #include <cstring>
 #include <stdexcept>
@@ -17,120 +15,6 @@ namespace mcvol
 {
 namespace
 {
-// Warp sums with shuffles (any architecture from sm_70), 64-bit so that high
-// sample counts cannot wrap.
-__device__ MCVOL_FORCE_INLINE unsigned long long warpSumU64(unsigned long long v)
-{
-  for (int o = 16; o > 0; o >>= 1)
-  {
-    v += __shfl_xor_sync(0xffffffffu, v, o);
-  }
-  return v;
-}
-
-/// The core's running mean (accumulate()) on one pixel of the device image.
-__device__ MCVOL_FORCE_INLINE void accumulatePixel(float4* pixel, const Vec4f& sum, uint32_t previous, int added)
-{
-  const float4 old = *pixel;
-  float v[4] = { old.x, old.y, old.z, old.w };
-  accumulate(v, sum, previous, added);
-  *pixel = make_float4(v[0], v[1], v[2], v[3]);
-}
-
-/// The even half of the error estimate (accumulateEven()) on one pixel of
-/// the device's even-sample image.
-__device__ MCVOL_FORCE_INLINE void accumulateEvenPixel(float4* pixel, const Vec4f& sum, uint32_t previous, int added)
-{
-  if (addedEvenSamples(previous, added) == 0u)
-  {
-    return; // no sample of even index in this render: leave the pixel unread
-  }
-  const float4 old = *pixel;
-  float v[4] = { old.x, old.y, old.z, old.w };
-  accumulateEven(v, sum, previous, added);
-  *pixel = make_float4(v[0], v[1], v[2], v[3]);
-}
-
-/// One thread per pixel: renderPixel() from the core, folded into the
-/// running mean in `accum` (and the even samples into `even`, when not
-/// null: the error estimate). Count adds the work counters (warp sums, one
-/// atomic per warp and counter).
-template <BlendMode Mode, bool Count, bool Lit, bool ExpectedValue>
-__device__ __forceinline__ void renderKernelBody(const SceneView& s, const CameraView& cam, const FrameParams& fp,
-  const float* __restrict__ depth, float4* __restrict__ accum, float4* __restrict__ even, uint32_t previous,
-  unsigned long long* __restrict__ counters)
-{
-  const int x = int(blockIdx.x * blockDim.x + threadIdx.x);
-  const int y = int(blockIdx.y * blockDim.y + threadIdx.y);
-  RayCounters c;
-  if (x < cam.width && y < cam.height)
-  {
-    const size_t p = size_t(y) * size_t(cam.width) + size_t(x);
-    const float z = depth ? depth[p] : 1.f;
-    Vec4f evenSum;
-    const Vec4f sum =
-      renderPixel<Mode, Lit, false, ExpectedValue>(s, cam, fp, x, y, z, c, nullptr, even ? &evenSum : nullptr);
-    accumulatePixel(accum + p, sum, previous, fp.samplesPerPixel);
-    if (even)
-    {
-      accumulateEvenPixel(even + p, evenSum, previous, fp.samplesPerPixel);
-    }
-  }
-  if (Count)
-  {
-    const unsigned long long dda = warpSumU64(c.ddaSteps);
-    const unsigned long long tent = warpSumU64(c.tentative);
-    const unsigned long long real = warpSumU64(c.real);
-    const unsigned long long smp = warpSumU64(c.samples);
-    const unsigned long long sca = Lit ? warpSumU64(c.scattering) : 0ull;
-    const unsigned long long shd = Lit ? warpSumU64(c.shadowRays) : 0ull;
-    const unsigned long long grd = Lit ? warpSumU64(c.gradients) : 0ull;
-    const unsigned lane = (threadIdx.y * blockDim.x + threadIdx.x) & 31u;
-    if (lane == 0)
-    {
-      atomicAdd(counters + 0, dda);
-      atomicAdd(counters + 1, tent);
-      atomicAdd(counters + 2, real);
-      atomicAdd(counters + 3, smp);
-      if (Lit)
-      {
-        atomicAdd(counters + 4, sca);
-        atomicAdd(counters + 5, shd);
-        atomicAdd(counters + 6, grd);
-      }
-    }
-  }
-}
-
-template <BlendMode Mode, bool Count, bool Lit, bool ExpectedValue = false>
-__global__ void renderKernel(const __grid_constant__ SceneView s, const __grid_constant__ CameraView cam,
-  const __grid_constant__ FrameParams fp, const float* __restrict__ depth, float4* __restrict__ accum,
-  float4* __restrict__ even, uint32_t previous, unsigned long long* __restrict__ counters)
-{
-  renderKernelBody<Mode, Count, Lit, ExpectedValue>(s, cam, fp, depth, accum, even, previous, counters);
-}
-
-/// The unlit kernels, a separate entry so that a build can cap their registers
-/// without touching the lit ones: -DMCVOL_UNLIT_MAXREG=N (off by default).
-/// Measured on the H100 (NYX-like, 1024^2; unlit kernels at 114-118
-/// registers): a cap of 96 (spilling 140-200 bytes) made the 1-DDA frame 0.83
-/// -> 0.77 ms and the expected-value one 1.24 -> 1.13 ms; 112 changed
-/// nothing; 80 spilled too much (1-DDA 1.37 ms). Without float4 texture reads
-/// in the kernels (the default build) they need 96-106 registers and
-/// the expected-value frame takes 1.05 ms uncapped.
-#if defined(MCVOL_UNLIT_MAXREG) && MCVOL_UNLIT_MAXREG > 0
-#define MCVOL_UNLIT_BOUNDS __maxnreg__(MCVOL_UNLIT_MAXREG)
-#else
-#define MCVOL_UNLIT_BOUNDS
-#endif
-template <BlendMode Mode, bool Count, bool ExpectedValue>
-__global__ void MCVOL_UNLIT_BOUNDS renderKernelUnlit(const __grid_constant__ SceneView s,
-  const __grid_constant__ CameraView cam, const __grid_constant__ FrameParams fp, const float* __restrict__ depth,
-  float4* __restrict__ accum, float4* __restrict__ even, uint32_t previous, unsigned long long* __restrict__ counters)
-{
-  renderKernelBody<Mode, Count, false, ExpectedValue>(s, cam, fp, depth, accum, even, previous, counters);
-}
-
 /**
  * The visibility optimization's kernel (paper 004): as renderKernel, with the
  * pixel's importance segment list refined first on the refining renders
@@ -227,13 +111,20 @@ void launchOptimized(bool lit, dim3 grid, dim3 block, const SceneView& s, const 
 }
 
 template <BlendMode Mode>
-void launchRender(bool count, bool lit, dim3 grid, dim3 block, const SceneView& s, const CameraView& cam,
+void launchRender(bool count, bool lit, bool plain, dim3 grid, dim3 block, const SceneView& s, const CameraView& cam,
   const FrameParams& fp, const float* depth, float4* accum, float4* even, uint32_t previous,
   unsigned long long* counters)
 {
   // The unlit kernels contain none of the lighting code, the collision
-  // kernels none of the expected-value estimator's (registers: ptxas).
+  // kernels none of the expected-value estimator's (registers: ptxas); for
+  // plain scenes, none of the pre-classified or cubic sampling either
+  // (CUDALaunchPlain.cu).
   const bool ev = usesExpectedValue(fp.estimator, Mode, lit, false);
+  if (plain && !lit)
+  {
+    launchPlainUnlit(Mode, count, ev, grid, block, s, cam, fp, depth, accum, even, previous, counters);
+    return;
+  }
   if (ev)
   {
     if (count)
@@ -437,6 +328,13 @@ void CUDARenderer::render(const Scene& scene, const Camera& camera, const Render
     opt.refinePass = pool->passes < s.importance.refinePasses ? pool->passes : -1;
   }
   const bool count = counters != nullptr || optimized;
+  // Plain scenes (scalar channels, linear or nearest interpolation) take the
+  // kernels compiled without the pre-classified and cubic sampling.
+  bool plain = in.PlainKernels && !s.volume.cubic;
+  for (int n = 0; n < s.volume.numChannels; ++n)
+  {
+    plain = plain && s.volume.channels[n].format == ChannelFormat::Scalar;
+  }
   if (count)
   {
     MCVOL_CUDA(cudaMemsetAsync(in.Counters.ptr, 0, 9 * sizeof(unsigned long long)));
@@ -475,20 +373,20 @@ void CUDARenderer::render(const Scene& scene, const Camera& camera, const Render
       {
         case BlendMode::Max:
           launchRender<BlendMode::Max>(
-            count, lit, grid, block, s, cam, fp, devDepth, in.Accum.ptr, devEven, previous, in.Counters.ptr);
+            count, lit, plain, grid, block, s, cam, fp, devDepth, in.Accum.ptr, devEven, previous, in.Counters.ptr);
           break;
         case BlendMode::Mix:
           launchRender<BlendMode::Mix>(
-            count, lit, grid, block, s, cam, fp, devDepth, in.Accum.ptr, devEven, previous, in.Counters.ptr);
+            count, lit, plain, grid, block, s, cam, fp, devDepth, in.Accum.ptr, devEven, previous, in.Counters.ptr);
           break;
         case BlendMode::Composite:
           launchRender<BlendMode::Composite>(
-            count, lit, grid, block, s, cam, fp, devDepth, in.Accum.ptr, devEven, previous, in.Counters.ptr);
+            count, lit, plain, grid, block, s, cam, fp, devDepth, in.Accum.ptr, devEven, previous, in.Counters.ptr);
           break;
         case BlendMode::Density:
         default:
           launchRender<BlendMode::Density>(
-            count, lit, grid, block, s, cam, fp, devDepth, in.Accum.ptr, devEven, previous, in.Counters.ptr);
+            count, lit, plain, grid, block, s, cam, fp, devDepth, in.Accum.ptr, devEven, previous, in.Counters.ptr);
           break;
       }
     MCVOL_CUDA(cudaGetLastError());

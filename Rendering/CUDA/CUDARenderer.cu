@@ -182,6 +182,8 @@ CUDARenderer::CUDARenderer(int device)
   this->In->ChannelMax.resize(kMaxChannels);
   this->In->NaNFlags.resize(kMaxChannels);
   std::fill(std::begin(this->In->ChannelTableVersion), std::end(this->In->ChannelTableVersion), ~0ull);
+  const char* plain = std::getenv("MCVOL_CUDA_PLAIN_KERNELS");
+  this->In->PlainKernels = plain && std::string(plain) == "1";
 }
 
 CUDARenderer::~CUDARenderer() = default;
@@ -198,6 +200,16 @@ void CUDARenderer::setSampling(CudaSampling s)
 CudaSampling CUDARenderer::sampling() const
 {
   return this->In->Sampling;
+}
+
+void CUDARenderer::setPlainKernels(bool on)
+{
+  this->In->PlainKernels = on;
+}
+
+bool CUDARenderer::plainKernels() const
+{
+  return this->In->PlainKernels;
 }
 
 void CUDARenderer::setBlockSize(int x, int y)

@@ -639,6 +639,50 @@ TEST(CudaAccumulation, DisplayImageIsTheRoundedMean)
   g.finish();
 }
 
+// The experimental plain kernels (CUDARenderer::setPlainKernels) compute the
+// same image as the general ones for a plain scene, for both estimators and
+// every blend mode, and are not taken for a cubic scene.
+TEST(CudaRender, PlainKernelsEqualGeneral)
+{
+  const TypedVolume v(ScalarType::UInt16, 3, 30, 28, 26);
+  const Camera cam = orbitCamera(v.dims, std::array<double, 3>{ 1, 1, 1 }.data(), 24, 24, 30, 20);
+  for (BlendMode mode : { BlendMode::Density, BlendMode::Max, BlendMode::Mix, BlendMode::Composite })
+  {
+    for (Estimator e : { Estimator::Collision, Estimator::ExpectedValue })
+    {
+      for (Interpolation interp : { Interpolation::Linear, Interpolation::Cubic })
+      {
+        Scene scene;
+        v.configure(scene, mode);
+        scene.setInterpolation(interp);
+        scene.update();
+        std::vector<float> img[2];
+        for (int plain = 0; plain < 2; ++plain)
+        {
+          CUDARenderer g;
+          g.setPlainKernels(plain == 1);
+          EXPECT_EQ(g.plainKernels(), plain == 1);
+          Accumulator acc;
+          RenderSettings rs;
+          rs.seed = 5;
+          rs.samplesPerPixel = 4;
+          rs.estimator = e;
+          g.render(scene, cam, rs, nullptr, acc);
+          img[plain].assign(acc.rgba(), acc.rgba() + size_t(cam.width) * cam.height * 4);
+        }
+        double worst = 0.0, sum = 0.0;
+        for (size_t i = 0; i < img[0].size(); ++i)
+        {
+          worst = std::max(worst, double(std::fabs(img[0][i] - img[1][i])));
+          sum += img[0][i];
+        }
+        EXPECT_GT(sum, 1.0) << toString(mode);
+        EXPECT_LE(worst, 1e-5) << toString(mode) << " " << toString(e) << " " << toString(interp);
+      }
+    }
+  }
+}
+
 // Depth clipping and counters on the device: geometry at mid-depth stops the
 // rays (less alpha, fewer collisions), and the counters add up like the CPU's.
 TEST(CudaRender, DepthAndCounters)

@@ -83,6 +83,16 @@ public:
   /// Texture (default) or global-memory sampling; takes effect at the next render.
   void setSampling(CudaSampling s);
   CudaSampling sampling() const;
+  /**
+   * Experimental, off by default: unlit renders of plain scenes (scalar
+   * channels, linear or nearest interpolation) launch kernels compiled
+   * without the pre-classified and cubic sampling (CUDALaunchPlain.cu;
+   * ptxas: 72-80 registers instead of 116-124). Not yet run on a GPU: the
+   * CUDA tests and benchmarks take it with MCVOL_CUDA_PLAIN_KERNELS=1 in the
+   * environment (read when the renderer is made) until they have passed.
+   */
+  void setPlainKernels(bool on);
+  bool plainKernels() const;
   /// Threads per block (x, y) of the render kernel (default 8 x 8).
   void setBlockSize(int x, int y);
 

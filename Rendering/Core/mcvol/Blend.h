@@ -62,9 +62,15 @@ MCVOL_COLD TFSample coldChannelOptics(const SceneView& s, int n, Vec3f p)
 /// render kernels hold as many call sites as without cubic sampling.
 MCVOL_HOT TFSample channelOptics(const SceneView& s, int n, Vec3f p)
 {
+#if defined(__CUDA_ARCH__) && defined(MCVOL_DEVICE_PLAIN_CHANNELS)
+  // Device kernels for plain scenes only (Rendering/CUDA/CUDALaunchPlain.cu:
+  // scalar channels, linear or nearest interpolation; the launcher checks).
+  TFSample t = lookupTF(s.tables, n, sampleChannel(s.volume, n, p));
+#else
   TFSample t = s.volume.channels[n].format == ChannelFormat::Extinction || s.volume.cubic
     ? coldChannelOptics(s, n, p)
     : lookupTF(s.tables, n, sampleChannel(s.volume, n, p));
+#endif
   t.sigma = minf(t.sigma, s.sigmaLimit);
   return t;
 }
