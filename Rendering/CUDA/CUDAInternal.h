@@ -163,7 +163,7 @@ struct CUDARenderer::Internal
   DeviceBuffer<float4> Even;
   bool AccumEven = false;
   bool SkipEvenReadBack = false; ///< set by render() for RenderSettings::readBackEven off
-  bool PlainKernels = false; ///< setPlainKernels()
+  bool PlainKernels = true; ///< setPlainKernels()
   /// displayImage(): the 8-bit image on the device and its page-locked host copy.
   DeviceBuffer<uchar4> Display;
   uint8_t* DisplayHost = nullptr;

@@ -7,12 +7,13 @@
 // - CUDALaunchPlain.cu: the unlit kernels again, compiled with
 //   MCVOL_DEVICE_PLAIN_CHANNELS, for scenes of scalar channels with linear or
 //   nearest interpolation (the common case; CUDARenderer::setPlainKernels,
-//   experimental and off until run on a GPU). There channelOptics() has no
+//   on by default). There channelOptics() has no
 //   out-of-line call for pre-classified or cubic sampling, whose register
 //   needs otherwise weigh on every kernel that can make it (ptxas, sm_90:
 //   unlit kernels 72-80 instead of 116-124 registers; on the H100 an
 //   expected-value NYX-like frame took 1.05 ms with the pre-classified call
-//   alone and 1.24 ms with cubic sampling added, Benchmarks/RESULTS.md).
+//   alone, 1.24 ms with cubic sampling added and 0.86 ms with the plain
+//   kernels, Benchmarks/RESULTS.md).
 // Included once per translation unit, inside namespace mcvol.
 #pragma once
 

@@ -183,7 +183,7 @@ CUDARenderer::CUDARenderer(int device)
   this->In->NaNFlags.resize(kMaxChannels);
   std::fill(std::begin(this->In->ChannelTableVersion), std::end(this->In->ChannelTableVersion), ~0ull);
   const char* plain = std::getenv("MCVOL_CUDA_PLAIN_KERNELS");
-  this->In->PlainKernels = plain && std::string(plain) == "1";
+  this->In->PlainKernels = !(plain && std::string(plain) == "0");
 }
 
 CUDARenderer::~CUDARenderer() = default;

@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <limits>
 #include <sstream>
@@ -639,11 +640,13 @@ TEST(CudaAccumulation, DisplayImageIsTheRoundedMean)
   g.finish();
 }
 
-// The experimental plain kernels (CUDARenderer::setPlainKernels) compute the
+// The plain kernels (CUDARenderer::setPlainKernels, the default) compute the
 // same image as the general ones for a plain scene, for both estimators and
 // every blend mode, and are not taken for a cubic scene.
 TEST(CudaRender, PlainKernelsEqualGeneral)
 {
+  const char* env = std::getenv("MCVOL_CUDA_PLAIN_KERNELS");
+  EXPECT_EQ(CUDARenderer().plainKernels(), !(env && std::string(env) == "0")); // on by default
   const TypedVolume v(ScalarType::UInt16, 3, 30, 28, 26);
   const Camera cam = orbitCamera(v.dims, std::array<double, 3>{ 1, 1, 1 }.data(), 24, 24, 30, 20);
   for (BlendMode mode : { BlendMode::Density, BlendMode::Max, BlendMode::Mix, BlendMode::Composite })
