@@ -26,7 +26,9 @@
 // renderer's default) its estimator; the 4096-spp cross-check uses the same.
 // Without --mc-configs the series are that estimator and sampler with both
 // trackers; --mc-configs lists estimator:sampler:tracker triples instead
-// (e.g. expected-value:sobol:1dda,collision:independent:1dda), so that one
+// (e.g. expected-value:sobol:1dda,collision:independent:1dda; a 4th field,
+// expected-value:sobol:1dda:1, sets RenderSettings::minSamplesPerVoxel and
+// names the series' variant 1dda-min1), so that one
 // run, with one reference, times several Monte Carlo configurations. A
 // configuration the renderer would not run as asked (the expected-value
 // estimator under the composite blend, which keeps the collision estimator)
@@ -70,6 +72,7 @@ struct McConfig
   mcvol::Estimator estimator;
   mcvol::Sampler sampler;
   mcvol::Tracker tracker;
+  float minSamplesPerVoxel = 0.f; ///< RenderSettings::minSamplesPerVoxel
 };
 
 struct Options
@@ -127,14 +130,16 @@ std::vector<McConfig> splitConfigs(const std::string& s)
     {
       throw std::invalid_argument("--mc-configs takes estimator:sampler:tracker entries, not " + item);
     }
-    const std::string t = item.substr(b + 1);
+    const size_t c = item.find(':', b + 1); // optional 4th field: minimum samples per voxel
+    const std::string t = item.substr(b + 1, c == std::string::npos ? std::string::npos : c - b - 1);
     if (t != "1dda" && t != "ndda")
     {
       throw std::invalid_argument("--mc-configs: tracker 1dda or ndda, not " + t);
     }
     v.push_back(
       { estimatorOf(item.substr(0, a), "--mc-configs"), samplerOf(item.substr(a + 1, b - a - 1), "--mc-configs"),
-        t == "ndda" ? mcvol::Tracker::NDDA : mcvol::Tracker::OneDDA });
+        t == "ndda" ? mcvol::Tracker::NDDA : mcvol::Tracker::OneDDA,
+        c == std::string::npos ? 0.f : std::stof(item.substr(c + 1)) });
   }
   return v;
 }
@@ -457,8 +462,24 @@ int main(int argc, char** argv)
       }
       const bool again = std::any_of(done.begin(), done.end(),
         [&](const McConfig& d)
-        { return d.estimator == c.estimator && d.sampler == c.sampler && d.tracker == c.tracker; });
-      const std::string trk = c.tracker == mcvol::Tracker::OneDDA ? "1dda" : "ndda";
+        {
+          return d.estimator == c.estimator && d.sampler == c.sampler && d.tracker == c.tracker &&
+            d.minSamplesPerVoxel == c.minSamplesPerVoxel;
+        });
+      if (c.minSamplesPerVoxel > 0.f && c.estimator != mcvol::Estimator::ExpectedValue)
+      {
+        std::fprintf(stderr, "mcvol-accuracy: a minimum sample rate serves the expected-value estimator only; "
+                             "skipped for the %s blend\n",
+          o.blend.c_str());
+        continue;
+      }
+      std::string trk = c.tracker == mcvol::Tracker::OneDDA ? "1dda" : "ndda";
+      if (c.minSamplesPerVoxel > 0.f)
+      {
+        char m[32];
+        std::snprintf(m, sizeof(m), "-min%g", double(c.minSamplesPerVoxel));
+        trk += m;
+      }
       const std::string tag = std::string(mcvol::toString(c.estimator)) + "_" + mcvol::toString(c.sampler) + "_" + trk;
       if (again)
       {
@@ -469,6 +490,7 @@ int main(int argc, char** argv)
       done.push_back(c);
       rs.estimator = c.estimator;
       rs.sampler = c.sampler;
+      rs.minSamplesPerVoxel = c.minSamplesPerVoxel;
       // Warm-up (threads, caches) on a throw-away image.
       {
         mcvol::Accumulator w;
@@ -530,7 +552,7 @@ int main(int argc, char** argv)
     for (const McConfig& c : done)
     {
       m << "mc_series " << mcvol::toString(c.estimator) << " " << mcvol::toString(c.sampler) << " "
-        << mcvol::toString(c.tracker) << "\n";
+        << mcvol::toString(c.tracker) << " " << c.minSamplesPerVoxel << "\n";
     }
   }
   catch (const std::exception& e)

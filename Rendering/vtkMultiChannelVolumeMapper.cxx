@@ -229,6 +229,7 @@ bool vtkMultiChannelVolumeMapper::TraceImage(const mcvol::Scene& scene, const mc
   settings.sampler = this->SampleSequence == INDEPENDENT_SEQUENCE ? mcvol::Sampler::Independent : mcvol::Sampler::Sobol;
   settings.estimator =
     this->Estimator == COLLISION_ESTIMATOR ? mcvol::Estimator::Collision : mcvol::Estimator::ExpectedValue;
+  settings.minSamplesPerVoxel = float(this->MinimumSamplesPerVoxel);
   try
   {
     renderer->render(scene, camera, settings, depth, accum);
@@ -1388,6 +1389,7 @@ void vtkMultiChannelVolumeMapper::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "TrackingMethod: " << this->GetTrackingMethodAsString() << "\n";
   os << indent << "SampleSequence: " << this->GetSampleSequenceAsString() << "\n";
   os << indent << "Estimator: " << this->GetEstimatorAsString() << "\n";
+  os << indent << "MinimumSamplesPerVoxel: " << this->MinimumSamplesPerVoxel << "\n";
   os << indent << "SamplesPerPixel: " << this->SamplesPerPixel << "\n";
   os << indent << "InteractiveFrameTime: " << this->InteractiveFrameTime << "\n";
   os << indent << "Progressive: " << this->Progressive << "\n";

@@ -194,6 +194,21 @@ public:
   const char* GetEstimatorAsString();
   ///@}
 
+  ///@{
+  /**
+   * Expected-value estimator: the fewest tentative collisions per voxel
+   * length along a ray in every macrocell that is not empty (default 0: as
+   * many as the majorant gives). Any value keeps the image unbiased (ratio
+   * tracking needs only a collision rate at least the extinction); more
+   * collisions in optically thin cells sample thin, faint structures more
+   * often, at more cost per sample (Benchmarks/RESULTS.md, "Minimum
+   * samples per voxel"). No effect on the collision estimator. A change
+   * restarts the progressive image.
+   */
+  vtkSetClampMacro(MinimumSamplesPerVoxel, double, 0.0, 1e6);
+  vtkGetMacro(MinimumSamplesPerVoxel, double);
+  ///@}
+
   enum SampleSequences
   {
     INDEPENDENT_SEQUENCE = 0,
@@ -865,6 +880,7 @@ protected:
   int TrackingMethod = ONE_DDA;
   int SampleSequence = SOBOL_SEQUENCE;
   int Estimator = EXPECTED_VALUE_ESTIMATOR;
+  double MinimumSamplesPerVoxel = 0.0;
   int SamplesPerPixel = 1;
   double InteractiveFrameTime = 0.0;
   int LastSamplesPerRender = 0;

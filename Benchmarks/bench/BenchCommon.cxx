@@ -49,7 +49,7 @@ void usage()
             "                   [--label TEXT] [--sampling texture|global] [--block X Y]\n"
             "                   [--psnr DB] [--reference-spp N] [--density F]\n"
             "                   [--samplers independent,sobol] [--spp-max N]\n"
-            "                   [--estimators collision,expected-value]\n"
+            "                   [--estimators collision,expected-value] [--min-samples-per-voxel 0.5,1]\n"
             "sections: trackers channels macrocell rebuild memory paper converge sampling effects visibility estimate\n"
             "          sequences pyramid");
 }
@@ -162,6 +162,14 @@ Options parse(int argc, char** argv)
         {
           throw std::invalid_argument("--samplers takes independent and/or sobol, not " + n);
         }
+      }
+    }
+    else if (a == "--min-samples-per-voxel")
+    {
+      need(1);
+      for (const std::string& n : split(argv[++i], ','))
+      {
+        o.minSamplesPerVoxel.push_back(std::stof(n));
       }
     }
     else if (a == "--spp-max")

@@ -47,6 +47,9 @@ struct Options
   std::vector<std::string> samplers = { "independent", "sobol" }; ///< section sequences
   int sppMax = 256;                                               ///< section sequences
   std::vector<std::string> estimators = { "collision" };          ///< section sequences
+  /// section converge: extra expected-value rows with these
+  /// RenderSettings::minSamplesPerVoxel (none by default)
+  std::vector<float> minSamplesPerVoxel;
 };
 
 void usage();

@@ -33,12 +33,13 @@ void runConverge(Bench& bench)
     ds.c_str(), o.width, o.height, o.psnr, ref.samples());
   struct Config
   {
-    const char* name;
+    std::string name;
     mcvol::Estimator estimator;
     mcvol::Tracker tracker;
     mcvol::Sampler sampler;
+    float minSamplesPerVoxel = 0.f;
   };
-  const Config configs[] = {
+  std::vector<Config> configs = {
     { "expected-value, sobol (default)", mcvol::Estimator::ExpectedValue, mcvol::Tracker::OneDDA,
       mcvol::Sampler::Sobol },
     { "collision, 1-DDA, sobol", mcvol::Estimator::Collision, mcvol::Tracker::OneDDA, mcvol::Sampler::Sobol },
@@ -48,6 +49,12 @@ void runConverge(Bench& bench)
     { "collision, N-DDA, independent", mcvol::Estimator::Collision, mcvol::Tracker::NDDA,
       mcvol::Sampler::Independent },
   };
+  for (float m : o.minSamplesPerVoxel)
+  {
+    char name[96];
+    std::snprintf(name, sizeof(name), "expected-value, sobol, >= %g tentative per voxel", double(m));
+    configs.push_back({ name, mcvol::Estimator::ExpectedValue, mcvol::Tracker::OneDDA, mcvol::Sampler::Sobol, m });
+  }
   for (const Config& config : configs)
   {
     mcvol::Accumulator acc;
@@ -55,6 +62,7 @@ void runConverge(Bench& bench)
     st.tracker = config.tracker;
     st.estimator = config.estimator;
     st.sampler = config.sampler;
+    st.minSamplesPerVoxel = config.minSamplesPerVoxel;
     st.seed = 7;
     st.readBack = false;
     // Warm-up on a throw-away accumulator, then timed frames; the PSNR is
@@ -104,7 +112,7 @@ void runConverge(Bench& bench)
       }
       r.finish();
       const double per = 1e3 * seconds(t0) / steady;
-      std::printf("| %s | %d | %.2f | %.2f | %.3f | %.2f |\n", config.name, frames, ms, q, per, per * frames);
+      std::printf("| %s | %d | %.2f | %.2f | %.3f | %.2f |\n", config.name.c_str(), frames, ms, q, per, per * frames);
       bench.row("converge", ds, s.volume.numChannels(), o.macrocell, config.name, ms, "ms",
         "frames=" + std::to_string(frames) + " psnr=" + std::to_string(q) +
           " back_to_back_ms_per_frame=" + std::to_string(per));

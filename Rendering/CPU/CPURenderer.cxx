@@ -145,6 +145,7 @@ void CPURenderer::render(const Scene& scene, const Camera& camera, const RenderS
   }
   const CameraView cam = toView(camera);
   s.sigmaLimit = extinctionLimit(cam);
+  s.minRate = settings.minSamplesPerVoxel > 0.f ? settings.minSamplesPerVoxel * voxelRate(cam) : 0.f;
   const FrameParams fp = frameParams(settings, accum.samples());
   const bool lit = s.lighting.enabled;
   if (lit)

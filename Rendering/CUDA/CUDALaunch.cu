@@ -236,6 +236,7 @@ void CUDARenderer::render(const Scene& scene, const Camera& camera, const Render
   const SceneView& hv = scene.view();
   const CameraView cam = toView(camera);
   s.sigmaLimit = extinctionLimit(cam);
+  s.minRate = settings.minSamplesPerVoxel > 0.f ? settings.minSamplesPerVoxel * voxelRate(cam) : 0.f;
   const bool lit = s.lighting.enabled;
   if (lit)
   {

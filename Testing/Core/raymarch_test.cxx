@@ -279,6 +279,56 @@ TEST(RayMarch, ErrorsAndHardCases)
   }
 }
 
+namespace
+{
+// Asserts that a Monte Carlo image of N samples per pixel, each of whose
+// colour components lies in [0, top] and alpha in [0, 1], has the reference
+// as its mean, at significance level alpha: components with
+// N mu (top - mu) >= 100 one by one (expectZeroDifference's image-mean z,
+// sum of z^2 and largest |z|, whose normal tail needs that many expected
+// hits), the others pooled per component into one z-score of their summed
+// differences. The variance bound mu (top - mu) / N holds for any variable
+// in [0, top] with mean mu.
+void expectMeanOfSamples(
+  const Accumulator& acc, const std::vector<float>& ref, int N, double top, double alpha, const std::string& what)
+{
+  std::vector<double> D, V;
+  double poolD[4] = { 0, 0, 0, 0 }, poolV[4] = { 0, 0, 0, 0 };
+  for (size_t i = 0; i < ref.size(); ++i)
+  {
+    const double M = i % 4 == 3 ? 1.0 : top;
+    const double mu = std::min(M, std::max(0.0, double(ref[i])));
+    const double d = double(acc.rgba()[i]) - double(ref[i]);
+    const double var = mu * (M - mu) / N;
+    if (N * mu * (M - mu) >= 100.0)
+    {
+      D.push_back(d);
+      V.push_back(var);
+    }
+    else
+    {
+      D.push_back(0.0); // keeps the layout; skipped by expectZeroDifference
+      V.push_back(0.0);
+      poolD[i % 4] += d;
+      poolV[i % 4] += var;
+    }
+  }
+  expectZeroDifference(D, V, alpha, what);
+  for (int c = 0; c < 4; ++c)
+  {
+    if (poolV[c] > 0)
+    {
+      const double z = poolD[c] / std::sqrt(poolV[c]);
+      EXPECT_GT(normalTwoSided(z), alpha) << what << " component " << c << ": pooled rare pixels z = " << z;
+    }
+    else
+    {
+      EXPECT_LE(std::fabs(poolD[c]), 1e-5) << what << " component " << c;
+    }
+  }
+}
+} // namespace
+
 // Each Monte Carlo blend mode converges to the ray-marched image of the same
 // mode (extinction model, fine step). One render of N = 2048 samples per
 // pixel at pixel centres; per component, one sample lies in [0, 1], so with
@@ -330,44 +380,11 @@ TEST(RayMarch, MonteCarloConvergesToRayMarch)
         mc.render(scene, cam, rs, nullptr, acc);
         const std::string what = std::string(name) + " " + toString(mode) + " " + toString(sampler) + " " +
           toString(estimator) + " MC vs ray march";
-        std::vector<double> D, V;
-        double poolD[4] = { 0, 0, 0, 0 }, poolV[4] = { 0, 0, 0, 0 };
         // Composite adds the channels' colours: a sample's colour lies in
         // [0, channels], and its variance is at most mu (channels - mu).
         const double top = (mode == BlendMode::Composite ? double(scene.view().numActive) : 1.0) *
           (estimator == Estimator::ExpectedValue ? 1.0 + kRouletteThreshold : 1.0);
-        for (size_t i = 0; i < ref.size(); ++i)
-        {
-          const double M = i % 4 == 3 ? 1.0 : top;
-          const double mu = std::min(M, std::max(0.0, double(ref[i])));
-          const double d = double(acc.rgba()[i]) - double(ref[i]);
-          const double var = mu * (M - mu) / N;
-          if (N * mu * (M - mu) >= 100.0)
-          {
-            D.push_back(d);
-            V.push_back(var);
-          }
-          else
-          {
-            D.push_back(0.0); // keeps the layout; skipped by expectZeroDifference
-            V.push_back(0.0);
-            poolD[i % 4] += d;
-            poolV[i % 4] += var;
-          }
-        }
-        expectZeroDifference(D, V, alpha, what);
-        for (int c = 0; c < 4; ++c)
-        {
-          if (poolV[c] > 0)
-          {
-            const double z = poolD[c] / std::sqrt(poolV[c]);
-            EXPECT_GT(normalTwoSided(z), alpha) << what << " component " << c << ": pooled rare pixels z = " << z;
-          }
-          else
-          {
-            EXPECT_LE(std::fabs(poolD[c]), 1e-5) << what << " component " << c;
-          }
-        }
+        expectMeanOfSamples(acc, ref, N, top, alpha, what);
       }
     }
 }
@@ -498,6 +515,75 @@ TEST(RayMarch, ExpectedValueEstimatorHasLessNoise)
         (unsigned long long)counters[0].tentativeCollisions, (unsigned long long)counters[1].tentativeCollisions);
       EXPECT_LT(mse[1], 0.5 * mse[0]) << name << " " << toString(mode);
     }
+  }
+}
+
+// A floor on the expected-value estimator's tentative rate
+// (RenderSettings::minSamplesPerVoxel) keeps it unbiased: with 2 tentative
+// collisions per voxel length at least, N = 1024 samples per pixel converge
+// to the fine-step ray march (the z-tests of MonteCarloConvergesToRayMarch,
+// significance kAlpha over all checks), and the floor adds tentative
+// collisions (counters). The MSE at 16 spp with and without it is printed.
+TEST(RayMarch, MinimumTentativeRateStaysUnbiased)
+{
+  const double alpha = kAlpha / (4 * 4 * 2 * 3);
+  const int N = 1024;
+  for (const char* name : { "figure3", "microscopy" })
+  {
+    const DemoVolume v = makeDemo(name, { 24, 24, 24 });
+    const Camera cam = demoCam(v, 32, 32);
+    for (BlendMode mode : { BlendMode::Density, BlendMode::Max, BlendMode::Mix })
+    {
+      Scene scene;
+      configureDemo(scene, v, 4, 128, 1.0, mode);
+      MarchSettings ms;
+      ms.step = 1.0 / 16.0;
+      ms.terminateTransmittance = 0.f;
+      const std::vector<float> ref = march(scene, cam, ms);
+      CPURenderer mc;
+      RenderCounters counters[2];
+      double mse[2] = { 0, 0 };
+      for (int floor = 0; floor < 2; ++floor)
+      {
+        RenderSettings rs;
+        rs.jitterPixels = false;
+        rs.minSamplesPerVoxel = floor ? 2.f : 0.f;
+        for (int rep = 0; rep < 4; ++rep)
+        {
+          Accumulator acc;
+          rs.samplesPerPixel = 16;
+          rs.seed = uint32_t(40 + rep);
+          mc.render(scene, cam, rs, nullptr, acc, &counters[floor]);
+          const double e = rmse(std::vector<float>(acc.rgba(), acc.rgba() + ref.size()), ref);
+          mse[floor] += e * e / 4;
+        }
+        if (floor)
+        {
+          Accumulator acc;
+          rs.samplesPerPixel = N;
+          rs.seed = 301;
+          mc.render(scene, cam, rs, nullptr, acc);
+          expectMeanOfSamples(acc, ref, N, 1.0 + kRouletteThreshold, alpha,
+            std::string(name) + " " + toString(mode) + " expected value, >= 2 per voxel");
+        }
+      }
+      std::printf("%s %s: 16 spp MSE %.3g without the floor, %.3g with 2 per voxel; tentative collisions %llu, %llu\n",
+        name, toString(mode), mse[0], mse[1], (unsigned long long)counters[0].tentativeCollisions,
+        (unsigned long long)counters[1].tentativeCollisions);
+      EXPECT_GT(counters[1].tentativeCollisions, counters[0].tentativeCollisions) << name << " " << toString(mode);
+    }
+  }
+  // A negative, NaN or infinite floor is refused.
+  const DemoVolume small = makeDemo("figure3", { 8, 8, 8 });
+  Scene scene;
+  configureDemo(scene, small, 4, 16, 1.0, BlendMode::Density);
+  RenderSettings bad;
+  for (float m : { -1.f, std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity() })
+  {
+    bad.minSamplesPerVoxel = m;
+    CPURenderer mc;
+    Accumulator acc;
+    EXPECT_THROW(mc.render(scene, demoCam(small, 4, 4), bad, nullptr, acc), std::invalid_argument);
   }
 }
 

@@ -124,6 +124,13 @@ render_and_expect(8, "re-render after the property change")
 mapper.SetChannelBlendModeToMax()
 render_and_expect(4, "blend mode changed")
 
+t.check(mapper.GetMinimumSamplesPerVoxel() == 0.0, "no minimum tentative rate by default")
+prop.ShadeOff()  # the expected-value estimator serves unlit rays
+render_and_expect(4, "unlit again")
+mapper.SetMinimumSamplesPerVoxel(2.0)
+render_and_expect(4, "minimum samples per voxel changed")
+render_and_expect(8, "re-render with a minimum of 2 samples per voxel")
+
 # Opaque geometry in front of part of the volume: the depth buffer changes.
 sphere = vtkSphereSource()
 sphere.SetCenter(N / 2.0 + 1, N / 2.0, N)

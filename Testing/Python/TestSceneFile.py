@@ -74,6 +74,7 @@ BAD_SCENES = [
     ("bad-tracking", {"input": {"demo": "figure3"}, "tracking": "2-dda"}, "tracking:"),
     ("bad-sample-sequence", {"input": {"demo": "figure3"}, "sample_sequence": "halton"}, "sample_sequence:"),
     ("bad-estimator", {"input": {"demo": "figure3"}, "estimator": "track-length"}, "estimator:"),
+    ("bad-min-samples", {"input": {"demo": "figure3"}, "min_samples_per_voxel": -1}, "min_samples_per_voxel"),
     ("bad-mix-color", {"input": {"demo": "figure3"}, "blend": "mix", "mix_color": "sum"}, "mix_color:"),
     ("bad-interpolation", {"input": {"demo": "figure3"}, "interpolation": "tricubic"}, "interpolation:"),
     ("cubic-opacity-model",
@@ -214,6 +215,20 @@ def main():
     t.check(r.returncode == 0 and "memory fallback" in r.stderr, "memory_budget 0.1 MiB: %d %r" % (r.returncode, r.stderr))
     r = run(program, [fn, "-o", os.path.join(work, "lodbad.png"), "--level-of-detail", "-3"])
     t.check(r.returncode == 2 and "--level-of-detail" in r.stderr, "--level-of-detail -3: %d %r" % (r.returncode, r.stderr))
+
+    # min_samples_per_voxel reaches the mapper: the same seed with a floor of
+    # 4 tentative collisions per voxel gives other samples (another image).
+    imgs = []
+    for floor in (0, 4):
+        with open(fn, "w") as f:
+            json.dump({"input": {"demo": "figure3", "dimensions": [32, 32, 32]}, "seed": 3,
+                       "min_samples_per_voxel": floor}, f)
+        out = os.path.join(work, "minrate%d.png" % floor)
+        r = run(program, [fn, "-o", out, "--spp", "2", "--size", "32x32", "--backend", "cpu", "--quiet"])
+        t.check(r.returncode == 0, "min_samples_per_voxel %d: %d %r" % (floor, r.returncode, r.stderr))
+        imgs.append(read_png(out) if r.returncode == 0 else None)
+    t.check(imgs[0] is not None and imgs[1] is not None and not np.array_equal(imgs[0], imgs[1]),
+            "min_samples_per_voxel changes the samples")
 
     # mix_color: a channel alone is dimmed by Eq. 10 (3 equal weights: 1/3 of
     # its colour) and not by the default weighted average.

@@ -70,6 +70,24 @@ MCVOL_FUNC float extinctionLimit(const CameraView& cam)
   return limit > 0.0 && limit < 3.4e38 ? float(limit) : 3.4e38f;
 }
 
+/// Rays' voxel crossings per world unit, sqrt(||A||_F^2 / 3) for A the
+/// linear part of worldToIndex: 1 / h for cubic voxels of side h (the RMS
+/// of the axes' inverse spacings for others).
+MCVOL_FUNC float voxelRate(const CameraView& cam)
+{
+  const double* w = cam.worldToIndex;
+  double f2 = 0.0;
+  for (int r = 0; r < 3; ++r)
+  {
+    for (int c = 0; c < 3; ++c)
+    {
+      f2 += w[4 * r + c] * w[4 * r + c];
+    }
+  }
+  const double rate = sqrt(f2 / 3.0);
+  return rate > 0.0 && rate < 3.4e38 ? float(rate) : 0.f;
+}
+
 /**
  * Builds the ray through film position (px, py) (pixel units, origin at the
  * bottom-left corner) and clips it to the volume box and to the window depth

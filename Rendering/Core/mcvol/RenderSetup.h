@@ -116,6 +116,10 @@ inline void checkRenderArguments(const Camera& camera, const RenderSettings& set
   {
     throw std::invalid_argument("mcvol: samples per pixel must be at least 1");
   }
+  if (!(settings.minSamplesPerVoxel >= 0.f && settings.minSamplesPerVoxel <= 1e6f))
+  {
+    throw std::invalid_argument("mcvol: the minimum samples per voxel must be between 0 and 1e6");
+  }
   if (accum.width() != camera.width || accum.height() != camera.height)
   {
     accum.resize(camera.width, camera.height);

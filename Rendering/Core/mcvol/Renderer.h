@@ -43,6 +43,13 @@ struct RenderSettings
   /// less time to a given error on every dataset measured
   /// (Benchmarks/RESULTS.md, "Estimators").
   Estimator estimator = Estimator::ExpectedValue;
+  /// Expected-value estimator: tentative collisions at least this many per
+  /// voxel length along a ray (voxelRate()) in every macrocell that is not
+  /// empty, where the majorant alone would place fewer. Unbiased for any
+  /// value (ratio tracking needs only a rate at least the extinction); more
+  /// samples in optically thin cells cost time and lower the noise of thin,
+  /// bright structures. 0: the majorant alone.
+  float minSamplesPerVoxel = 0.f;
   /// Device backends: copy the accumulated image into the Accumulator at the
   /// end of render(). false leaves it on the device (the frame may still be
   /// running when render() returns) until readBack() or the next render with

@@ -153,6 +153,10 @@ struct SceneView
   /// keeps the number of null collisions in a macrocell bounded when a
   /// transfer function is opaque over a tiny unit distance.
   float sigmaLimit = 3.4e38f;
+  /// Lowest rate of tentative collisions (world units^-1) the expected-value
+  /// estimator uses in a non-empty macrocell, set per render by the backend
+  /// (RenderSettings::minSamplesPerVoxel times voxelRate()); 0: off.
+  float minRate = 0.f;
   LightingView lighting;
   ImportanceView importance;
 };

@@ -344,6 +344,10 @@ MCVOL_HOT Vec4f trackExpected(const SceneView& s, Vec3f o, Vec3f d, float tmin, 
       const float m = minf(maj[s.active[i]], s.sigmaLimit);
       M = Mode == BlendMode::Density ? M + m : maxf(M, m);
     }
+    if (M > 0.f)
+    {
+      M = maxf(M, s.minRate); // a denser tentative process stays unbiased
+    }
     float t = dda.t0;
     while (M > 0.f)
     {

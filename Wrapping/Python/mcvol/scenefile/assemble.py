@@ -446,6 +446,7 @@ def setup_mapper(mapper, prop, scene, channels, tfs, render_image, reference):
         mapper.SetEstimatorToCollision()
     else:
         mapper.SetEstimatorToExpectedValue()
+    mapper.SetMinimumSamplesPerVoxel(scene["min_samples_per_voxel"])
     if scene["sample_sequence"] == "independent":
         mapper.SetSampleSequenceToIndependent()
     else:

@@ -366,6 +366,11 @@ def parse_scene(data, scene_dir, presets):
     s["estimator"] = (
         get_string(data["estimator"], "estimator", ESTIMATORS) if "estimator" in data else "expected-value"
     )
+    s["min_samples_per_voxel"] = (
+        get_number(data["min_samples_per_voxel"], "min_samples_per_voxel", lo=0.0, hi=1e6)
+        if "min_samples_per_voxel" in data
+        else 0.0
+    )
     s["backend"] = get_string(data["backend"], "backend", BACKENDS) if "backend" in data else "auto"
     s["samples_per_pixel"] = (
         get_number(data["samples_per_pixel"], "samples_per_pixel", lo=1, hi=1 << 24, integer=True)

@@ -56,6 +56,7 @@ TOP_KEYS = {
     "tracking",
     "sample_sequence",
     "estimator",
+    "min_samples_per_voxel",
     "backend",
     "samples_per_pixel",
     "samples_per_render",
