@@ -248,8 +248,11 @@ CudaMemoryStats CUDARenderer::memory() const
   }
   m.macrocellBytes = this->In->Ranges.bytes();
   m.majorantBytes = this->In->Majorants.bytes();
-  m.imageBytes =
-    this->In->Accum.bytes() + this->In->Even.bytes() + this->In->Depth.bytes() + this->In->Display.bytes();
+  m.imageBytes = this->In->Accum.bytes() + this->In->Even.bytes() + this->In->Depth.bytes() + this->In->Display.bytes();
+  for (const auto& li : this->In->LevelInputs)
+  {
+    m.levelInputBytes += li->data.bytes();
+  }
   return m;
 }
 
@@ -257,8 +260,8 @@ size_t CUDARenderer::deviceBytes() const
 {
   const CudaMemoryStats m = this->memory();
   const Internal& in = *this->In;
-  return m.dataBytes + m.textureBytes + m.macrocellBytes + m.majorantBytes + m.imageBytes + in.Tables.bytes() +
-    in.Sparse.bytes() + in.ChannelMax.bytes() + in.NaNFlags.bytes() + in.Counters.bytes() +
+  return m.dataBytes + m.textureBytes + m.macrocellBytes + m.majorantBytes + m.imageBytes + m.levelInputBytes +
+    in.Tables.bytes() + in.Sparse.bytes() + in.ChannelMax.bytes() + in.NaNFlags.bytes() + in.Counters.bytes() +
     in.ImportanceTables.bytes() + in.Segments.bytes() + in.SegmentCounts.bytes() + in.SegmentTotals.bytes();
 }
 
