@@ -308,60 +308,89 @@ PyramidLevel CUDARenderer::classifyLevel(const ClassifyInput* inputs, int numInp
   const size_t voxels = size_t(dims[0]) * size_t(dims[1]) * size_t(dims[2]);
   DeviceMeter meter;
 
-  // The inputs: kept copies whose key matches are reused (first, so that
-  // the stale ones are freed before anything new is allocated); the others
-  // are copied (whole: a strided array with its other components). Kept
-  // copies this build does not use are freed.
-  std::vector<std::unique_ptr<LevelInput>> kept;
+  // The inputs. Copies kept from earlier builds (ClassifyInput::dataVersion
+  // nonzero) are reused when their key matches; a kept copy of the same host
+  // array under another key (older data) is freed, and so are the least
+  // recently used others while the kept copies would exceed half the
+  // device's memory. The rest is copied (whole: a strided array with its
+  // other components); unversioned inputs only for this build.
+  std::vector<std::unique_ptr<LevelInput>>& pool = in.LevelInputs;
   std::vector<const LevelInput*> used(static_cast<size_t>(numInputs), nullptr);
   std::vector<std::unique_ptr<LevelInput>> transient;
   auto matches = [](const LevelInput& li, const ChannelSource& src, size_t elements, uint64_t version)
   {
-    return li.host == src.data && li.type == src.type && li.stride == src.stride && li.elements == elements &&
-      li.version == version;
+    return version != 0 && li.host == src.data && li.type == src.type && li.stride == src.stride &&
+      li.elements == elements && li.version == version;
   };
   auto elementsOf = [voxels](const ChannelSource& src) { return (voxels - 1) * size_t(src.stride) + 1; };
-  for (int n = 0; n < numInputs; ++n)
+  auto usedNow = [&](const LevelInput* li) { return std::find(used.begin(), used.end(), li) != used.end(); };
+  auto find = [&](const ChannelSource& src, uint64_t version) -> const LevelInput*
   {
-    const ChannelSource& src = inputs[n].source;
-    const uint64_t version = inputs[n].dataVersion;
-    if (version == 0)
+    for (const auto& li : pool)
     {
-      continue;
-    }
-    const size_t elements = elementsOf(src);
-    for (auto& li : kept)
-    {
-      if (matches(*li, src, elements, version))
+      if (matches(*li, src, elementsOf(src), version))
       {
-        used[size_t(n)] = li.get(); // the same channel given twice
+        return li.get();
       }
     }
-    for (auto it = in.LevelInputs.begin(); !used[size_t(n)] && it != in.LevelInputs.end(); ++it)
+    return nullptr;
+  };
+  for (int n = 0; n < numInputs; ++n)
+  {
+    used[size_t(n)] = find(inputs[n].source, inputs[n].dataVersion);
+  }
+  size_t needed = 0;
+  for (int n = 0; n < numInputs; ++n)
+  {
+    if (!used[size_t(n)] && inputs[n].dataVersion != 0)
     {
-      if (matches(**it, src, elements, version))
+      needed += elementsOf(inputs[n].source) * size_t(scalarTypeSize(inputs[n].source.type));
+    }
+  }
+  {
+    auto stale = [&](const LevelInput& li)
+    {
+      for (int n = 0; n < numInputs; ++n)
       {
-        kept.push_back(std::move(*it));
-        in.LevelInputs.erase(it);
-        used[size_t(n)] = kept.back().get();
-        break;
+        if (li.host == inputs[n].source.data)
+        {
+          return true;
+        }
+      }
+      return false;
+    };
+    size_t keptBytes = 0;
+    for (auto it = pool.begin(); it != pool.end();)
+    {
+      if (!usedNow(it->get()) && stale(**it))
+      {
+        it = pool.erase(it);
+      }
+      else
+      {
+        keptBytes += (*it)->data.bytes();
+        ++it;
+      }
+    }
+    const size_t cap = in.Props.totalGlobalMem / 2;
+    for (auto it = pool.begin(); it != pool.end() && keptBytes + needed > cap;)
+    {
+      if (!usedNow(it->get()))
+      {
+        keptBytes -= (*it)->data.bytes();
+        it = pool.erase(it); // the front is the least recently used
+      }
+      else
+      {
+        ++it;
       }
     }
   }
-  in.LevelInputs.clear();
   for (int n = 0; n < numInputs; ++n)
   {
     const ChannelSource& src = inputs[n].source;
     const uint64_t version = inputs[n].dataVersion;
-    const size_t elements = elementsOf(src);
-    for (auto& li : kept)
-    {
-      if (!used[size_t(n)] && version != 0 && matches(*li, src, elements, version))
-      {
-        used[size_t(n)] = li.get(); // uploaded for an earlier input of this build
-      }
-    }
-    if (used[size_t(n)])
+    if (used[size_t(n)] || (used[size_t(n)] = find(src, version)) != nullptr) // or copied for an earlier input
     {
       continue;
     }
@@ -369,19 +398,22 @@ PyramidLevel CUDARenderer::classifyLevel(const ClassifyInput* inputs, int numInp
     li->host = src.data;
     li->type = src.type;
     li->stride = src.stride;
-    li->elements = elements;
+    li->elements = elementsOf(src);
     li->version = version;
-    const size_t bytes = elements * size_t(scalarTypeSize(src.type));
+    const size_t bytes = li->elements * size_t(scalarTypeSize(src.type));
     li->data.resize(bytes);
     MCVOL_CUDA(cudaMemcpy(li->data.ptr, src.data, bytes, cudaMemcpyHostToDevice));
     ++in.Updates.levelInputUploads;
     used[size_t(n)] = li.get();
-    (version != 0 ? kept : transient).push_back(std::move(li));
+    (version != 0 ? pool : transient).push_back(std::move(li));
   }
+  // The copies this build uses go to the back (most recently used).
+  std::stable_partition(
+    pool.begin(), pool.end(), [&](const std::unique_ptr<LevelInput>& li) { return !usedNow(li.get()); });
   size_t inputBytes = 0;
-  for (const auto& li : kept)
+  for (const auto& li : pool)
   {
-    inputBytes += li->data.bytes();
+    inputBytes += li->data.bytes(); // all kept copies are on the device meanwhile
   }
   for (const auto& li : transient)
   {
@@ -470,7 +502,6 @@ PyramidLevel CUDARenderer::classifyLevel(const ClassifyInput* inputs, int numInp
   out.voxels.resize(out.numVoxels() * 4);
   MCVOL_CUDA(cudaMemcpy(out.voxels.data(), v.buf.ptr, out.voxels.size() * sizeof(float), cudaMemcpyDeviceToHost));
   v.release();
-  in.LevelInputs = std::move(kept);
   ++in.Updates.levelBuilds;
   in.Updates.lastLevelPeakBytes = meter.peak;
   in.Updates.lastLevelMs = 1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

@@ -292,6 +292,14 @@ TEST(CudaPyramid, KeepsInputsByDataVersion)
   ta = a.table(rnd, 32, 1.f); // an edit
   build("after an edit");
   EXPECT_EQ(r->updateCounters().levelInputUploads, u0 + 2) << "the kept inputs were copied again";
+  // One level per channel, as the per-channel levels are built: both stay.
+  for (int n : { 0, 1, 0, 1 })
+  {
+    const PyramidLevel gpu = r->classifyLevel(inputs + n, 1, dims, spacing, origin, 2, DownsampleFilter::BSpline);
+    expectLevelsAgree(gpu, classifyExtinctionLevel(inputs + n, 1, dims, spacing, origin, 2, DownsampleFilter::BSpline),
+      "channel " + std::to_string(n));
+  }
+  EXPECT_EQ(r->updateCounters().levelInputUploads, u0 + 2) << "per-channel builds copied the kept inputs again";
   // New data in place, with a new version: copied again.
   Channel a2(ScalarType::UInt16, dims, rnd);
   a.bytes = a2.bytes;

@@ -104,8 +104,11 @@ public:
    * one (a quarter), then the level; the full-resolution float4 volume is
    * never held. For 4 float channels of 512^3: 2 GiB of inputs + 1 GiB +
    * 0.5 GiB. Inputs with a nonzero ClassifyInput::dataVersion stay on the
-   * device for the next call (levelInputBytes; releaseLevelInputs() frees
-   * them), so a transfer-function edit copies nothing but the tables.
+   * device for later calls (levelInputBytes), so a transfer-function edit
+   * copies nothing but the tables, per channel or summed: a kept copy is
+   * freed when the same host array comes with another key (new data), and
+   * the least recently used ones while the kept copies would exceed half
+   * the device's memory; releaseLevelInputs() frees them all.
    */
   PyramidLevel classifyLevel(const ClassifyInput* inputs, int numInputs, const int dims[3], const double spacing[3],
     const double origin[3], int level, DownsampleFilter filter, size_t* peakWorkBytes = nullptr) override;
