@@ -1190,7 +1190,11 @@ bool vtkMultiChannelVolumeMapper::UpdateLevelScene(RenderPass& pass)
       tables.push_back(&in.Tables.Table(c));
     }
   }
-  const mcvol::adapter::LevelOfDetailCache::Level& level = in.Levels.Get(key, pass.Level, pass.Channels, tables);
+  // Scalar channels' levels are built on the backend's device where it
+  // builds them there (CUDA), so that editing a function at a coarse level
+  // stays interactive; on the host otherwise.
+  const mcvol::adapter::LevelOfDetailCache::Level& level =
+    in.Levels.Get(key, pass.Level, pass.Channels, tables, in.Backend.Get());
   pass.LevelData = &level;
   if (level.Version != in.LevelSceneVersion)
   {

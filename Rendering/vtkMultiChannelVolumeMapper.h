@@ -716,7 +716,9 @@ public:
   /**
    * The levels' cost: how many levels the mapper built since it was
    * created, the bytes of the levels it keeps, and the last build's seconds
-   * and peak working memory (bytes besides the level itself).
+   * and peak working memory (host bytes besides the level itself; with the
+   * CUDA backend, which builds the levels of scalar channels on the GPU,
+   * the device's peak, its copy of the channels and the level included).
    */
   int GetNumberOfLevelOfDetailBuilds();
   double GetLevelOfDetailMemory();

@@ -11,6 +11,9 @@
 // renders at least 4x faster than level 0 for a 4 x 512^3 float volume at
 // 1024^2 on the GPU (Benchmarks/gpu/bench.sh pyramid); the CPU figure is the
 // same section with --backend cpu. Image quality per level is mcvol-pyramid's.
+// Last, the rebuild of levels 1 and 2 after a transfer-function edit on the
+// host and by the renderer's classifyLevel (on the GPU for CUDA; issue 13,
+// item 2).
 
 #include "BenchCommon.h"
 #include "Sections.h"
@@ -19,6 +22,7 @@
 #include "mcvol/Pyramid.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <memory>
@@ -90,6 +94,210 @@ double medianMarchMs(const Options& o, mcvol::Renderer& r, const mcvol::Scene& s
     t.push_back(1e3 * seconds(t0));
   }
   return median(t);
+}
+
+/// Largest |a - b| / max(|b|, 1e-6 max|b|) over two levels of equal size
+/// (-1 when the sizes differ).
+double maxRelativeDiff(const mcvol::PyramidLevel& a, const mcvol::PyramidLevel& b)
+{
+  if (a.voxels.size() != b.voxels.size())
+  {
+    return -1.0;
+  }
+  double top = 0.0;
+  for (float x : b.voxels)
+  {
+    top = std::max(top, double(std::fabs(x)));
+  }
+  double worst = 0.0;
+  for (size_t i = 0; i < b.voxels.size(); ++i)
+  {
+    const double d = std::fabs(double(a.voxels[i]) - double(b.voxels[i]));
+    worst = std::max(worst, d / std::max(double(std::fabs(b.voxels[i])), 1e-6 * top + 1e-30));
+  }
+  return worst;
+}
+
+/**
+ * Rebuilding a level after a transfer-function edit (issue 13, item 2):
+ * levels 1 and 2 (box4) of the loaded scalar channels, their density blend
+ * (all channels summed into one level) and per channel (one level each,
+ * times added), by the host build (classifyExtinctionLevel, once: seconds
+ * at 512^3) and by the renderer's classifyLevel: on a device backend the
+ * first build (the channels copied to the device) and then the median of
+ * --frames builds, each after an edit of every table, with the channels
+ * kept on the device (ClassifyInput::dataVersion), which is what an edit
+ * costs. Bytes: the host build's working memory and the device build's
+ * peak device memory (inputs kept included), besides the level itself.
+ */
+void runLevelRebuild(Bench& bench)
+{
+  const Options& o = bench.o;
+  Setup& s = bench.s;
+  mcvol::Renderer& r = bench.r;
+  const std::string ds = describe(o, s);
+  const int* d = s.volume.dims;
+  const int channels = s.volume.numChannels();
+  const double MiB = 1024.0 * 1024.0;
+  // classifyLevel() builds on the device with the CUDA backend whether or
+  // not the mapper takes it yet (CUDARenderer::setDeviceLevels).
+  const bool device = std::string(r.name()) == "cuda";
+  std::vector<mcvol::TransferFunctionDesc> tfs;
+  for (int k = 0; k < channels; ++k)
+  {
+    tfs.push_back(mcvol::sampleTransferFunction(s.volume.transferFunctions[size_t(k)], s.ranges[size_t(k)][0],
+      s.ranges[size_t(k)][1], o.tableSize, s.volume.spacing[0] / o.density));
+  }
+  const std::vector<mcvol::TransferFunctionDesc> original = tfs;
+  std::vector<mcvol::ClassifyInput> inputs(static_cast<size_t>(channels));
+  for (int k = 0; k < channels; ++k)
+  {
+    inputs[size_t(k)].source = s.volume.source(k);
+    inputs[size_t(k)].tf = &tfs[size_t(k)];
+    inputs[size_t(k)].dataVersion = uint64_t(k) + 1; // the data never change here
+  }
+  const double origin[3] = { 0, 0, 0 };
+  const mcvol::DownsampleFilter f = mcvol::DownsampleFilter::Box4;
+  // An edit: every table's opacities scaled by a factor that alternates.
+  auto edit = [&](int i)
+  {
+    const float scale = i % 2 ? 0.9f : 1.f / 0.9f;
+    for (auto& tf : tfs)
+    {
+      for (float& a : tf.opacity)
+      {
+        a = std::min(1.f, a * scale);
+      }
+    }
+  };
+
+  struct RebuildRow
+  {
+    std::string what;
+    int level = 0;
+    int dims[3] = { 0, 0, 0 };
+    double levelMiB = 0;
+    double hostMs = 0, hostWorkMiB = 0;
+    double firstMs = -1, editMs = -1, deviceMiB = 0, relDiff = -1;
+  };
+  std::vector<RebuildRow> rows;
+  const int levels = std::min(2, mcvol::maxPyramidLevels(d));
+  for (int level = 1; level <= levels; ++level)
+  {
+    for (bool summed : { true, false })
+    {
+      RebuildRow row;
+      row.what = summed ? "density blend (" + std::to_string(channels) + " channels summed)"
+                        : "per channel (" + std::to_string(channels) + " levels)";
+      row.level = level;
+      const int groups = summed ? 1 : channels;
+      const int per = summed ? channels : 1;
+      std::vector<mcvol::PyramidLevel> host;
+      for (int g = 0; g < groups; ++g)
+      {
+        size_t work = 0;
+        const auto t0 = Clock::now();
+        host.push_back(
+          mcvol::classifyExtinctionLevel(inputs.data() + g * per, per, d, s.volume.spacing, origin, level, f, &work));
+        row.hostMs += 1e3 * seconds(t0);
+        row.hostWorkMiB = std::max(row.hostWorkMiB, double(work) / MiB);
+        row.levelMiB += double(host.back().bytes()) / MiB;
+      }
+      std::copy(host[0].dims, host[0].dims + 3, row.dims);
+      if (device)
+      {
+        // The first build copies the channels (a kept copy of the previous
+        // row's may be reused: release them to time the copy).
+#ifdef MCVOL_WITH_CUDA
+        if (mcvol::CUDARenderer* cuda = asCuda(r))
+        {
+          cuda->releaseLevelInputs();
+        }
+#endif
+        std::vector<double> ms;
+        for (int i = 0; i <= std::max(1, o.frames); ++i)
+        {
+          if (i > 0)
+          {
+            edit(i);
+          }
+          double total = 0.0;
+          for (int g = 0; g < groups; ++g)
+          {
+            size_t peak = 0;
+            const auto t0 = Clock::now();
+            const mcvol::PyramidLevel lv =
+              r.classifyLevel(inputs.data() + g * per, per, d, s.volume.spacing, origin, level, f, &peak);
+            total += 1e3 * seconds(t0);
+            row.deviceMiB = std::max(row.deviceMiB, double(peak) / MiB);
+            if (i == 0)
+            {
+              row.relDiff = std::max(row.relDiff, maxRelativeDiff(lv, host[size_t(g)]));
+            }
+          }
+          if (i == 0)
+          {
+            row.firstMs = total;
+          }
+          else
+          {
+            ms.push_back(total);
+          }
+        }
+        row.editMs = median(ms);
+        for (size_t k = 0; k < tfs.size(); ++k)
+        {
+          tfs[k] = original[k]; // the tables as the host build had them
+        }
+      }
+      rows.push_back(row);
+    }
+  }
+
+  std::printf("## Level rebuild after a transfer-function edit (%s, %d channels, box4; host: classifyExtinctionLevel, "
+              "%s: Renderer::classifyLevel)\n\n",
+    ds.c_str(), channels, r.name());
+  std::printf(
+    "| level | grid | channels | level MiB | host ms | host work MiB | %s first build ms (copies the data) | %s "
+    "ms after an edit (median of %d) | speed-up (edit) | %s device peak MiB | max rel. diff |\n"
+    "|---|---|---|---|---|---|---|---|---|---|---|\n",
+    r.name(), r.name(), std::max(1, o.frames), r.name());
+  for (const RebuildRow& row : rows)
+  {
+    if (row.firstMs >= 0)
+    {
+      std::printf("| %d | %dx%dx%d | %s | %.1f | %.1f | %.1f | %.2f | %.2f | %.1fx | %.1f | %.2g |\n", row.level,
+        row.dims[0], row.dims[1], row.dims[2], row.what.c_str(), row.levelMiB, row.hostMs, row.hostWorkMiB, row.firstMs,
+        row.editMs, row.hostMs / row.editMs, row.deviceMiB, row.relDiff);
+    }
+    else
+    {
+      std::printf("| %d | %dx%dx%d | %s | %.1f | %.1f | %.1f | - | - | - | - | - |\n", row.level, row.dims[0],
+        row.dims[1], row.dims[2], row.what.c_str(), row.levelMiB, row.hostMs, row.hostWorkMiB);
+    }
+    const std::string extra = "level " + std::to_string(row.level) + (row.what[0] == 'd' ? " summed" : " per channel");
+    bench.row("pyramid", ds, channels, o.macrocell, "host-build", row.hostMs, "rebuild_ms", extra);
+    bench.row("pyramid", ds, channels, o.macrocell, "host-build", row.hostWorkMiB, "work_MiB", extra);
+    if (row.firstMs >= 0)
+    {
+      bench.row("pyramid", ds, channels, o.macrocell, "device-build", row.firstMs, "first_build_ms", extra);
+      bench.row("pyramid", ds, channels, o.macrocell, "device-build", row.editMs, "rebuild_ms", extra);
+      bench.row("pyramid", ds, channels, o.macrocell, "device-build", row.deviceMiB, "device_peak_MiB", extra);
+      bench.row("pyramid", ds, channels, o.macrocell, "device-build", row.relDiff, "max_rel_diff", extra);
+    }
+  }
+  if (!device)
+  {
+    std::printf("\n(%s builds levels on the host: Renderer::classifyLevel is classifyExtinctionLevel.)\n", r.name());
+  }
+#ifdef MCVOL_WITH_CUDA
+  if (mcvol::CUDARenderer* cuda = asCuda(r))
+  {
+    cuda->releaseLevelInputs();
+  }
+#endif
+  std::printf("\n");
+  std::fflush(stdout);
 }
 
 struct LevelRow
@@ -264,5 +472,6 @@ void runPyramid(Bench& bench)
   }
   std::printf("\n");
   std::fflush(stdout);
+  runLevelRebuild(bench);
 }
 } // namespace mcvolbench

@@ -13,6 +13,7 @@
 #include <cuda_runtime.h>
 
 #include <cstdint>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <type_traits>
@@ -119,6 +120,18 @@ struct DeviceChannel
   }
 };
 
+/// A scalar channel classifyLevel() copied to the device (CUDAPyramid.cu),
+/// kept while its key matches (ClassifyInput::dataVersion nonzero).
+struct LevelInput
+{
+  const void* host = nullptr;
+  ScalarType type = ScalarType::Float32;
+  int64_t stride = 1;
+  size_t elements = 0; ///< copied elements: (voxels - 1) * stride + 1
+  uint64_t version = 0;
+  DeviceBuffer<uint8_t> data;
+};
+
 /**
  * Everything the renderer keeps on the device, and the versions it was made
  * from. The members are defined where their work is done:
@@ -127,7 +140,8 @@ struct DeviceChannel
  * - CUDAUpload.cu: uploadChannels(), moveNonFiniteToArrays();
  * - CUDAAcceleration.cu: buildRanges(), buildMajorants();
  * - CUDALaunch.cu: render() and readBack() use Accum, Depth and Counters;
- * - CUDAMarch.cu: march(), the ray-marching reference, on the same copies.
+ * - CUDAMarch.cu: march(), the ray-marching reference, on the same copies;
+ * - CUDAPyramid.cu: classifyLevel(), pyramid levels built on the device.
  */
 struct CUDARenderer::Internal
 {
@@ -164,6 +178,7 @@ struct CUDARenderer::Internal
   bool AccumEven = false;
   bool SkipEvenReadBack = false; ///< set by render() for RenderSettings::readBackEven off
   bool PlainKernels = true; ///< setPlainKernels()
+  bool DeviceLevels = false; ///< setDeviceLevels()
   /// displayImage(): the 8-bit image on the device and its page-locked host copy.
   DeviceBuffer<uchar4> Display;
   uint8_t* DisplayHost = nullptr;
@@ -182,6 +197,8 @@ struct CUDARenderer::Internal
   uint64_t PoolId = 0;
   cudaEvent_t Start = nullptr;
   cudaEvent_t Stop = nullptr;
+  /// classifyLevel()'s kept inputs (CUDAPyramid.cu).
+  std::vector<std::unique_ptr<LevelInput>> LevelInputs;
 
   CudaUpdateCounters Updates;
 

@@ -184,6 +184,8 @@ CUDARenderer::CUDARenderer(int device)
   std::fill(std::begin(this->In->ChannelTableVersion), std::end(this->In->ChannelTableVersion), ~0ull);
   const char* plain = std::getenv("MCVOL_CUDA_PLAIN_KERNELS");
   this->In->PlainKernels = !(plain && std::string(plain) == "0");
+  const char* levels = std::getenv("MCVOL_CUDA_DEVICE_LEVELS");
+  this->In->DeviceLevels = levels && std::string(levels) == "1";
 }
 
 CUDARenderer::~CUDARenderer() = default;
@@ -210,6 +212,16 @@ void CUDARenderer::setPlainKernels(bool on)
 bool CUDARenderer::plainKernels() const
 {
   return this->In->PlainKernels;
+}
+
+bool CUDARenderer::buildsLevelsOnDevice() const
+{
+  return this->In->DeviceLevels;
+}
+
+void CUDARenderer::setDeviceLevels(bool on)
+{
+  this->In->DeviceLevels = on;
 }
 
 void CUDARenderer::setBlockSize(int x, int y)
@@ -248,8 +260,11 @@ CudaMemoryStats CUDARenderer::memory() const
   }
   m.macrocellBytes = this->In->Ranges.bytes();
   m.majorantBytes = this->In->Majorants.bytes();
-  m.imageBytes =
-    this->In->Accum.bytes() + this->In->Even.bytes() + this->In->Depth.bytes() + this->In->Display.bytes();
+  m.imageBytes = this->In->Accum.bytes() + this->In->Even.bytes() + this->In->Depth.bytes() + this->In->Display.bytes();
+  for (const auto& li : this->In->LevelInputs)
+  {
+    m.levelInputBytes += li->data.bytes();
+  }
   return m;
 }
 
@@ -257,8 +272,8 @@ size_t CUDARenderer::deviceBytes() const
 {
   const CudaMemoryStats m = this->memory();
   const Internal& in = *this->In;
-  return m.dataBytes + m.textureBytes + m.macrocellBytes + m.majorantBytes + m.imageBytes + in.Tables.bytes() +
-    in.Sparse.bytes() + in.ChannelMax.bytes() + in.NaNFlags.bytes() + in.Counters.bytes() +
+  return m.dataBytes + m.textureBytes + m.macrocellBytes + m.majorantBytes + m.imageBytes + m.levelInputBytes +
+    in.Tables.bytes() + in.Sparse.bytes() + in.ChannelMax.bytes() + in.NaNFlags.bytes() + in.Counters.bytes() +
     in.ImportanceTables.bytes() + in.Segments.bytes() + in.SegmentCounts.bytes() + in.SegmentTotals.bytes();
 }
 

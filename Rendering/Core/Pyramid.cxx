@@ -580,47 +580,22 @@ namespace
 PyramidLevel streamLevel(const int dims[3], const double spacing[3], const double origin[3], int level,
   DownsampleFilter filter, const std::function<void(int z, float* out)>& slice, size_t* peakWorkBytes, bool checkSlices)
 {
-  // The geometry is checked as a view's (no voxels are read through it).
-  static const float kNoVoxels[4] = { 0, 0, 0, 0 };
-  ClassifiedVolumeView geometry;
-  geometry.voxels = kNoVoxels;
-  for (int a = 0; a < 3; ++a)
-  {
-    geometry.dims[a] = dims[a];
-    geometry.spacing[a] = spacing[a];
-    geometry.origin[a] = origin[a];
-  }
-  checkView(geometry);
-  if (level < 1 || level > maxPyramidLevels(dims))
-  {
-    throw std::invalid_argument("mcvol: level " + std::to_string(level) + " asked of a streamed pyramid; a volume of " +
-      std::to_string(dims[0]) + "x" + std::to_string(dims[1]) + "x" + std::to_string(dims[2]) + " has levels 1 to " +
-      std::to_string(maxPyramidLevels(dims)));
-  }
+  // The geometry and the level are checked, and the level's geometry made,
+  // as pyramidLevelGeometry() does for a device build.
+  PyramidLevel out = pyramidLevelGeometry(dims, spacing, origin, level);
   if (!slice)
   {
     throw std::invalid_argument("mcvol: a streamed pyramid needs a slice source");
   }
   const FilterTaps taps = filterTaps(filter);
-
-  PyramidLevel out;
-  out.level = level;
-  ClassifiedVolumeView g = geometry;
   // Stage l (0-based) halves the grid of dims stageDims[l].
   std::vector<std::array<int, 3>> stageDims(static_cast<size_t>(level));
+  int stage[3] = { dims[0], dims[1], dims[2] };
   for (int l = 0; l < level; ++l)
   {
-    stageDims[size_t(l)] = { g.dims[0], g.dims[1], g.dims[2] };
-    PyramidLevel next;
-    coarseGeometry(g, next);
-    levelDims(g.dims, 1, next.dims);
-    std::copy(next.dims, next.dims + 3, g.dims);
-    std::copy(next.spacing, next.spacing + 3, g.spacing);
-    std::copy(next.origin, next.origin + 3, g.origin);
+    stageDims[size_t(l)] = { stage[0], stage[1], stage[2] };
+    levelDims(stage, 1, stage);
   }
-  std::copy(g.dims, g.dims + 3, out.dims);
-  std::copy(g.spacing, g.spacing + 3, out.spacing);
-  std::copy(g.origin, g.origin + 3, out.origin);
   out.voxels.resize(out.numVoxels() * 4);
   const size_t outSlice = size_t(out.dims[0]) * size_t(out.dims[1]) * 4;
   const size_t inSlice = size_t(dims[0]) * size_t(dims[1]) * 4;
@@ -713,26 +688,66 @@ PyramidLevel streamLevel(const int dims[3], const double spacing[3], const doubl
 
 } // namespace
 
+void checkClassifyInputs(const ClassifyInput* inputs, int numInputs)
+{
+  if (!inputs || numInputs < 1)
+  {
+    throw std::invalid_argument("mcvol: classifyExtinctionLevel needs at least one channel");
+  }
+  for (int n = 0; n < numInputs; ++n)
+  {
+    if (!inputs[n].tf || !inputs[n].source.data)
+    {
+      throw std::invalid_argument(
+        "mcvol: classifyExtinctionLevel: channel " + std::to_string(n) + " has no data or no transfer function");
+    }
+  }
+}
+
+PyramidLevel pyramidLevelGeometry(const int dims[3], const double spacing[3], const double origin[3], int level)
+{
+  // streamLevel's checks and geometry.
+  static const float kNoVoxels[4] = { 0, 0, 0, 0 };
+  ClassifiedVolumeView g;
+  g.voxels = kNoVoxels;
+  for (int a = 0; a < 3; ++a)
+  {
+    g.dims[a] = dims[a];
+    g.spacing[a] = spacing[a];
+    g.origin[a] = origin[a];
+  }
+  checkView(g);
+  if (level < 1 || level > maxPyramidLevels(dims))
+  {
+    throw std::invalid_argument("mcvol: level " + std::to_string(level) + " asked of a streamed pyramid; a volume of " +
+      std::to_string(dims[0]) + "x" + std::to_string(dims[1]) + "x" + std::to_string(dims[2]) + " has levels 1 to " +
+      std::to_string(maxPyramidLevels(dims)));
+  }
+  PyramidLevel out;
+  out.level = level;
+  for (int l = 0; l < level; ++l)
+  {
+    PyramidLevel next;
+    coarseGeometry(g, next);
+    levelDims(g.dims, 1, next.dims);
+    std::copy(next.dims, next.dims + 3, g.dims);
+    std::copy(next.spacing, next.spacing + 3, g.spacing);
+    std::copy(next.origin, next.origin + 3, g.origin);
+  }
+  std::copy(g.dims, g.dims + 3, out.dims);
+  std::copy(g.spacing, g.spacing + 3, out.spacing);
+  std::copy(g.origin, g.origin + 3, out.origin);
+  return out;
+}
+
 PyramidLevel streamExtinctionLevel(const int dims[3], const double spacing[3], const double origin[3], int level,
   DownsampleFilter filter, const std::function<void(int z, float* out)>& slice, size_t* peakWorkBytes)
 {
   return streamLevel(dims, spacing, origin, level, filter, slice, peakWorkBytes, true);
 }
 
-namespace
-{
-/// A transfer function as classifyScalars reads it: (r, g, b, extinction)
-/// per texel and the map from a scalar to a texel coordinate.
-struct ClassifyTable
-{
-  std::vector<float> texels; ///< 4 per texel
-  size_t K = 0;
-  double scalarMin = 0.0;
-  double scale = 0.0;
-};
-
 /// Checks `src` and `tf` and tabulates `tf` (the table as Scene builds it).
-ClassifyTable makeClassifyTable(const ChannelSource& src, const TransferFunctionDesc& tf)
+ClassificationTable classificationTable(const ChannelSource& src, const TransferFunctionDesc& tf)
 {
   if (src.format != ChannelFormat::Scalar)
   {
@@ -753,7 +768,7 @@ ClassifyTable makeClassifyTable(const ChannelSource& src, const TransferFunction
     throw std::invalid_argument("mcvol: classifyScalars: the transfer function needs >= 2 entries, 3 colour values "
                                 "per entry, a positive unit distance and a finite range");
   }
-  ClassifyTable t;
+  ClassificationTable t;
   t.K = K;
   t.texels.resize(K * 4);
   for (size_t i = 0; i < K; ++i)
@@ -779,6 +794,10 @@ ClassifyTable makeClassifyTable(const ChannelSource& src, const TransferFunction
   t.scale = double(K - 1) / width;
   return t;
 }
+
+namespace
+{
+using ClassifyTable = ClassificationTable;
 
 /// Voxels [first, first + count) of `src` through `t` into out[v * outStride]
 /// (v counted from `first`), serially: classifyScalars' loop body.
@@ -831,25 +850,14 @@ void classifyRange(const ClassifyTable& t, const ChannelSource& src, int64_t fir
 PyramidLevel classifyExtinctionLevel(const ClassifyInput* inputs, int numInputs, const int dims[3],
   const double spacing[3], const double origin[3], int level, DownsampleFilter filter, size_t* peakWorkBytes)
 {
-  if (!inputs || numInputs < 1)
-  {
-    throw std::invalid_argument("mcvol: classifyExtinctionLevel needs at least one channel");
-  }
-  for (int n = 0; n < numInputs; ++n)
-  {
-    if (!inputs[n].tf || !inputs[n].source.data)
-    {
-      throw std::invalid_argument(
-        "mcvol: classifyExtinctionLevel: channel " + std::to_string(n) + " has no data or no transfer function");
-    }
-  }
+  checkClassifyInputs(inputs, numInputs);
   // The tables once, then every slice block by block: all channels of a
   // block are added while it is in cache (a pass per channel over a whole
   // slice would stream it through memory once per channel).
   std::vector<ClassifyTable> tables;
   for (int n = 0; n < numInputs; ++n)
   {
-    tables.push_back(makeClassifyTable(inputs[n].source, *inputs[n].tf));
+    tables.push_back(classificationTable(inputs[n].source, *inputs[n].tf));
   }
   const int64_t sliceVoxels = int64_t(dims[0]) * int64_t(dims[1]);
   auto classifySlice = [&](int z, float* out)
@@ -997,7 +1005,7 @@ void classifyScalars(const ChannelSource& src, const int dims[3], const Transfer
       throw std::invalid_argument("mcvol: classifyScalars: the volume has an empty extent");
     }
   }
-  const ClassifyTable table = makeClassifyTable(src, tf);
+  const ClassifyTable table = classificationTable(src, tf);
   const int64_t n = int64_t(voxelsOf(dims));
   // Blocks of voxels, one thread each (the per-voxel work is the same).
   constexpr int64_t kBlock = 4096;

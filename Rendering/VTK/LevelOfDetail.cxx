@@ -193,8 +193,8 @@ void LevelOfDetailCache::DropIfStale(const Key& key)
 }
 
 //------------------------------------------------------------------------------
-const LevelOfDetailCache::Level& LevelOfDetailCache::Get(
-  const Key& key, int level, const BoundChannels& channels, const std::vector<const TransferFunctionDesc*>& tables)
+const LevelOfDetailCache::Level& LevelOfDetailCache::Get(const Key& key, int level, const BoundChannels& channels,
+  const std::vector<const TransferFunctionDesc*>& tables, Renderer* device)
 {
   if (!this->HaveKey || !(key == this->Current))
   {
@@ -247,19 +247,41 @@ const LevelOfDetailCache::Level& LevelOfDetailCache::Get(
     {
       inputs[size_t(c)].source = channels.Sources[size_t(c)];
       inputs[size_t(c)].tf = tables[size_t(c)];
+      // The arrays' modification time names their values: a device builder
+      // keeps its copies of them while it stays the same.
+      inputs[size_t(c)].dataVersion = static_cast<uint64_t>(key.DataMTime);
     }
+    // On the render backend's device where it builds levels there (CUDA),
+    // else streamed on the host; the same level to float rounding.
+    built.OnDevice = device && device->buildsLevelsOnDevice();
+    auto build = [&](const ClassifyInput* first, int count, size_t* peak)
+    {
+      if (built.OnDevice)
+      {
+        try
+        {
+          return device->classifyLevel(first, count, channels.Dims, spacing, origin, level, filter, peak);
+        }
+        catch (const std::runtime_error&)
+        {
+          // The device failed (out of memory, say): this level and the
+          // next channels' are built on the host. Bad input throws
+          // std::invalid_argument on both, and is not caught.
+          built.OnDevice = false;
+        }
+      }
+      return classifyExtinctionLevel(first, count, channels.Dims, spacing, origin, level, filter, peak);
+    };
     if (key.Summed)
     {
-      built.Channels.push_back(
-        classifyExtinctionLevel(inputs.data(), channels.Count, channels.Dims, spacing, origin, level, filter, &work));
+      built.Channels.push_back(build(inputs.data(), channels.Count, &work));
     }
     else
     {
       for (int c = 0; c < channels.Count; ++c)
       {
         size_t channelWork = 0;
-        built.Channels.push_back(
-          classifyExtinctionLevel(&inputs[size_t(c)], 1, channels.Dims, spacing, origin, level, filter, &channelWork));
+        built.Channels.push_back(build(&inputs[size_t(c)], 1, &channelWork));
         work = std::max(work, channelWork);
       }
     }
@@ -270,6 +292,7 @@ const LevelOfDetailCache::Level& LevelOfDetailCache::Get(
   ++this->BuildCount;
   this->LastSeconds = built.BuildSeconds;
   this->LastWork = work;
+  this->LastOnDevice = built.OnDevice;
   return this->Levels.emplace(level, std::move(built)).first->second;
 }
 

@@ -22,8 +22,9 @@ namespace adapter
  * 13 item 4; Kraus and Buerger, Sec. 4). Which level this render uses (the
  * one asked for, the automatic footprint rule, or the finest that fits the
  * memory budget), and that level's pre-classified channels, built by
- * streaming level 0 slice by slice (mcvol::classifyExtinctionLevel) and
- * kept until the data, a transfer-function table, the filter or the channel
+ * streaming level 0 slice by slice (mcvol::classifyExtinctionLevel), or on
+ * the render backend's device where it builds levels there
+ * (Renderer::classifyLevel: CUDA), and kept until the data, a transfer-function table, the filter or the channel
  * grouping changes.
  *
  * A level's geometry is kept in level 0's continuous index space (level 0's
@@ -103,7 +104,8 @@ public:
     std::vector<PyramidLevel> Channels;
     unsigned long long Version = 0; ///< unique per build (accumulation key)
     double BuildSeconds = 0.0;
-    size_t WorkBytes = 0; ///< peak working memory of the streamed build
+    size_t WorkBytes = 0;  ///< peak working memory of the build (the device's when built there)
+    bool OnDevice = false; ///< built by the render backend on its device (Renderer::classifyLevel)
     size_t Bytes() const;
   };
 
@@ -111,10 +113,16 @@ public:
    * Level `level` (> 0) for `key`: from the cache, or built from
    * `channels` (scalar channels through `tables`, one per channel; or the
    * one classified channel of dependent components). `summed` adds the
-   * channels into one (Eq. 6/7). Throws what the core throws.
+   * channels into one (Eq. 6/7). Scalar channels are built by `device`'s
+   * Renderer::classifyLevel when it builds levels on a device (CUDA: issue
+   * 13, item 2; the same level to float rounding, the channels kept on the
+   * device under the key's DataMTime so that a transfer-function edit
+   * copies nothing but the tables), otherwise by classifyExtinctionLevel on
+   * the host, streamed. The dependent components' classified channel is
+   * always streamed on the host. Throws what the core throws.
    */
-  const Level& Get(
-    const Key& key, int level, const BoundChannels& channels, const std::vector<const TransferFunctionDesc*>& tables);
+  const Level& Get(const Key& key, int level, const BoundChannels& channels,
+    const std::vector<const TransferFunctionDesc*>& tables, Renderer* device = nullptr);
 
   /// Drops every level (the mapper's data went away).
   void Clear();
@@ -130,6 +138,8 @@ public:
   /// The last build's seconds and peak working memory (0 before any).
   double LastBuildSeconds() const { return this->LastSeconds; }
   size_t LastWorkBytes() const { return this->LastWork; }
+  /// Whether the last build ran on the render backend's device.
+  bool LastBuiltOnDevice() const { return this->LastOnDevice; }
 
 private:
   bool HaveKey = false;
@@ -139,6 +149,7 @@ private:
   unsigned long long NextVersion = 1;
   double LastSeconds = 0.0;
   size_t LastWork = 0;
+  bool LastOnDevice = false;
 };
 
 /// Turns level 0's camera (world to level-0 index) into the level's:

@@ -541,6 +541,52 @@ inline void expectZeroDifference(
   }
 }
 
+// Asserts that a Monte Carlo image of N samples per pixel, each of whose
+// colour components lies in [0, top] and alpha in [0, 1], has the reference
+// as its mean, at significance level alpha: components with
+// N mu (top - mu) >= 100 one by one (expectZeroDifference's image-mean z,
+// sum of z^2 and largest |z|, whose normal tail needs that many expected
+// hits), the others pooled per component into one z-score of their summed
+// differences. The variance bound mu (top - mu) / N holds for any variable
+// in [0, top] with mean mu.
+inline void expectMeanOfSamples(
+  const Accumulator& acc, const std::vector<float>& ref, int N, double top, double alpha, const std::string& what)
+{
+  std::vector<double> D, V;
+  double poolD[4] = { 0, 0, 0, 0 }, poolV[4] = { 0, 0, 0, 0 };
+  for (size_t i = 0; i < ref.size(); ++i)
+  {
+    const double M = i % 4 == 3 ? 1.0 : top;
+    const double mu = std::min(M, std::max(0.0, double(ref[i])));
+    const double d = double(acc.rgba()[i]) - double(ref[i]);
+    const double var = mu * (M - mu) / N;
+    if (N * mu * (M - mu) >= 100.0)
+    {
+      D.push_back(d);
+      V.push_back(var);
+    }
+    else
+    {
+      D.push_back(0.0); // keeps the layout; skipped by expectZeroDifference
+      V.push_back(0.0);
+      poolD[i % 4] += d;
+      poolV[i % 4] += var;
+    }
+  }
+  expectZeroDifference(D, V, alpha, what);
+  for (int c = 0; c < 4; ++c)
+  {
+    if (poolV[c] > 0)
+    {
+      const double z = poolD[c] / std::sqrt(poolV[c]);
+      EXPECT_GT(normalTwoSided(z), alpha) << what << " component " << c << ": pooled rare pixels z = " << z;
+    }
+    else
+    {
+      EXPECT_LE(std::fabs(poolD[c]), 1e-5) << what << " component " << c;
+    }
+  }
+}
 /// Two renders of the same expectation (pooled variance under the null).
 inline void expectSameImage(const Moments& A, const Moments& B, double alpha, const std::string& what)
 {

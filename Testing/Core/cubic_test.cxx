@@ -562,40 +562,7 @@ TEST(CubicRayMarch, MonteCarloConvergesToRayMarch)
         const std::string what =
           std::string(name) + " " + toString(mode) + " " + toString(estimator) + " cubic MC vs cubic ray march";
         const double top = estimator == Estimator::ExpectedValue ? 1.0 + kRouletteThreshold : 1.0;
-        std::vector<double> D, V;
-        double poolD[4] = { 0, 0, 0, 0 }, poolV[4] = { 0, 0, 0, 0 };
-        for (size_t i = 0; i < ref.size(); ++i)
-        {
-          const double M = i % 4 == 3 ? 1.0 : top;
-          const double mu = std::min(M, std::max(0.0, double(ref[i])));
-          const double d = double(acc.rgba()[i]) - double(ref[i]);
-          const double var = mu * (M - mu) / N;
-          if (N * mu * (M - mu) >= 100.0)
-          {
-            D.push_back(d);
-            V.push_back(var);
-          }
-          else
-          {
-            D.push_back(0.0);
-            V.push_back(0.0);
-            poolD[i % 4] += d;
-            poolV[i % 4] += var;
-          }
-        }
-        expectZeroDifference(D, V, alpha, what);
-        for (int c = 0; c < 4; ++c)
-        {
-          if (poolV[c] > 0)
-          {
-            const double z = poolD[c] / std::sqrt(poolV[c]);
-            EXPECT_GT(normalTwoSided(z), alpha) << what << " component " << c << ": pooled rare pixels z = " << z;
-          }
-          else
-          {
-            EXPECT_LE(std::fabs(poolD[c]), 1e-5) << what << " component " << c;
-          }
-        }
+        expectMeanOfSamples(acc, ref, N, top, alpha, what);
       }
     }
   }

@@ -1047,6 +1047,37 @@ TEST(StreamedPyramid, BadInputErrors)
     classifyExtinctionLevel(noTable, 1, dims, spacing, origin, 1, DownsampleFilter::Box4), std::invalid_argument);
 }
 
+// The backend hook's default (the CPU backend) is the host build itself.
+TEST(StreamedPyramid, DefaultRendererClassifyLevel)
+{
+  std::unique_ptr<Renderer> cpu = Renderer::create(Backend::CPU);
+  EXPECT_FALSE(cpu->buildsLevelsOnDevice());
+  TestRand r(5);
+  const int dims[3] = { 13, 6, 9 };
+  const std::vector<float> s0 = smoothField(dims, r), s1 = smoothField(dims, r);
+  const TransferFunctionDesc tf0 = randomTF(r, 16, 1.f), tf1 = randomTF(r, 8, 2.f);
+  const ClassifyInput inputs[2] = { { scalarSource(s0), &tf0 }, { scalarSource(s1), &tf1 } };
+  const double spacing[3] = { 1, 2, 0.5 }, origin[3] = { 1, 0, -1 };
+  for (int level : { 1, 2 })
+  {
+    const PyramidLevel a = cpu->classifyLevel(inputs, 2, dims, spacing, origin, level, DownsampleFilter::BSpline);
+    const PyramidLevel b = classifyExtinctionLevel(inputs, 2, dims, spacing, origin, level, DownsampleFilter::BSpline);
+    EXPECT_EQ(a.voxels, b.voxels) << "level " << level;
+    for (int ax = 0; ax < 3; ++ax)
+    {
+      EXPECT_EQ(a.dims[ax], b.dims[ax]);
+      EXPECT_EQ(a.spacing[ax], b.spacing[ax]);
+      EXPECT_EQ(a.origin[ax], b.origin[ax]);
+    }
+    // The geometry alone, as the device backends take it.
+    const PyramidLevel g = pyramidLevelGeometry(dims, spacing, origin, level);
+    EXPECT_TRUE(g.voxels.empty());
+    EXPECT_TRUE(g.level == b.level && g.dims[0] == b.dims[0] && g.dims[1] == b.dims[1] && g.dims[2] == b.dims[2]);
+    EXPECT_TRUE(g.origin[0] == b.origin[0] && g.spacing[2] == b.spacing[2]);
+  }
+  EXPECT_THROW(cpu->classifyLevel(inputs, 2, dims, spacing, origin, 5, DownsampleFilter::Box4), std::invalid_argument);
+}
+
 // The automatic level follows L = floor(log2(footprint / min spacing)),
 // clamped to [0, levels].
 TEST(LevelOfDetail, FootprintRule)

@@ -20,11 +20,12 @@ enum class CudaSampling : int
 /// Device-side memory of a CUDA renderer (the paper's Table 1, on the GPU).
 struct CudaMemoryStats
 {
-  size_t dataBytes = 0;      ///< channels held as dense arrays (native type; float64 stored as float32)
-  size_t textureBytes = 0;   ///< channels held as 3D textures (each channel is held one way only)
-  size_t macrocellBytes = 0; ///< per-cell per-channel scalar ranges
-  size_t majorantBytes = 0;  ///< per-cell per-channel majorants
-  size_t imageBytes = 0;     ///< accumulation (with the error estimate's even half) and depth buffers
+  size_t dataBytes = 0;       ///< channels held as dense arrays (native type; float64 stored as float32)
+  size_t textureBytes = 0;    ///< channels held as 3D textures (each channel is held one way only)
+  size_t macrocellBytes = 0;  ///< per-cell per-channel scalar ranges
+  size_t majorantBytes = 0;   ///< per-cell per-channel majorants
+  size_t imageBytes = 0;      ///< accumulation (with the error estimate's even half) and depth buffers
+  size_t levelInputBytes = 0; ///< classifyLevel()'s kept copies of its inputs (ClassifyInput::dataVersion)
 };
 
 /// What the renderer did to keep its device copies current (for tests).
@@ -37,6 +38,10 @@ struct CudaUpdateCounters
   double lastMajorantMs = 0.0;        ///< GPU time of the last majorant rebuild (all channels it touched)
   double lastRangeMs = 0.0;           ///< GPU time of the last range build
   uint64_t textureFallbacks = 0;      ///< channels held as dense arrays for lack of room for a texture
+  uint64_t levelInputUploads = 0;     ///< classifyLevel(): scalar channels copied to the device
+  uint64_t levelBuilds = 0;           ///< classifyLevel() calls that built a level
+  double lastLevelMs = 0.0;           ///< wall time of the last classifyLevel() (uploads and read-back included)
+  size_t lastLevelPeakBytes = 0;      ///< device memory of the last classifyLevel() at its peak
 };
 
 /**
@@ -79,6 +84,46 @@ public:
   bool buildsAccelerationOnDevice() const override { return true; }
   size_t deviceBytes() const override;
   uint64_t dataUploads() const override { return this->updateCounters().dataUploads; }
+  /**
+   * Whether the mapper builds levels of detail with classifyLevel() on the
+   * device: off by default until the device build has run on a GPU (it
+   * compiles, and its kernels' arithmetic equals the host build's when run
+   * as host code, but no GPU was available when it was written);
+   * setDeviceLevels(true) or MCVOL_CUDA_DEVICE_LEVELS=1 in the environment
+   * (read when the renderer is made) turns it on. classifyLevel() itself
+   * builds on the device whatever this says (its tests call it directly).
+   */
+  bool buildsLevelsOnDevice() const override;
+  void setDeviceLevels(bool on);
+  /**
+   * A pyramid level built on the device (issue 13, item 2; CUDAPyramid.cu):
+   * the scalar channels are copied to the device as they are (strided
+   * arrays whole, float64 as float64: the renderer's own copies are
+   * converted or held as textures and not reused), classified there with
+   * classificationTable()'s tables and the host's arithmetic (the texel
+   * coordinate in double, the interpolation in float, the inputs added in
+   * order), and filtered along x (fused with the classification), y and z
+   * in double, stored as float after each axis; a level L > 1 is level 1
+   * downsampled again on the device. The result equals
+   * classifyExtinctionLevel's (the same operations, rounded alike: the
+   * kernels use explicitly rounded arithmetic, no fused multiply-add) and
+   * is checked against it to 1e-5 relative (Testing/Core/
+   * cuda_pyramid_test.cxx). Device memory at the peak (lastLevelPeakBytes):
+   * the inputs plus the x-filtered level-0 volume (half of the level-0
+   * float4 volume, 8 bytes a level-0 voxel), then that plus the xy-filtered
+   * one (a quarter), then the level; the full-resolution float4 volume is
+   * never held. For 4 float channels of 512^3: 2 GiB of inputs + 1 GiB +
+   * 0.5 GiB. Inputs with a nonzero ClassifyInput::dataVersion stay on the
+   * device for later calls (levelInputBytes), so a transfer-function edit
+   * copies nothing but the tables, per channel or summed: a kept copy is
+   * freed when the same host array comes with another key (new data), and
+   * the least recently used ones while the kept copies would exceed half
+   * the device's memory; releaseLevelInputs() frees them all.
+   */
+  PyramidLevel classifyLevel(const ClassifyInput* inputs, int numInputs, const int dims[3], const double spacing[3],
+    const double origin[3], int level, DownsampleFilter filter, size_t* peakWorkBytes = nullptr) override;
+  /// Frees classifyLevel()'s kept input copies.
+  void releaseLevelInputs();
 
   /// Texture (default) or global-memory sampling; takes effect at the next render.
   void setSampling(CudaSampling s);

@@ -180,6 +180,14 @@ struct ClassifyInput
 {
   ChannelSource source;
   const TransferFunctionDesc* tf = nullptr;
+  /// Optional, for device backends (Renderer::classifyLevel): nonzero names
+  /// the content of `source` (e.g. the data array's modification time), so
+  /// a backend may keep its device copy of the channel between builds and
+  /// reuse it while the source pointer, type, stride, dims and this version
+  /// are the same (a transfer-function edit then uploads nothing). 0: the
+  /// content is unknown and is copied every time. The caller must change it
+  /// whenever the data change in place. The host build ignores it.
+  uint64_t dataVersion = 0;
 };
 
 /**
@@ -194,6 +202,32 @@ struct ClassifyInput
  */
 PyramidLevel classifyExtinctionLevel(const ClassifyInput* inputs, int numInputs, const int dims[3],
   const double spacing[3], const double origin[3], int level, DownsampleFilter filter, size_t* peakWorkBytes = nullptr);
+
+/// A transfer function as classifyScalars reads it: per texel (r, g, b,
+/// extinction), colour clamped to [0, 1] and extinction from
+/// opacityToExtinction, 4 floats a texel; a scalar s (in data units, double)
+/// is at texel coordinate (s - scalarMin) * scale, clamped to [0, K - 1].
+struct ClassificationTable
+{
+  std::vector<float> texels; ///< 4 per texel
+  size_t K = 0;
+  double scalarMin = 0.0;
+  double scale = 0.0;
+};
+
+/// The table classifyScalars and classifyExtinctionLevel build for `src`
+/// and `tf` (for backends that classify elsewhere, e.g. on a device, with
+/// the same numbers). Throws what classifyScalars throws for them.
+ClassificationTable classificationTable(const ChannelSource& src, const TransferFunctionDesc& tf);
+/// classifyExtinctionLevel()'s checks of its inputs (at least one, each with
+/// data and a transfer function): std::invalid_argument naming the channel.
+void checkClassifyInputs(const ClassifyInput* inputs, int numInputs);
+
+/// The geometry (level, dims, spacing, origin; no voxels) of level `level`
+/// (1 .. maxPyramidLevels(dims)) over a level 0 of `dims`, `spacing` and
+/// `origin`, as streamExtinctionLevel computes it; throws its errors for bad
+/// geometry and a level out of range.
+PyramidLevel pyramidLevelGeometry(const int dims[3], const double spacing[3], const double origin[3], int level);
 
 /**
  * The automatic level of detail (issue 13 item 4): the level whose voxels

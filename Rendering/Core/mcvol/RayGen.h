@@ -45,6 +45,21 @@ MCVOL_FUNC Dvec3 unproject(const double* m, double x, double y, double z)
 /// across it: opaque for every image, yet finite work per macrocell).
 constexpr float kMaxOpticalDepthPerVoxel = 16.f;
 
+/// ||A||_F^2 for A the linear part of the camera's worldToIndex.
+MCVOL_FUNC double worldToIndexNorm2(const CameraView& cam)
+{
+  const double* w = cam.worldToIndex;
+  double f2 = 0.0;
+  for (int r = 0; r < 3; ++r)
+  {
+    for (int c = 0; c < 3; ++c)
+    {
+      f2 += w[4 * r + c] * w[4 * r + c];
+    }
+  }
+  return f2;
+}
+
 /**
  * Extinction limit for a render: kMaxOpticalDepthPerVoxel per 1 / ||A||_F
  * world units, A the linear part of worldToIndex (1 / ||A||_F is at most the
@@ -57,16 +72,7 @@ constexpr float kMaxOpticalDepthPerVoxel = 16.f;
  */
 MCVOL_FUNC float extinctionLimit(const CameraView& cam)
 {
-  const double* w = cam.worldToIndex;
-  double f2 = 0.0;
-  for (int r = 0; r < 3; ++r)
-  {
-    for (int c = 0; c < 3; ++c)
-    {
-      f2 += w[4 * r + c] * w[4 * r + c];
-    }
-  }
-  const double limit = double(kMaxOpticalDepthPerVoxel) * sqrt(f2);
+  const double limit = double(kMaxOpticalDepthPerVoxel) * sqrt(worldToIndexNorm2(cam));
   return limit > 0.0 && limit < 3.4e38 ? float(limit) : 3.4e38f;
 }
 
@@ -75,16 +81,7 @@ MCVOL_FUNC float extinctionLimit(const CameraView& cam)
 /// of the axes' inverse spacings for others).
 MCVOL_FUNC float voxelRate(const CameraView& cam)
 {
-  const double* w = cam.worldToIndex;
-  double f2 = 0.0;
-  for (int r = 0; r < 3; ++r)
-  {
-    for (int c = 0; c < 3; ++c)
-    {
-      f2 += w[4 * r + c] * w[4 * r + c];
-    }
-  }
-  const double rate = sqrt(f2 / 3.0);
+  const double rate = sqrt(worldToIndexNorm2(cam) / 3.0);
   return rate > 0.0 && rate < 3.4e38 ? float(rate) : 0.f;
 }
 

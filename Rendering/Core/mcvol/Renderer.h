@@ -2,6 +2,7 @@
 #pragma once
 
 #include "mcvol/Importance.h"
+#include "mcvol/Pyramid.h"
 #include "mcvol/Scene.h"
 #include "mcvol/Types.h"
 
@@ -262,6 +263,28 @@ public:
   /// Device backends: channel copies to the device so far (one per channel
   /// per data change); 0 for the CPU, which reads the data in place.
   virtual uint64_t dataUploads() const { return 0; }
+
+  /// True if classifyLevel() builds levels on a device (CUDA); false where
+  /// it is classifyExtinctionLevel on the host (the CPU).
+  virtual bool buildsLevelsOnDevice() const { return false; }
+  /**
+   * Level `level` of the extinction-based pyramid over scalar channels
+   * classified through their tables (issue 13, item 2: rebuilt when a
+   * transfer function changes): classifyExtinctionLevel's arguments, result
+   * (a host PyramidLevel, 4 floats per voxel) and errors. The default is
+   * classifyExtinctionLevel itself; a device backend builds the level there
+   * and copies it back, equal to the host build to float rounding.
+   * `peakWorkBytes` (optional): the build's working memory at its peak, the
+   * host's for the default (classifyExtinctionLevel's), the device's for a
+   * device backend (the level's own buffer and any inputs it keeps
+   * included).
+   */
+  virtual PyramidLevel classifyLevel(const ClassifyInput* inputs, int numInputs, const int dims[3],
+    const double spacing[3], const double origin[3], int level, DownsampleFilter filter,
+    size_t* peakWorkBytes = nullptr)
+  {
+    return classifyExtinctionLevel(inputs, numInputs, dims, spacing, origin, level, filter, peakWorkBytes);
+  }
 
   /// Throws std::runtime_error naming the cause if the requested backend is
   /// unavailable. `why` (optional) receives a sentence on the choice made.
