@@ -105,6 +105,6 @@ for mode in ("moving", "still"):
         frame.append(1e3 * (time.perf_counter() - t0))
     times[mode] = statistics.median(frame)
 if rank == 0:
-    print("| %dx%dx%d x%d channels | %dx%d | %d GPU(s) | moving %.1f ms | still %.1f ms |"
-          % (*args.dims, args.channels, *args.size, ranks, times["moving"], times["still"]),
+    print("| %dx%dx%d x%d channels | %dx%d | %d rank(s), %s | moving %.1f ms | still %.1f ms |"
+          % (*args.dims, args.channels, *args.size, ranks, args.backend, times["moving"], times["still"]),
           flush=True)
