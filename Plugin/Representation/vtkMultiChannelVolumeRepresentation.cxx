@@ -216,6 +216,11 @@ void vtkMultiChannelVolumeRepresentation::SetEstimator(int estimator)
   this->GetMultiChannelMapper()->SetEstimator(estimator);
 }
 
+void vtkMultiChannelVolumeRepresentation::SetMinimumSamplesPerVoxel(double samples)
+{
+  this->GetMultiChannelMapper()->SetMinimumSamplesPerVoxel(samples);
+}
+
 void vtkMultiChannelVolumeRepresentation::SetMultiChannelInterpolation(int type)
 {
   this->GetMultiChannelMapper()->SetInterpolationType(type);

@@ -101,6 +101,8 @@ public:
   void SetTrackingMethod(int method);
   void SetSampleSequence(int sequence);
   void SetEstimator(int estimator);
+  /// vtkMultiChannelVolumeMapper::SetMinimumSamplesPerVoxel.
+  void SetMinimumSamplesPerVoxel(double samples);
   /// vtkMultiChannelVolumeMapper::SetInterpolationType (-1: the volume property's).
   void SetMultiChannelInterpolation(int type);
   void SetSamplesPerRender(int spp);

@@ -88,6 +88,15 @@ reference = image()
 expect_property("Seed", 8, True)
 expect_property("SampleSequence", "Sobol", True)
 expect_property("Estimator", "Expected Value", True)
+# Minimum Samples Per Voxel: nothing with the collision estimator (show()
+# pins it: an effect that is off costs nothing and changes nothing), a new
+# image with the expected-value estimator.
+expect_property("MinimumSamplesPerVoxel", 2.0, False, "MinimumSamplesPerVoxel with the collision estimator")
+rep.Estimator = "Expected Value"
+reference = image()
+expect_property("MinimumSamplesPerVoxel", 2.0, True, "MinimumSamplesPerVoxel with the expected-value estimator")
+rep.Estimator = "Collision"
+reference = image()
 expect_property("MultiChannelInterpolation", "Cubic B-Spline", True)
 expect_property("MultiChannelInterpolation", "Nearest", True)
 # The override set to what the volume property already says (Linear) draws
