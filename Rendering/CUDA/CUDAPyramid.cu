@@ -244,15 +244,15 @@ void moveVolume(Volume4& from, Volume4& to)
   from.meter = nullptr;
 }
 
-/// The axes after x of one level step on `v` (y, then z), each one halved
-/// unless it has one voxel.
-void filterYZ(Volume4& v, const DeviceTaps& taps, DeviceMeter& meter)
+/// One level step on `v` along the axes from `first` to z, each one halved
+/// unless it has one voxel (then the data are the level's along it).
+void filterAxes(Volume4& v, int first, const DeviceTaps& taps, DeviceMeter& meter)
 {
-  for (int axis = 1; axis < 3; ++axis)
+  for (int axis = first; axis < 3; ++axis)
   {
     if (v.dims[axis] == 1)
     {
-      continue; // not filtered: the data are the level's along this axis
+      continue;
     }
     int d[3] = { v.dims[0], v.dims[1], v.dims[2] };
     d[axis] = (d[axis] + 1) / 2;
@@ -280,12 +280,7 @@ PyramidLevel CUDARenderer::classifyLevel(const ClassifyInput* inputs, int numInp
   const auto t0 = std::chrono::steady_clock::now();
   Internal& in = *this->In;
   // The host build's checks, in its order: inputs, tables, geometry, level.
-  checkClassifyInputs(inputs, numInputs);
-  std::vector<ClassificationTable> tables;
-  for (int n = 0; n < numInputs; ++n)
-  {
-    tables.push_back(classificationTable(inputs[n].source, *inputs[n].tf));
-  }
+  const std::vector<ClassificationTable> tables = classificationTables(inputs, numInputs);
   PyramidLevel out = pyramidLevelGeometry(dims, spacing, origin, level);
   const FilterTaps hostTaps = filterTaps(filter);
   DeviceTaps taps;
@@ -463,23 +458,11 @@ PyramidLevel CUDARenderer::classifyLevel(const ClassifyInput* inputs, int numInp
     meter.sub(li->data.bytes());
   }
   transient.clear();
-  filterYZ(v, taps, meter);
+  filterAxes(v, 1, taps, meter);
   // Levels 2 .. level: the float4 level downsampled again.
   for (int l = 2; l <= level; ++l)
   {
-    if (v.dims[0] > 1)
-    {
-      int d[3] = { (v.dims[0] + 1) / 2, v.dims[1], v.dims[2] };
-      Volume4 next;
-      next.allocate(d, meter);
-      const long long total = (long long)d[0] * d[1] * d[2];
-      filterAxisKernel<<<blocksFor(total), kThreads>>>(
-        v.buf.ptr, v.dims[0], v.dims[1], v.dims[2], 0, taps, next.buf.ptr);
-      MCVOL_CUDA(cudaGetLastError());
-      v.release();
-      moveVolume(next, v);
-    }
-    filterYZ(v, taps, meter);
+    filterAxes(v, 0, taps, meter);
   }
   for (int a = 0; a < 3; ++a)
   {

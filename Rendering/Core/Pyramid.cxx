@@ -688,7 +688,7 @@ PyramidLevel streamLevel(const int dims[3], const double spacing[3], const doubl
 
 } // namespace
 
-void checkClassifyInputs(const ClassifyInput* inputs, int numInputs)
+std::vector<ClassificationTable> classificationTables(const ClassifyInput* inputs, int numInputs)
 {
   if (!inputs || numInputs < 1)
   {
@@ -702,6 +702,12 @@ void checkClassifyInputs(const ClassifyInput* inputs, int numInputs)
         "mcvol: classifyExtinctionLevel: channel " + std::to_string(n) + " has no data or no transfer function");
     }
   }
+  std::vector<ClassificationTable> tables;
+  for (int n = 0; n < numInputs; ++n)
+  {
+    tables.push_back(classificationTable(inputs[n].source, *inputs[n].tf));
+  }
+  return tables;
 }
 
 PyramidLevel pyramidLevelGeometry(const int dims[3], const double spacing[3], const double origin[3], int level)
@@ -797,13 +803,11 @@ ClassificationTable classificationTable(const ChannelSource& src, const Transfer
 
 namespace
 {
-using ClassifyTable = ClassificationTable;
-
 /// Voxels [first, first + count) of `src` through `t` into out[v * outStride]
 /// (v counted from `first`), serially: classifyScalars' loop body.
 template <class T>
 void classifyRangeOf(
-  const ClassifyTable& t, const T* in, int64_t stride, int64_t count, float* out, int64_t outStride, bool accumulate)
+  const ClassificationTable& t, const T* in, int64_t stride, int64_t count, float* out, int64_t outStride, bool accumulate)
 {
   const size_t K = t.K;
   for (int64_t v = 0; v < count; ++v)
@@ -834,7 +838,7 @@ void classifyRangeOf(
   }
 }
 
-void classifyRange(const ClassifyTable& t, const ChannelSource& src, int64_t first, int64_t count, float* out,
+void classifyRange(const ClassificationTable& t, const ChannelSource& src, int64_t first, int64_t count, float* out,
   int64_t outStride, bool accumulate)
 {
   visitScalarType(src.type,
@@ -850,15 +854,10 @@ void classifyRange(const ClassifyTable& t, const ChannelSource& src, int64_t fir
 PyramidLevel classifyExtinctionLevel(const ClassifyInput* inputs, int numInputs, const int dims[3],
   const double spacing[3], const double origin[3], int level, DownsampleFilter filter, size_t* peakWorkBytes)
 {
-  checkClassifyInputs(inputs, numInputs);
   // The tables once, then every slice block by block: all channels of a
   // block are added while it is in cache (a pass per channel over a whole
   // slice would stream it through memory once per channel).
-  std::vector<ClassifyTable> tables;
-  for (int n = 0; n < numInputs; ++n)
-  {
-    tables.push_back(classificationTable(inputs[n].source, *inputs[n].tf));
-  }
+  const std::vector<ClassificationTable> tables = classificationTables(inputs, numInputs);
   const int64_t sliceVoxels = int64_t(dims[0]) * int64_t(dims[1]);
   auto classifySlice = [&](int z, float* out)
   {
@@ -1005,7 +1004,7 @@ void classifyScalars(const ChannelSource& src, const int dims[3], const Transfer
       throw std::invalid_argument("mcvol: classifyScalars: the volume has an empty extent");
     }
   }
-  const ClassifyTable table = classificationTable(src, tf);
+  const ClassificationTable table = classificationTable(src, tf);
   const int64_t n = int64_t(voxelsOf(dims));
   // Blocks of voxels, one thread each (the per-voxel work is the same).
   constexpr int64_t kBlock = 4096;

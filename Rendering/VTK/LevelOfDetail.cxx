@@ -253,10 +253,10 @@ const LevelOfDetailCache::Level& LevelOfDetailCache::Get(const Key& key, int lev
     }
     // On the render backend's device where it builds levels there (CUDA),
     // else streamed on the host; the same level to float rounding.
-    built.OnDevice = device && device->buildsLevelsOnDevice();
+    bool onDevice = device && device->buildsLevelsOnDevice();
     auto build = [&](const ClassifyInput* first, int count, size_t* peak)
     {
-      if (built.OnDevice)
+      if (onDevice)
       {
         try
         {
@@ -267,7 +267,7 @@ const LevelOfDetailCache::Level& LevelOfDetailCache::Get(const Key& key, int lev
           // The device failed (out of memory, say): this level and the
           // next channels' are built on the host. Bad input throws
           // std::invalid_argument on both, and is not caught.
-          built.OnDevice = false;
+          onDevice = false;
         }
       }
       return classifyExtinctionLevel(first, count, channels.Dims, spacing, origin, level, filter, peak);
@@ -292,7 +292,6 @@ const LevelOfDetailCache::Level& LevelOfDetailCache::Get(const Key& key, int lev
   ++this->BuildCount;
   this->LastSeconds = built.BuildSeconds;
   this->LastWork = work;
-  this->LastOnDevice = built.OnDevice;
   return this->Levels.emplace(level, std::move(built)).first->second;
 }
 

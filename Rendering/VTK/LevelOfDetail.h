@@ -104,8 +104,7 @@ public:
     std::vector<PyramidLevel> Channels;
     unsigned long long Version = 0; ///< unique per build (accumulation key)
     double BuildSeconds = 0.0;
-    size_t WorkBytes = 0;  ///< peak working memory of the build (the device's when built there)
-    bool OnDevice = false; ///< built by the render backend on its device (Renderer::classifyLevel)
+    size_t WorkBytes = 0; ///< peak working memory of the build (the device's when built there)
     size_t Bytes() const;
   };
 
@@ -138,8 +137,6 @@ public:
   /// The last build's seconds and peak working memory (0 before any).
   double LastBuildSeconds() const { return this->LastSeconds; }
   size_t LastWorkBytes() const { return this->LastWork; }
-  /// Whether the last build ran on the render backend's device.
-  bool LastBuiltOnDevice() const { return this->LastOnDevice; }
 
 private:
   bool HaveKey = false;
@@ -149,7 +146,6 @@ private:
   unsigned long long NextVersion = 1;
   double LastSeconds = 0.0;
   size_t LastWork = 0;
-  bool LastOnDevice = false;
 };
 
 /// Turns level 0's camera (world to level-0 index) into the level's:

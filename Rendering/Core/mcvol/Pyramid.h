@@ -219,9 +219,10 @@ struct ClassificationTable
 /// and `tf` (for backends that classify elsewhere, e.g. on a device, with
 /// the same numbers). Throws what classifyScalars throws for them.
 ClassificationTable classificationTable(const ChannelSource& src, const TransferFunctionDesc& tf);
-/// classifyExtinctionLevel()'s checks of its inputs (at least one, each with
-/// data and a transfer function): std::invalid_argument naming the channel.
-void checkClassifyInputs(const ClassifyInput* inputs, int numInputs);
+/// classificationTable() of each input, after classifyExtinctionLevel()'s
+/// checks of them (at least one, each with data and a transfer function:
+/// std::invalid_argument naming the channel).
+std::vector<ClassificationTable> classificationTables(const ClassifyInput* inputs, int numInputs);
 
 /// The geometry (level, dims, spacing, origin; no voxels) of level `level`
 /// (1 .. maxPyramidLevels(dims)) over a level 0 of `dims`, `spacing` and
