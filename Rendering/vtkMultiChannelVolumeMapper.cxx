@@ -777,6 +777,10 @@ void vtkMultiChannelVolumeMapper::ReleaseGraphicsResources(vtkWindow* window)
 {
   vtkInternals& in = *this->Internals;
   in.Compositor.ReleaseGraphicsResources(window);
+  // The image still on the device comes back first: GetAccumulatedImage
+  // after a release (vtkRenderWindow::RemoveRenderer releases) returns it,
+  // as on the CPU.
+  this->ReadBackImage();
   // A device backend holds the data (twice, with textures) and the grids in
   // GPU memory: give them back too; the next render uploads again.
   if (in.Backend.ReleaseDevice())
@@ -1241,11 +1245,11 @@ bool vtkMultiChannelVolumeMapper::SetUpView(RenderPass& pass)
   std::vector<float>& depth = this->Internals->Depth;
   if (!mcvol::adapter::HasOpaqueGeometry(pass.Renderer))
   {
-    // Nothing but volumes: the depth buffer is all "far"; skip the read-back
-    // (filling is a tenth of its cost; the buffer must be refilled each time,
-    // since the Accumulation stage swaps it with the previous frame's).
-    const size_t n = static_cast<size_t>(pass.Viewport.Width) * static_cast<size_t>(pass.Viewport.Height);
-    depth.assign(n, 1.f);
+    // Nothing but volumes: the depth buffer is all "far". No buffer at all
+    // (an empty one: Depth() is null and the backends take every ray to the
+    // far plane) skips the read-back, the per-frame fill and comparison of
+    // a full-window buffer, and a device backend's depth copy.
+    depth.clear();
     return true;
   }
   if (!mcvol::adapter::ReadDepth(pass.Window, pass.Viewport, depth))

@@ -25,7 +25,7 @@ bool AccumulationKey::operator==(const AccumulationKey& o) const
 bool Accumulation::Update(const AccumulationKey& key, std::vector<float>& depth, Accumulator& accum)
 {
   const bool depthChanged = this->LastDepth.size() != depth.size() ||
-    std::memcmp(this->LastDepth.data(), depth.data(), depth.size() * sizeof(float)) != 0;
+    (!depth.empty() && std::memcmp(this->LastDepth.data(), depth.data(), depth.size() * sizeof(float)) != 0);
   if (this->HaveKey && key == this->Key && !depthChanged && !this->ResetRequested && accum.width() == key.Width &&
     accum.height() == key.Height)
   {

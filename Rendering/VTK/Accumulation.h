@@ -49,8 +49,9 @@ public:
   /// True when the image was restarted.
   bool Update(const AccumulationKey& key, std::vector<float>& depth, Accumulator& accum);
 
-  /// The depth buffer the current image is traced against.
-  const float* Depth() const { return this->LastDepth.data(); }
+  /// The depth buffer the current image is traced against; null when the
+  /// render had none (nothing but volumes: every ray reaches the far plane).
+  const float* Depth() const { return this->LastDepth.empty() ? nullptr : this->LastDepth.data(); }
 
   /// The next render starts a new image (ResetAccumulation).
   void RequestReset() { this->ResetRequested = true; }

@@ -34,9 +34,18 @@ bool FrameCompositor::Draw(
 bool FrameCompositor::DrawImage(
   vtkOpenGLRenderWindow* window, int width, int height, int type, const void* rgba, std::string& error)
 {
+  if (this->Texture && this->TextureType != type)
+  {
+    // A texture object keeps the format and type of its first upload: a
+    // device backend's RGBA8 image after a float one (or the reverse) needs
+    // a new one, else its bytes are read as the old type.
+    this->Texture->ReleaseGraphicsResources(window);
+    this->Texture = nullptr;
+  }
   if (!this->Texture)
   {
     this->Texture = vtkSmartPointer<vtkTextureObject>::New();
+    this->TextureType = type;
   }
   this->Texture->SetContext(window);
   this->Texture->SetMinificationFilter(vtkTextureObject::Nearest);

@@ -23,6 +23,7 @@ import numpy as np
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 import vtkmodules.vtkRenderingOpenGL2  # noqa: F401 (OpenGL render window)
+from vtkmodules.vtkCommonCore import vtkFloatArray
 from vtkmodules.vtkCommonDataModel import vtkImageData, vtkPiecewiseFunction
 from vtkmodules.vtkRenderingCore import (vtkColorTransferFunction, vtkRenderer, vtkRenderWindow, vtkVolume,
                                          vtkVolumeProperty)
@@ -171,6 +172,27 @@ t.check(np.array_equal(pixels_a, pixels_b), "same seed, same GPU: the same image
         % np.abs(pixels_a.astype(int) - pixels_b.astype(int)).max())
 t.check(mapper.GetNumberOfDataUploads() == 2 * channels, "the first mapper's copy is untouched")
 
+# --- the drawn image, from the device's 8-bit copy or the read-back floats ---
+# The image is drawn from the device's RGBA8 display copy while it is pending
+# there, and from the float image once it is read back (GetAccumulatedImage);
+# a finished image redrawn after the read-back must look the same, and new
+# samples after that go back to the 8-bit copy.
+readback = vtkFloatArray()
+mapper_a.GetAccumulatedImage(readback)
+pixels_float = capture_rgba(window_a)
+t.check(np.abs(pixels_float.astype(int) - pixels_a.astype(int)).max() <= 1,
+        "drawn from the read-back floats: the same image as from the 8-bit copy (max difference %d)"
+        % np.abs(pixels_float.astype(int) - pixels_a.astype(int)).max())
+for w in (window_a, window_b):
+    w.GetRenderers().GetFirstRenderer().GetActiveCamera().Azimuth(10)
+pixels_a = capture_rgba(window_a)
+pixels_b = capture_rgba(window_b)
+t.check(mapper_a.GetTotalSamples() == 1 and pixels_a[..., :3].max() > 0,
+        "a camera move restarts the image, drawn from the 8-bit copy again (%d sample)" % mapper_a.GetTotalSamples())
+t.check(np.array_equal(pixels_a, pixels_b),
+        "after a float draw, the 8-bit draw equals that of a mapper that never drew floats (max difference %d)"
+        % np.abs(pixels_a.astype(int) - pixels_b.astype(int)).max())
+
 # --- ReleaseGraphicsResources gives the memory back --------------------------
 for m, w in ((mapper_a, window_a), (mapper_b, window_b)):
     m.ReleaseGraphicsResources(w)
@@ -179,6 +201,13 @@ device_bytes = mapper.GetDeviceMemory()
 before = process_memory_mib()
 mapper.ReleaseGraphicsResources(window)
 after = process_memory_mib()
+# The image was still on the device: the release reads it back first.
+released = vtkFloatArray()
+mapper.GetAccumulatedImage(released)
+released = vtk_to_numpy(released)
+t.check(released.size > 0 and np.isfinite(released).all() and released[3::4].max() > 0.1,
+        "GetAccumulatedImage after the release returns the image (max alpha %.3f)"
+        % (released[3::4].max() if released.size else 0))
 t.check(mapper.GetDeviceMemory() == 0, "released: the mapper holds %g bytes" % mapper.GetDeviceMemory())
 if before is not None and after is not None:
     freed = before - after
