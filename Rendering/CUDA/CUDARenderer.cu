@@ -185,7 +185,7 @@ CUDARenderer::CUDARenderer(int device)
   const char* plain = std::getenv("MCVOL_CUDA_PLAIN_KERNELS");
   this->In->PlainKernels = !(plain && std::string(plain) == "0");
   const char* levels = std::getenv("MCVOL_CUDA_DEVICE_LEVELS");
-  this->In->DeviceLevels = levels && std::string(levels) == "1";
+  this->In->DeviceLevels = !(levels && std::string(levels) == "0");
 }
 
 CUDARenderer::~CUDARenderer() = default;
