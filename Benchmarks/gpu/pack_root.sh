@@ -31,8 +31,8 @@ if [ "${1:-}" = "--build-only" ]; then build_only=1; shift; fi
 top="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 b="$(cd "${1:-$top/build}" && pwd)"
 out="$top/.gpuroot"
-# A call carries 64 MiB with the working tree (about 25 MiB) included.
-chunk_mb="${CHUNK_MB:-38}"
+# A call carries 64 MiB with the working tree (about 29 MiB) included.
+chunk_mb="${CHUNK_MB:-32}"
 work="$(mktemp -d)"
 trap 'rm -rf "$work"' EXIT
 grep -qxF '/.gpuroot/' "$top/.git/info/exclude" 2>/dev/null || {
