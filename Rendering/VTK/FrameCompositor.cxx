@@ -34,7 +34,7 @@ bool FrameCompositor::Draw(
 bool FrameCompositor::DrawImage(
   vtkOpenGLRenderWindow* window, int width, int height, int type, const void* rgba, std::string& error)
 {
-  if (this->Texture && this->TextureType != type)
+  if (this->Texture && this->Texture->GetVTKDataType() != type)
   {
     // A texture object keeps the format and type of its first upload: a
     // device backend's RGBA8 image after a float one (or the reverse) needs
@@ -45,7 +45,6 @@ bool FrameCompositor::DrawImage(
   if (!this->Texture)
   {
     this->Texture = vtkSmartPointer<vtkTextureObject>::New();
-    this->TextureType = type;
   }
   this->Texture->SetContext(window);
   this->Texture->SetMinificationFilter(vtkTextureObject::Nearest);

@@ -39,7 +39,6 @@ private:
   bool DrawImage(vtkOpenGLRenderWindow* window, int width, int height, int type, const void* rgba, std::string& error);
 
   vtkSmartPointer<vtkTextureObject> Texture;
-  int TextureType = 0; ///< the VTK type of the texture's data (VTK_FLOAT, VTK_UNSIGNED_CHAR)
   std::unique_ptr<vtkOpenGLQuadHelper> Quad;
 };
 } // namespace adapter
