@@ -252,7 +252,7 @@ void CUDARenderer::render(const Scene& scene, const Camera& camera, const Render
   // The even-sample mean of the error estimate goes with it, when the
   // Accumulator keeps one (AccumEven: the device copy is in step).
   const size_t P = size_t(camera.width) * size_t(camera.height);
-  const bool wantEven = accum.evenRGBA() != nullptr;
+  const bool wantEven = accum.hasEven();
   if (accum.pendingOnDevice() && in.AccumId != accum.id())
   {
     throw std::logic_error("mcvol: this Accumulator's image was left on the device (RenderSettings::readBack = "
@@ -443,14 +443,14 @@ void CUDARenderer::readBack(Accumulator& accum)
     return; // the host copy is current
   }
   MCVOL_CUDA(cudaSetDevice(in.Device));
-  MCVOL_CUDA(cudaMemcpy(accum.rgba(), in.Accum.ptr, in.Accum.bytes(), cudaMemcpyDeviceToHost));
+  MCVOL_CUDA(cudaMemcpy(accum.rgbaForOverwrite(), in.Accum.ptr, in.Accum.bytes(), cudaMemcpyDeviceToHost));
   // The error estimate is computed on the host from both images: one more
   // copy of the image's size, only while the Accumulator keeps the estimate
   // (and, with RenderSettings::readBackEven off, only when readBackEven()
   // asks for it).
   accum.setPendingOnDevice(false);
   accum.setEvenPendingOnDevice(false);
-  if (accum.evenRGBA() && in.AccumEven && in.Even.count == in.Accum.count)
+  if (accum.hasEven() && in.AccumEven && in.Even.count == in.Accum.count)
   {
     if (in.SkipEvenReadBack)
     {
@@ -458,7 +458,7 @@ void CUDARenderer::readBack(Accumulator& accum)
     }
     else
     {
-      MCVOL_CUDA(cudaMemcpy(accum.evenRGBA(), in.Even.ptr, in.Even.bytes(), cudaMemcpyDeviceToHost));
+      MCVOL_CUDA(cudaMemcpy(accum.evenRGBAForOverwrite(), in.Even.ptr, in.Even.bytes(), cudaMemcpyDeviceToHost));
     }
   }
   ++in.Updates.imageDownloads;
@@ -472,11 +472,11 @@ void CUDARenderer::readBackEven(Accumulator& accum)
     return;
   }
   const bool mine = in.AccumId == accum.id() && in.AccumSamples == accum.samples() && in.AccumEven &&
-    in.Even.count == size_t(accum.width()) * size_t(accum.height()) && accum.evenRGBA();
+    in.Even.count == size_t(accum.width()) * size_t(accum.height()) && accum.hasEven();
   if (mine)
   {
     MCVOL_CUDA(cudaSetDevice(in.Device));
-    MCVOL_CUDA(cudaMemcpy(accum.evenRGBA(), in.Even.ptr, in.Even.bytes(), cudaMemcpyDeviceToHost));
+    MCVOL_CUDA(cudaMemcpy(accum.evenRGBAForOverwrite(), in.Even.ptr, in.Even.bytes(), cudaMemcpyDeviceToHost));
     accum.setEvenPendingOnDevice(false);
   }
 }

@@ -230,3 +230,52 @@ TEST(ErrorEstimate, FollowsReadBack)
   r->readBack(lazy);
   EXPECT_EQ(lazy.estimatedMSE(), eager.estimatedMSE());
 }
+
+// reset() defers the host image's zeros to its first host access (a device
+// backend starts the image on the device and never pays for the clear). The
+// deferred clear must be invisible: after a reset, the host image and its
+// even half read as zeros, the estimate is unavailable, and a new image
+// rendered after the reset equals one rendered into a fresh Accumulator,
+// with the same estimate, whether or not the host image was read in between.
+TEST(ErrorEstimate, ResetClearsLazilyButCompletely)
+{
+  std::unique_ptr<Renderer> r = testRenderer();
+  const DemoVolume v = makeDemo("figure3", { 20, 20, 20 });
+  Scene scene;
+  configureDemo(scene, v, 4);
+  const Camera cam = demoCam(v, 24, 24);
+  Accumulator fresh, touched, untouched;
+  renderBatches(*r, scene, cam, fresh, 8, 4, 7);
+  renderBatches(*r, scene, cam, touched, 6, 3, 11);
+  renderBatches(*r, scene, cam, untouched, 6, 3, 11);
+  const std::vector<float> before = image(touched);
+  ASSERT_GT(*std::max_element(before.begin(), before.end()), 0.f);
+
+  touched.reset();
+  untouched.reset();
+  EXPECT_TRUE(touched.hostClearPending());
+  EXPECT_EQ(touched.samples(), 0u);
+  EXPECT_LT(touched.estimatedMSE(), 0.0);
+  const std::vector<float> cleared = image(touched); // writes the zeros
+  EXPECT_FALSE(touched.hostClearPending());
+  EXPECT_TRUE(std::all_of(cleared.begin(), cleared.end(), [](float x) { return x == 0.f; }));
+  ASSERT_NE(touched.evenRGBA(), nullptr);
+  const float* even = touched.evenRGBA();
+  EXPECT_TRUE(std::all_of(even, even + cleared.size(), [](float x) { return x == 0.f; }));
+
+  // `untouched` goes straight into the next render.
+  EXPECT_TRUE(untouched.hostClearPending());
+  renderBatches(*r, scene, cam, touched, 8, 4, 7);
+  renderBatches(*r, scene, cam, untouched, 8, 4, 7);
+  EXPECT_EQ(image(touched), image(fresh));
+  EXPECT_EQ(image(untouched), image(fresh));
+  EXPECT_EQ(touched.estimatedMSE(), fresh.estimatedMSE());
+  EXPECT_EQ(untouched.estimatedMSE(), fresh.estimatedMSE());
+
+  // rgbaForOverwrite() hands the buffer over without writing the zeros.
+  untouched.reset();
+  float* raw = untouched.rgbaForOverwrite();
+  std::fill(raw, raw + cleared.size(), 0.5f);
+  EXPECT_EQ(untouched.rgba()[0], 0.5f); // not cleared behind the caller's back
+  EXPECT_EQ(untouched.evenRGBA()[0], 0.f); // the even half was still pending: cleared
+}

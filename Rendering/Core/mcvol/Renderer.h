@@ -103,8 +103,30 @@ public:
   int height() const { return this->Height; }
   /// Samples per pixel accumulated so far.
   uint32_t samples() const { return this->Samples; }
-  const float* rgba() const { return this->RGBA.data(); }
-  float* rgba() { return this->RGBA.data(); }
+  /// The host image. After reset() its zeros are written on first access
+  /// (see hostClearPending()): a device backend that starts the image on the
+  /// device never pays for clearing the host copy.
+  const float* rgba() const
+  {
+    this->settle();
+    return this->RGBA.data();
+  }
+  float* rgba()
+  {
+    this->settle();
+    return this->RGBA.data();
+  }
+  /**
+   * For a backend about to overwrite every value of the host image (and of
+   * the even half when `even`), e.g. a read-back: the pointer without writing
+   * the pending zeros first. The caller must write all of it.
+   */
+  float* rgbaForOverwrite();
+  float* evenRGBAForOverwrite();
+  /// True while reset() has not yet written the host image's zeros: they are
+  /// written by the first rgba()/evenRGBA()/estimatedMSE() (not thread-safe
+  /// against concurrent first accesses; backends take the pointer once).
+  bool hostClearPending() const { return this->ClearRGBA || this->ClearEven; }
   /// Called by backends after adding `k` samples per pixel.
   void addSamples(uint32_t k) { this->Samples += k; }
 
@@ -119,8 +141,19 @@ public:
   /// Running mean of the samples of even per-pixel index (RGBA as rgba()),
   /// or nullptr when the estimate is off or unavailable for this image:
   /// backends then skip the split.
-  float* evenRGBA() { return this->EvenValid ? this->Even.data() : nullptr; }
-  const float* evenRGBA() const { return this->EvenValid ? this->Even.data() : nullptr; }
+  float* evenRGBA()
+  {
+    this->settle();
+    return this->EvenValid ? this->Even.data() : nullptr;
+  }
+  const float* evenRGBA() const
+  {
+    this->settle();
+    return this->EvenValid ? this->Even.data() : nullptr;
+  }
+  /// Whether evenRGBA() would return an image, without touching it (device
+  /// backends ask this to decide whether to keep the split).
+  bool hasEven() const { return this->EvenValid; }
   /// Samples of even index among the first n of a pixel: 0, 2, 4, ... < n.
   static uint32_t evenSamples(uint32_t n) { return (n + 1u) / 2u; }
 
@@ -185,16 +218,29 @@ public:
   const ImportancePool& importancePoolIfAny() const { return this->Importance; }
 
 private:
+  void settle() const
+  {
+    if (this->ClearRGBA || this->ClearEven)
+    {
+      this->clearHost();
+    }
+  }
+  void clearHost() const;
+
   int Width = 0;
   int Height = 0;
   uint32_t Samples = 0;
+  // reset() leaves the host zeros to the first access (mutable: const
+  // accessors write them).
+  mutable bool ClearRGBA = false;
+  mutable bool ClearEven = false;
   bool Pending = false;
   bool EvenPending = false;
   ObjectId Id;
-  std::vector<float> RGBA;
+  mutable std::vector<float> RGBA;
   bool EstimateError = true;
   bool EvenValid = false; ///< Even holds the even samples of this image
-  std::vector<float> Even;
+  mutable std::vector<float> Even;
   ImportancePool Importance;
 };
 
