@@ -18,7 +18,7 @@
 #                             libraries, Python package, plugin, CTest files);
 #                             object files and the VTK-free core's test
 #                             programs (check.sh builds those there) left out,
-#                             unless MCVOL_PACK_TESTS=1.
+#                             unless MCVOL_PACK_TESTS=cuda.
 # The working tree itself travels with every call.
 #
 # Usage: bash Benchmarks/gpu/pack_root.sh [--build-only] [build-dir]
@@ -117,13 +117,19 @@ fi
 
 # --- 4. the build tree's run-time part ---------------------------------------
 rm -rf "$out"/build.tar.zst "$out"/build-*
-# The core's test programs (~9 MiB each compressed, mostly CUDA kernels) come
-# only with MCVOL_PACK_TESTS=1: then `vtk.sh ctest -L cuda` runs the core's
-# CUDA tests in the root too, without building them on the GPU machine.
-skip_tests="mcvol_*_test"
-[ "${MCVOL_PACK_TESTS:-0}" = 1 ] && skip_tests="no-such-file"
-(cd / && find "${b#/}" \( -name CMakeFiles -o -name '_deps' \) -prune -o -type f \
-  ! -name '*.o' ! -name '*.a' ! -name '*.d' ! -name "$skip_tests" -print) |
+# The core's test programs (~9 MiB each compressed, mostly CUDA kernels) are
+# left out, unless MCVOL_PACK_TESTS=cuda: then the programs of the `cuda`
+# ctest label come along, and `vtk.sh ctest -L cuda` runs the core's CUDA
+# tests in the root without building them on the GPU machine.
+keep_tests=""
+if [ "${MCVOL_PACK_TESTS:-}" = cuda ]; then
+  keep_tests="$(cd "$b" && ctest -N -V -L cuda | sed -n 's/.*Test command: \([^ ]*mcvol_[a-z_]*_test\).*/\1/p' | sort -u)"
+fi
+{
+  (cd / && find "${b#/}" \( -name CMakeFiles -o -name '_deps' \) -prune -o -type f \
+    ! -name '*.o' ! -name '*.a' ! -name '*.d' ! -name 'mcvol_*_test' -print)
+  for t in $keep_tests; do echo "${t#/}"; done
+} |
   tar -C / -cf - -T - | zstd -q -T0 -"${ZSTD_LEVEL:-12}" -o "$out/build.tar.zst"
 echo "build: $(du -m "$out/build.tar.zst" | cut -f1) MiB compressed"
 
