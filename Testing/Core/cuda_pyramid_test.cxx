@@ -200,7 +200,8 @@ TEST(CudaPyramid, LevelsEqualHostBuild)
 {
   const std::unique_ptr<CUDARenderer> r = device();
   const char* env = std::getenv("MCVOL_CUDA_DEVICE_LEVELS");
-  EXPECT_EQ(r->buildsLevelsOnDevice(), env && std::string(env) == "1"); // the mapper's use: opt-in for now
+  // The default since the fourth session; MCVOL_CUDA_DEVICE_LEVELS=0 turns it off.
+  EXPECT_EQ(r->buildsLevelsOnDevice(), !(env && std::string(env) == "0"));
   r->setDeviceLevels(true);
   EXPECT_TRUE(r->buildsLevelsOnDevice());
   TestRand rnd(4242);
