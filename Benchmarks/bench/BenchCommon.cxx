@@ -50,6 +50,7 @@ void usage()
             "                   [--psnr DB] [--reference-spp N] [--density F]\n"
             "                   [--samplers independent,sobol] [--spp-max N]\n"
             "                   [--estimators collision,expected-value] [--min-samples-per-voxel 0.5,1]\n"
+            "                   [--pixel-centres]\n"
             "sections: trackers channels macrocell rebuild memory paper converge sampling effects visibility estimate\n"
             "          sequences pyramid");
 }
@@ -163,6 +164,10 @@ Options parse(int argc, char** argv)
           throw std::invalid_argument("--samplers takes independent and/or sobol, not " + n);
         }
       }
+    }
+    else if (a == "--pixel-centres")
+    {
+      o.pixelCentres = true;
     }
     else if (a == "--min-samples-per-voxel")
     {

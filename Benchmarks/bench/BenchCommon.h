@@ -50,6 +50,9 @@ struct Options
   /// section converge: extra expected-value rows with these
   /// RenderSettings::minSamplesPerVoxel (none by default)
   std::vector<float> minSamplesPerVoxel;
+  /// converge: also every configuration at pixel centres
+  /// (RenderSettings::jitterPixels off), against a reference at pixel centres
+  bool pixelCentres = false;
 };
 
 void usage();

@@ -24,9 +24,19 @@ void runConverge(Bench& bench)
   s.load(o, o.channels, o.macrocell, bench.hostAccel);
   const std::string ds = describe(o, s);
   const mcvol::Camera cam = benchCamera(o, s.scene);
-  // Converged reference: many samples, another seed, in batches.
+  // Converged reference: many samples, another seed, in batches. With
+  // --pixel-centres a second one at pixel centres, for the same
+  // configurations at pixel centres (each scored against its own limit).
   mcvol::Accumulator ref;
   const std::vector<float> refImg = renderReference(o, r, s.scene, cam, ref);
+  std::vector<float> refCentres;
+  if (o.pixelCentres)
+  {
+    mcvol::Accumulator refC;
+    mcvol::RenderSettings rc;
+    rc.jitterPixels = false;
+    refCentres = renderReference(o, r, s.scene, cam, refC, rc);
+  }
   std::printf("## Time to converge: %s, %dx%d, 1 spp per frame, target PSNR %.1f dB (peak 1, RGB over black) "
               "against %u spp\n\n| estimator, tracker, sampler | frames | ms (rendering only) | PSNR reached | ms per frame back to back "
               "| frames x that |\n|---|---|---|---|---|---|\n",
@@ -38,6 +48,7 @@ void runConverge(Bench& bench)
     mcvol::Tracker tracker;
     mcvol::Sampler sampler;
     float minSamplesPerVoxel = 0.f;
+    bool centres = false;
   };
   std::vector<Config> configs = {
     { "expected-value, sobol (default)", mcvol::Estimator::ExpectedValue, mcvol::Tracker::OneDDA,
@@ -55,14 +66,27 @@ void runConverge(Bench& bench)
     std::snprintf(name, sizeof(name), "expected-value, sobol, >= %g tentative per voxel", double(m));
     configs.push_back({ name, mcvol::Estimator::ExpectedValue, mcvol::Tracker::OneDDA, mcvol::Sampler::Sobol, m });
   }
+  if (o.pixelCentres)
+  {
+    const size_t n = configs.size();
+    for (size_t i = 0; i < n; ++i)
+    {
+      Config c = configs[i];
+      c.name += ", pixel centres";
+      c.centres = true;
+      configs.push_back(c);
+    }
+  }
   for (const Config& config : configs)
   {
+    const std::vector<float>& target = config.centres ? refCentres : refImg;
     mcvol::Accumulator acc;
     mcvol::RenderSettings st;
     st.tracker = config.tracker;
     st.estimator = config.estimator;
     st.sampler = config.sampler;
     st.minSamplesPerVoxel = config.minSamplesPerVoxel;
+    st.jitterPixels = !config.centres;
     st.seed = 7;
     st.readBack = false;
     // Warm-up on a throw-away accumulator, then timed frames; the PSNR is
@@ -86,7 +110,7 @@ void runConverge(Bench& bench)
       ms += 1e3 * seconds(t0);
       ++frames;
       r.readBack(acc);
-      q = psnrOf(acc, refImg);
+      q = psnrOf(acc, target);
       if (q >= o.psnr)
       {
         break;
