@@ -21,14 +21,18 @@
 #                             unless MCVOL_PACK_TESTS=cuda.
 # The working tree itself travels with every call.
 #
-# Usage: bash Benchmarks/gpu/pack_root.sh [--build-only] [build-dir]
+# Usage: bash Benchmarks/gpu/pack_root.sh [--build-only | --dev] [build-dir]
 #   (default build-dir: build). --build-only re-packs the build tree alone
-#   (after a rebuild), keeping the bookworm root's chunks.
+#   (after a rebuild), keeping the bookworm root's chunks. --dev packs what
+#   building there needs (.gpuroot/dev-N: compilers, headers, CMake
+#   packages), for `vtk.sh build`; it needs the root's chunks.
 # Then carry the .gpuroot/root-N and build-N folders in back-to-back calls
 # (see README.md).
 set -euo pipefail
 build_only=0
+dev_only=0
 if [ "${1:-}" = "--build-only" ]; then build_only=1; shift; fi
+if [ "${1:-}" = "--dev" ]; then dev_only=1; build_only=1; shift; fi
 top="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 b="$(cd "${1:-$top/build}" && pwd)"
 out="$top/.gpuroot"
@@ -115,7 +119,48 @@ echo "root: $(wc -l < "$work/pkgs") packages, $(wc -l < "$work/files") files," \
 
 fi
 
+# --- 3b. --dev: what building the project there needs ------------------------
+# The compilers, headers, CMake packages and static libraries of every package
+# scripts/deps.sh installs and of their installed dependencies, less the files
+# the root's chunks already hold: with it, `vtk.sh build` configures and
+# builds the whole project (module, Python wrapping, plugin, tests) inside
+# the root on the GPU machine, with that machine's nvcc (/usr/local/cuda,
+# bound into the root).
+if [ "$dev_only" = 1 ]; then
+  ls "$out"/root-*/root.[0-9][0-9] > /dev/null 2>&1 || { echo "pack the root first (no .gpuroot/root-N)"; exit 1; }
+  mapfile -t want < <(bash -c "$(sed -n '/^MCVOL_PACKAGES=(/,/^)/p' "$top/scripts/deps.sh")"'
+    printf "%s\n" "${MCVOL_PACKAGES[@]}"')
+  apt-cache depends --recurse --no-recommends --no-suggests --no-conflicts --no-breaks \
+    --no-replaces --no-enhances "${want[@]}" 2>/dev/null | grep -v '^[ <]' | sort -u > "$work/deps"
+  dpkg-query -W -f='${Package}\n' | sort -u > "$work/installed"
+  comm -12 "$work/deps" "$work/installed" > "$work/devpkgs"
+  cat $(ls "$out"/root-*/root.[0-9][0-9] | sort) | zstd -dc | tar -t | sed 's#/$##' | sort -u > "$work/inroot"
+  while read -r p; do dpkg -L "$p" 2>/dev/null || true; done < "$work/devpkgs" |
+    grep -vE '^/usr/share/(doc|man|info|locale|lintian|bug|doc-base)/|/__pycache__/|^/\.$' |
+    python3 -c '
+import os, sys
+seen = set()
+for line in sys.stdin:
+    f = line.rstrip("\n")
+    if not (os.path.lexists(f)) or (os.path.isdir(f) and not os.path.islink(f)):
+        continue
+    path = os.path.join(os.path.realpath(os.path.dirname(f)), os.path.basename(f))[1:]
+    if path not in seen:
+        seen.add(path)
+        print(path)
+' | sort -u > "$work/devall"
+  # update-alternatives links (cc, c++, ...) and their /etc/alternatives hops
+  find /usr/bin -maxdepth 1 -type l -lname '/etc/alternatives/*' | sed 's#^/##' >> "$work/devall"
+  find /etc/alternatives -type l | sed 's#^/##' >> "$work/devall"
+  sort -u "$work/devall" | comm -23 - "$work/inroot" > "$work/devfiles"
+  rm -rf "$out"/dev.tar.zst "$out"/dev-*
+  tar -C / --no-recursion -cf - -T "$work/devfiles" | zstd -q -T0 -"${ZSTD_LEVEL:-12}" -o "$out/dev.tar.zst"
+  echo "dev: $(wc -l < "$work/devpkgs") packages, $(wc -l < "$work/devfiles") files," \
+    "$(du -m "$out/dev.tar.zst" | cut -f1) MiB compressed"
+fi
+
 # --- 4. the build tree's run-time part ---------------------------------------
+if [ "$dev_only" = 0 ]; then
 rm -rf "$out"/build.tar.zst "$out"/build-*
 # The core's test programs (~9 MiB each compressed, mostly CUDA kernels) are
 # left out, unless MCVOL_PACK_TESTS=cuda: then the programs of the `cuda`
@@ -132,9 +177,10 @@ fi
 } |
   tar -C / -cf - -T - | zstd -q -T0 -"${ZSTD_LEVEL:-12}" -o "$out/build.tar.zst"
 echo "build: $(du -m "$out/build.tar.zst" | cut -f1) MiB compressed"
+fi
 
 # --- 5. chunks: one folder per call, NAME-N/NAME.NN plus its checksum --------
-for name in root build; do
+for name in root dev build; do
   [ -f "$out/$name.tar.zst" ] || continue
   (cd "$out" && split -b "${chunk_mb}M" -d -a 2 "$name.tar.zst" "$name." &&
     sha256sum "$name.tar.zst" > "$name.sha256")

@@ -3,12 +3,15 @@
 # (built here on Debian bookworm, packed by pack_root.sh) inside a bookworm
 # root on the GPU machine, with the host's NVIDIA driver. See README.md.
 #
-#   vtk.sh recv DIR...   keep the chunks of .gpuroot/DIR (root-0.., build-0..;
+#   vtk.sh recv DIR...   keep the chunks of .gpuroot/DIR (root-0.., dev-0.., build-0..;
 #                        one or two per call: the machine keeps them while it
 #                        stays warm)
 #   vtk.sh setup         join and unpack the chunks into $MCVOL_ROOT, add the
 #                        host's NVIDIA driver libraries, the device nodes,
 #                        /proc and /sys, and this working tree at /work/main
+#   vtk.sh build [ARGS]  configure and build the whole project in the root
+#                        (after the dev chunks: pack_root.sh --dev), with
+#                        this machine's nvcc; ARGS go to cmake's configure
 #   vtk.sh ctest ARGS    start Xvfb in the root and run ctest ARGS in
 #                        /work/main/build there, with MCVOL_BACKEND=cuda so
 #                        that every Auto mapper must run on the GPU
@@ -63,7 +66,7 @@ case "${1:-}" in
     # Each archive is joined, checked and unpacked once it is complete; a
     # new build (build-N chunks after pack_root.sh --build-only) replaces
     # the old one.
-    for name in root build; do
+    for name in root dev build; do
       ls "$chunks/$name".[0-9][0-9] > /dev/null 2>&1 || continue
       (cd "$chunks" && cat "$name".[0-9][0-9] > "$name.tar.zst" &&
         sha256sum -c "$name.sha256") || { echo "$name: chunks missing or corrupt"; ls -la "$chunks"; exit 1; }
@@ -73,7 +76,8 @@ case "${1:-}" in
       rm -f "$chunks/$name".[0-9][0-9] "$chunks/$name.tar.zst"
       echo "$name unpacked"
     done
-    [ -x "$R/usr/bin/python3.11" ] && [ -d "$R/work/main/build" ] || { echo "root or build not unpacked yet"; exit 1; }
+    [ -x "$R/usr/bin/python3.11" ] || { echo "root not unpacked yet"; exit 1; }
+    [ -d "$R/work/main/build" ] || [ -x "$R/usr/bin/g++" ] || { echo "neither a build nor the dev chunks unpacked"; exit 1; }
     # The host's NVIDIA user-space driver (it must match the kernel module).
     for lib in $(ldconfig -p | awk '/lib(cuda|nvidia-ptxjitcompiler|nvidia-ml|nvidia-nvvm|nvidia-gpucomp)\.so/{print $NF}'); do
       cp -L "$lib" "$R/usr/lib/x86_64-linux-gnu/$(basename "$lib")"
@@ -96,6 +100,16 @@ case "${1:-}" in
     in_root /usr/bin/nvidia-smi -L 2>/dev/null || true
     in_root /usr/bin/python3 -c "import sys; print('python', sys.version.split()[0])"
     echo "root ready: $(du -sm "$R" | cut -f1) MiB"
+    ;;
+  build)
+    # Configure and build the whole project in the root (needs the dev
+    # chunks): the module, Python wrapping, plugin, tests and benchmarks,
+    # CUDA with this machine's nvcc. ARGS go to the configure step.
+    shift
+    in_root /usr/bin/bash -c "cd /work/main && rm -rf build &&
+      cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DCMAKE_CUDA_ARCHITECTURES=${MCVOL_CUDA_ARCH:-native} \
+        -DCMAKE_CUDA_COMPILER=/usr/local/cuda/bin/nvcc $(printf '%q ' "$@") &&
+      cmake --build build -j\$(nproc)"
     ;;
   ctest)
     shift

@@ -98,9 +98,35 @@ __global__ void rangeKernel(const Voxels voxel, int3 dims, int3 gdims, int macro
   }
 }
 
+/// Voxels of a pre-classified channel held as packed float4 in an array.
+struct ArrayClassified
+{
+  const float* data;
+  int3 dims;
+  __device__ bool operator()(int i, int j, int k, float x[4]) const
+  {
+    return classifiedVoxel(data + ((int64_t(k) * dims.y + j) * dims.x + i) * 4, x);
+  }
+};
+
+/// Voxels of a pre-classified channel held as a float4 texture (its point
+/// object; the texels were sanitised on upload, classifiedVoxel is then the
+/// identity on them).
+struct TextureClassified
+{
+  cudaTextureObject_t tex;
+  __device__ bool operator()(int i, int j, int k, float x[4]) const
+  {
+    const float4 t = tex3D<float4>(tex, float(i) + 0.5f, float(j) + 0.5f, float(k) + 0.5f);
+    const float v[4] = { t.x, t.y, t.z, t.w };
+    return classifiedVoxel(v, x);
+  }
+};
+
 /// Range of a pre-classified channel's sanitised sigma (classifiedVoxel, as
 /// the host build and the per-ray sampling read it) over each macrocell.
-__global__ void classifiedRangeKernel(const float* __restrict__ data, int3 dims, int3 gdims, int macrocell, int apron,
+template <typename Voxels>
+__global__ void classifiedRangeKernel(const Voxels voxel, int3 dims, int3 gdims, int macrocell, int apron,
   int numChannels, int n, int64_t cells, float2* __restrict__ ranges)
 {
   const int64_t c = int64_t(blockIdx.x) * blockDim.x + threadIdx.x;
@@ -120,11 +146,10 @@ __global__ void classifiedRangeKernel(const float* __restrict__ data, int3 dims,
   {
     for (int j = lo[1]; j <= hi[1]; ++j)
     {
-      const float* row = data + ((int64_t(k) * dims.y + j) * dims.x) * 4;
       for (int i = lo[0]; i <= hi[0]; ++i)
       {
         float x[4];
-        if (classifiedVoxel(row + int64_t(i) * 4, x))
+        if (voxel(i, j, k, x))
         {
           mn = fminf(mn, x[0]);
           mx = fmaxf(mx, x[0]);
@@ -178,8 +203,16 @@ void CUDARenderer::Internal::buildRanges(int macrocell, int apron)
     const DeviceChannel& dc = this->Channels[n];
     if (dc.format == ChannelFormat::Extinction)
     {
-      classifiedRangeKernel<<<blocks, threads>>>(
-        reinterpret_cast<const float*>(dc.bytes.ptr), dims, gd, M, apron, N, n, cells, this->Ranges.ptr);
+      if (dc.array)
+      {
+        classifiedRangeKernel<<<blocks, threads>>>(
+          TextureClassified{ dc.point }, dims, gd, M, apron, N, n, cells, this->Ranges.ptr);
+      }
+      else
+      {
+        classifiedRangeKernel<<<blocks, threads>>>(ArrayClassified{ reinterpret_cast<const float*>(dc.bytes.ptr), dims },
+          dims, gd, M, apron, N, n, cells, this->Ranges.ptr);
+      }
       MCVOL_CUDA(cudaGetLastError());
       continue;
     }

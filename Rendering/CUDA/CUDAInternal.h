@@ -82,7 +82,8 @@ struct DeviceChannel
 {
   DeviceBuffer<uint8_t> bytes; ///< dense array, native type (float64 converted to float32 on upload); empty when texture-held
   ScalarType type = ScalarType::Float32;
-  /// Extinction: 4 packed floats per voxel (stride 4), never a texture.
+  /// Extinction: 4 floats per voxel, a float4 texture of the sanitised voxels
+  /// (texture sampling, NaN-free channels) or packed (stride 4) in `bytes`.
   ChannelFormat format = ChannelFormat::Scalar;
   cudaArray_t array = nullptr;
   cudaTextureObject_t linear = 0;

@@ -177,9 +177,9 @@ SceneView CUDARenderer::Internal::renderView(const Scene& scene, bool textures)
     c.stride = dc.format == ChannelFormat::Extinction ? 4 : 1; // elements per voxel of `data`
     c.type = dc.type;
     c.offset = 0.0;
-    // Texture-held channels: hardware filtering when `textures`, else exact
-    // voxel reads through the point object (the reference march).
-    // Pre-classified channels are always arrays (software sampling). Cubic
+    // Texture-held channels (pre-classified ones as float4 texels):
+    // hardware filtering when `textures`, else exact voxel reads through the
+    // point object (the reference march). Cubic
     // sampling combines 8 linear fetches (Sigg and Hadwiger), so it takes the
     // linear object too.
     c.texture = textures && !dc.nonFinite && dc.array ? (hv.volume.nearest ? dc.point : dc.linear) : 0;

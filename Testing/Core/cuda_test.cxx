@@ -9,6 +9,7 @@
 #include "TestUtil.h"
 
 #include "mcvol/CUDARenderer.h"
+#include "mcvol/MarchSetup.h"
 
 #include <algorithm>
 #include <cmath>
@@ -451,9 +452,10 @@ TEST(CudaMemory, EachChannelHeldOnce)
 }
 
 // Pre-classified (extinction-format) channels on the device (issue 13):
-// uploaded packed from an interleaved array (stride 5), never sampled through
-// a texture, so even with CudaSampling::Texture a classified-only scene gives
-// the CPU's pixels for the same seed; the device majorants (max sigma over
+// uploaded packed from an interleaved array (stride 5); holding a NaN voxel,
+// the channel stays an array even with CudaSampling::Texture (sampled in
+// software), so a classified-only scene gives the CPU's pixels for the same
+// seed; the device majorants (max sigma over
 // each cell, NaN and negative voxels present) equal the host's bit for bit;
 // and a scene mixing a classified and a scalar channel agrees statistically.
 TEST(CudaClassified, MatchesCpuAndHostMajorants)
@@ -537,6 +539,74 @@ TEST(CudaClassified, MatchesCpuAndHostMajorants)
     const Moments mb = renderMoments(*tex, scene, cam, rs, 24, 9000);
     expectSameImage(ma, mb, kAlpha / 24, std::string("classified + scalar ") + toString(mode));
   }
+}
+
+// Pre-classified channels without NaN are held as float4 textures under
+// texture sampling (sanitised on upload: a negative voxel and a colour above
+// sigma here), and only so: the hardware filter interpolates sigma and
+// sigma*colour. The majorants equal the host's bit for bit (built from the
+// texels), the Monte Carlo image agrees with the CPU's statistically (level
+// kAlpha, as above), and the exact reference march (point reads of the
+// texels) equals the CPU march to float rounding. Global sampling moves the
+// channel back to an array.
+TEST(CudaClassified, FloatTextureAgreesWithCpu)
+{
+  const int dims[3] = { 26, 22, 19 };
+  const size_t voxels = size_t(dims[0]) * dims[1] * dims[2];
+  TestRand rnd(23);
+  std::vector<float> packed(voxels * 4, 0.f);
+  for (int k = 0; k < dims[2]; ++k)
+    for (int j = 0; j < dims[1]; ++j)
+      for (int i = 0; i < dims[0]; ++i)
+      {
+        const size_t v = (size_t(k) * dims[1] + j) * dims[0] + i;
+        const double b = std::sin(0.3 * i) * std::sin(0.27 * j + 1) * std::sin(0.33 * k + 2);
+        const float sigma = float(std::max(0.0, 0.3 * b));
+        packed[v * 4 + 0] = sigma;
+        packed[v * 4 + 1] = sigma * float(0.5 + 0.5 * b);
+        packed[v * 4 + 2] = sigma * 0.3f;
+        packed[v * 4 + 3] = sigma * float(rnd.uniform());
+      }
+  packed[4 * 2000] = -2.f;     // sanitised to a transparent voxel
+  packed[4 * 3000 + 1] = 50.f; // colour above sigma: clamped to sigma
+  ChannelSource cls;
+  cls.data = packed.data();
+  cls.stride = 4;
+  cls.format = ChannelFormat::Extinction;
+  const Camera cam = orbitCamera(dims, std::array<double, 3>{ 1, 1, 1 }.data(), 32, 32, 35, 25);
+  CPURenderer cpu;
+  const std::unique_ptr<CUDARenderer> tex = cudaRenderer(CudaSampling::Texture);
+  Scene scene;
+  scene.setVolume(dims, 1, &cls);
+  scene.setMacrocellSize(4);
+  scene.update();
+  RenderSettings rs;
+  const Moments ma = renderMoments(cpu, scene, cam, rs, 24, 5000);
+  const Moments mb = renderMoments(*tex, scene, cam, rs, 24, 9000);
+  expectSameImage(ma, mb, kAlpha / 24, "classified float4 texture");
+  const CudaMemoryStats m = tex->memory();
+  EXPECT_EQ(m.textureBytes, voxels * 16) << "held as a float4 texture";
+  EXPECT_EQ(m.dataBytes, 0u) << "and only so";
+  EXPECT_EQ(tex->downloadMajorants(0), scene.majorants());
+  MarchSettings ms;
+  ms.step = 0.3;
+  ms.terminateTransmittance = 0.f; // no termination decided on a float rounding
+  Accumulator a, b;
+  cpu.march(scene, cam, ms, nullptr, a);
+  tex->march(scene, cam, ms, nullptr, b);
+  double worst = 0.0, sum = 0.0;
+  for (size_t i = 0; i < size_t(cam.width) * cam.height * 4; ++i)
+  {
+    worst = std::max(worst, std::fabs(double(a.rgba()[i]) - double(b.rgba()[i])));
+    sum += a.rgba()[i];
+  }
+  EXPECT_GT(sum, 5.0) << "the image must show something";
+  EXPECT_LE(worst, 1e-4) << "exact march through the point-sampled texels";
+  tex->setSampling(CudaSampling::Global);
+  Accumulator c;
+  tex->render(scene, cam, rs, nullptr, c);
+  EXPECT_EQ(tex->memory().textureBytes, 0u);
+  EXPECT_EQ(tex->memory().dataBytes, voxels * 16);
 }
 
 // Progressive accumulation on the device: k renders of one sample with the

@@ -32,7 +32,8 @@ struct ChannelView
   /// this factor restores data units.
   float textureScale = 1.f;
   /// Extinction: 4 float32 per voxel (sigma, sigma r, sigma g, sigma b),
-  /// sampled in software (sampleClassified); `texture` stays 0.
+  /// sampled by sampleClassified (in software, or from a float4 texture of
+  /// the sanitised voxels that the CUDA backend may hold instead of `data`).
   ChannelFormat format = ChannelFormat::Scalar;
 };
 
