@@ -104,7 +104,7 @@ find /usr/bin /usr/sbin /usr/lib/x86_64-linux-gnu -maxdepth 1 -type l \
   -lname '/etc/alternatives/*' | sed 's#^/##' >> "$work/files"
 # The /usr merge links, a minimal /etc and the loader's, MPI's and Python's
 # configuration.
-for e in etc/passwd etc/group etc/hosts etc/nsswitch.conf etc/ld.so.conf; do
+for e in etc/passwd etc/group etc/hosts etc/nsswitch.conf etc/ld.so.conf etc/debian_version etc/os-release usr/lib/os-release; do
   [ -e "/$e" ] && echo "$e"
 done >> "$work/files"
 find /etc/alternatives /etc/ld.so.conf.d /etc/openmpi /etc/python3.11 \( -type f -o -type l \) 2>/dev/null |

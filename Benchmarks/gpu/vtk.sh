@@ -93,6 +93,9 @@ case "${1:-}" in
       mkdir -p "$R/usr/local/cuda"
       mountpoint -q "$R/usr/local/cuda" || mount --bind /usr/local/cuda "$R/usr/local/cuda"
     fi
+    # CMake's GNUInstallDirs recognises Debian by this file (lib, not lib64):
+    # roots packed before it travelled get bookworm's.
+    [ -e "$R/etc/debian_version" ] || echo 12.11 > "$R/etc/debian_version"
     mkdir -p "$R/tmp" "$R/root" "$R/work/main" && chmod 1777 "$R/tmp"
     # This working tree (sources, tests, data) beside the unpacked build.
     tar -C "$top" --exclude=./.gpuroot --exclude=./build --exclude=./third_party -cf - . |
