@@ -49,22 +49,32 @@ MCVOL_FUNC bool classifiedVoxel(const float* x, float out[4])
   return true;
 }
 
+#if defined(__CUDA_ARCH__)
+/// Voxel v of a texture-held pre-classified channel (float4 texels,
+/// sanitised and NaN-free on upload): the point-sampled texel. Out of line,
+/// as fetchTextureVoxel(): the march kernels inline fetchClassified() for
+/// scalar scenes too, and the float4 read and the index division inlined
+/// there cost them registers.
+__device__ __noinline__ inline bool fetchClassifiedTexel(const ChannelView& c, int64_t v, float out[4])
+{
+  const int64_t nx = c.voxelTextureDims[0];
+  const int64_t nxy = nx * c.voxelTextureDims[1];
+  const int64_t k = v / nxy;
+  const int64_t r = v - k * nxy;
+  const int64_t j = r / nx;
+  const float4 t = tex3D<float4>(c.voxelTexture, float(r - j * nx) + 0.5f, float(j) + 0.5f, float(k) + 0.5f);
+  const float x[4] = { t.x, t.y, t.z, t.w };
+  return classifiedVoxel(x, out);
+}
+#endif
+
 /// A pre-classified channel's voxel v (index, not element) as classifiedVoxel() reads it.
 MCVOL_HOT bool fetchClassified(const ChannelView& c, int64_t v, float out[4])
 {
 #if defined(__CUDA_ARCH__)
   if (c.data == nullptr)
   {
-    // Texture-held (float4 texels, sanitised and NaN-free on upload): the
-    // point-sampled texel.
-    const int64_t nx = c.voxelTextureDims[0];
-    const int64_t nxy = nx * c.voxelTextureDims[1];
-    const int64_t k = v / nxy;
-    const int64_t r = v - k * nxy;
-    const int64_t j = r / nx;
-    const float4 t = tex3D<float4>(c.voxelTexture, float(r - j * nx) + 0.5f, float(j) + 0.5f, float(k) + 0.5f);
-    const float x[4] = { t.x, t.y, t.z, t.w };
-    return classifiedVoxel(x, out);
+    return fetchClassifiedTexel(c, v, out);
   }
 #endif
   return classifiedVoxel(static_cast<const float*>(c.data) + v * c.stride, out);
