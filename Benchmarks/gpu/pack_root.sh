@@ -43,6 +43,24 @@ trap 'rm -rf "$work"' EXIT
 grep -qxF '/.gpuroot/' "$top/.git/info/exclude" 2>/dev/null || {
   mkdir -p "$top/.git/info"; echo '/.gpuroot/' >> "$top/.git/info/exclude"; }
 
+# Package file lists to the files to pack: existing files and links (no
+# plain folders), each folder part resolved (bookworm merges /usr), without
+# the leading slash, each once.
+real_files() {
+  python3 -c '
+import os, sys
+seen = set()
+for line in sys.stdin:
+    f = line.rstrip("\n")
+    if not (os.path.lexists(f)) or (os.path.isdir(f) and not os.path.islink(f)):
+        continue
+    path = os.path.join(os.path.realpath(os.path.dirname(f)), os.path.basename(f))[1:]
+    if path not in seen:
+        seen.add(path)
+        print(path)
+'
+}
+
 mkdir -p "$out"
 if [ "$build_only" = 0 ]; then
 # --- 1. the programs and modules whose libraries we need --------------------
@@ -85,18 +103,7 @@ explicit=(libc6 libc-bin dash bash coreutils sed grep findutils procps
 # --- 3. their files, with /bin, /lib... resolved (bookworm merges /usr) -----
 while read -r p; do dpkg -L "$p" 2>/dev/null || true; done < "$work/pkgs" |
   grep -vE '^/usr/share/(doc|man|info|locale|lintian|bug|doc-base)/|^/usr/include/|\.a$|/__pycache__/|^/\.$' |
-  python3 -c '
-import os, sys
-seen = set()
-for line in sys.stdin:
-    f = line.rstrip("\n")
-    if not (os.path.lexists(f)) or (os.path.isdir(f) and not os.path.islink(f)):
-        continue
-    path = os.path.join(os.path.realpath(os.path.dirname(f)), os.path.basename(f))[1:]
-    if path not in seen:
-        seen.add(path)
-        print(path)
-' > "$work/files"
+  real_files > "$work/files"
 # Links that update-alternatives made (libblas.so.3, mpiexec, ...): no package
 # owns them, so add every one in the program and library folders, and the
 # /etc/alternatives links they go through.
@@ -137,18 +144,7 @@ if [ "$dev_only" = 1 ]; then
   cat $(ls "$out"/root-*/root.[0-9][0-9] | sort) | zstd -dc | tar -t | sed 's#/$##' | sort -u > "$work/inroot"
   while read -r p; do dpkg -L "$p" 2>/dev/null || true; done < "$work/devpkgs" |
     grep -vE '^/usr/share/(doc|man|info|locale|lintian|bug|doc-base)/|/__pycache__/|^/\.$' |
-    python3 -c '
-import os, sys
-seen = set()
-for line in sys.stdin:
-    f = line.rstrip("\n")
-    if not (os.path.lexists(f)) or (os.path.isdir(f) and not os.path.islink(f)):
-        continue
-    path = os.path.join(os.path.realpath(os.path.dirname(f)), os.path.basename(f))[1:]
-    if path not in seen:
-        seen.add(path)
-        print(path)
-' | sort -u > "$work/devall"
+    real_files | sort -u > "$work/devall"
   # update-alternatives links (cc, c++, ...) and their /etc/alternatives hops
   find /usr/bin -maxdepth 1 -type l -lname '/etc/alternatives/*' | sed 's#^/##' >> "$work/devall"
   find /etc/alternatives -type l | sed 's#^/##' >> "$work/devall"
