@@ -68,6 +68,16 @@ __device__ __noinline__ inline bool fetchClassifiedTexel(const ChannelView& c, i
 }
 #endif
 
+#if defined(__CUDA_ARCH__)
+/// fetchClassifiedTexel() by per-axis indices (no division of a flat index).
+__device__ __noinline__ inline bool fetchClassifiedTexelAt(const ChannelView& c, int i, int j, int k, float out[4])
+{
+  const float4 t = tex3D<float4>(c.voxelTexture, float(i) + 0.5f, float(j) + 0.5f, float(k) + 0.5f);
+  const float x[4] = { t.x, t.y, t.z, t.w };
+  return classifiedVoxel(x, out);
+}
+#endif
+
 /// A pre-classified channel's voxel v (index, not element) as classifiedVoxel() reads it.
 MCVOL_HOT bool fetchClassified(const ChannelView& c, int64_t v, float out[4])
 {
@@ -77,6 +87,21 @@ MCVOL_HOT bool fetchClassified(const ChannelView& c, int64_t v, float out[4])
     return fetchClassifiedTexel(c, v, out);
   }
 #endif
+  return classifiedVoxel(static_cast<const float*>(c.data) + v * c.stride, out);
+}
+
+/// fetchClassified() of voxel (i, j, k) of a grid dims[0] x dims[1] wide:
+/// per-axis indices, so that a texture-held channel's texel is read without
+/// dividing a flat index (the exact march reads 8 of them per sample).
+MCVOL_HOT bool fetchClassifiedAt(const ChannelView& c, const int dims[3], int i, int j, int k, float out[4])
+{
+#if defined(__CUDA_ARCH__)
+  if (c.data == nullptr)
+  {
+    return fetchClassifiedTexelAt(c, i, j, k, out);
+  }
+#endif
+  const int64_t v = int64_t(i) + int64_t(dims[0]) * (int64_t(j) + int64_t(dims[1]) * int64_t(k));
   return classifiedVoxel(static_cast<const float*>(c.data) + v * c.stride, out);
 }
 
@@ -445,8 +470,6 @@ MCVOL_COLD TFSample sampleClassifiedCubic(const VolumeView& vol, int n, Vec3f p)
   const CubicAxis ax = cubicAxis(p.x, vol.dims[0]);
   const CubicAxis ay = cubicAxis(p.y, vol.dims[1]);
   const CubicAxis az = cubicAxis(p.z, vol.dims[2]);
-  const int64_t sy = vol.dims[0];
-  const int64_t sz = int64_t(vol.dims[0]) * vol.dims[1];
   float acc[4] = { 0.f, 0.f, 0.f, 0.f };
   MCVOL_NO_UNROLL
   for (int k = 0; k < 4; ++k)
@@ -455,12 +478,13 @@ MCVOL_COLD TFSample sampleClassifiedCubic(const VolumeView& vol, int n, Vec3f p)
     for (int j = 0; j < 4; ++j)
     {
       const float wjk = bsplineWeight(ay.t, j) * bsplineWeight(az.t, k);
-      const int64_t row = cubicTap(ay, j) * sy + cubicTap(az, k) * sz;
+      const int y = cubicTap(ay, j);
+      const int z = cubicTap(az, k);
       MCVOL_NO_UNROLL
       for (int i = 0; i < 4; ++i)
       {
         float x[4];
-        if (!fetchClassified(c, row + cubicTap(ax, i), x))
+        if (!fetchClassifiedAt(c, vol.dims, cubicTap(ax, i), y, z, x))
         {
           return TFSample();
         }
@@ -523,15 +547,12 @@ MCVOL_COLD TFSample sampleClassified(const VolumeView& vol, int n, Vec3f p)
   int i1[3];
   float f[3];
   trilinearFootprint(vol, p, i0, i1, f);
-  const int64_t sy = vol.dims[0];
-  const int64_t sz = int64_t(vol.dims[0]) * vol.dims[1];
   for (int k = 0; k < 8; ++k)
   {
     const int bx = k & 1, by = (k >> 1) & 1, bz = (k >> 2) & 1;
-    const int64_t v = (bx ? i1[0] : i0[0]) + (by ? i1[1] : i0[1]) * sy + (bz ? i1[2] : i0[2]) * sz;
     const float w = (bx ? f[0] : 1.f - f[0]) * (by ? f[1] : 1.f - f[1]) * (bz ? f[2] : 1.f - f[2]);
     float x[4];
-    if (!fetchClassified(c, v, x))
+    if (!fetchClassifiedAt(c, vol.dims, bx ? i1[0] : i0[0], by ? i1[1] : i0[1], bz ? i1[2] : i0[2], x))
     {
       return TFSample();
     }
