@@ -115,12 +115,7 @@ struct ArrayClassified
 struct TextureClassified
 {
   cudaTextureObject_t tex;
-  __device__ bool operator()(int i, int j, int k, float x[4]) const
-  {
-    const float4 t = tex3D<float4>(tex, float(i) + 0.5f, float(j) + 0.5f, float(k) + 0.5f);
-    const float v[4] = { t.x, t.y, t.z, t.w };
-    return classifiedVoxel(v, x);
-  }
+  __device__ bool operator()(int i, int j, int k, float x[4]) const { return classifiedTexel(tex, i, j, k, x); }
 };
 
 /// Range of a pre-classified channel's sanitised sigma (classifiedVoxel, as

@@ -117,9 +117,10 @@ public:
     return this->RGBA.data();
   }
   /**
-   * For a backend about to overwrite every value of the host image (and of
-   * the even half when `even`), e.g. a read-back: the pointer without writing
-   * the pending zeros first. The caller must write all of it.
+   * For a backend about to overwrite every value of the host image (or of
+   * the even half, nullptr when there is none), e.g. a read-back: the
+   * pointer without writing the pending zeros first. The caller must write
+   * all of it.
    */
   float* rgbaForOverwrite();
   float* evenRGBAForOverwrite();

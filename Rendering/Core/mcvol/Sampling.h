@@ -49,12 +49,31 @@ MCVOL_FUNC bool classifiedVoxel(const float* x, float out[4])
   return true;
 }
 
+#if defined(__CUDACC__)
+/// Texel (i, j, k) of a float4 texture of pre-classified voxels (sanitised
+/// and NaN-free on upload) through its point object, as classifiedVoxel()
+/// reads it (declared in both of nvcc's passes: the CUDA backend's range
+/// kernels call it from device code of their own).
+__device__ inline bool classifiedTexel(cudaTextureObject_t tex, int i, int j, int k, float out[4])
+{
+  const float4 t = tex3D<float4>(tex, float(i) + 0.5f, float(j) + 0.5f, float(k) + 0.5f);
+  const float x[4] = { t.x, t.y, t.z, t.w };
+  return classifiedVoxel(x, out);
+}
+#endif
+
 #if defined(__CUDA_ARCH__)
-/// Voxel v of a texture-held pre-classified channel (float4 texels,
-/// sanitised and NaN-free on upload): the point-sampled texel. Out of line,
+
+/// Voxel (i, j, k) of a texture-held pre-classified channel. Out of line,
 /// as fetchTextureVoxel(): the march kernels inline fetchClassified() for
-/// scalar scenes too, and the float4 read and the index division inlined
-/// there cost them registers.
+/// scalar scenes too, and the float4 read inlined there costs them
+/// registers.
+__device__ __noinline__ inline bool fetchClassifiedTexelAt(const ChannelView& c, int i, int j, int k, float out[4])
+{
+  return classifiedTexel(c.voxelTexture, i, j, k, out);
+}
+
+/// The same by flat voxel index v (divided back into i, j, k).
 __device__ __noinline__ inline bool fetchClassifiedTexel(const ChannelView& c, int64_t v, float out[4])
 {
   const int64_t nx = c.voxelTextureDims[0];
@@ -62,19 +81,7 @@ __device__ __noinline__ inline bool fetchClassifiedTexel(const ChannelView& c, i
   const int64_t k = v / nxy;
   const int64_t r = v - k * nxy;
   const int64_t j = r / nx;
-  const float4 t = tex3D<float4>(c.voxelTexture, float(r - j * nx) + 0.5f, float(j) + 0.5f, float(k) + 0.5f);
-  const float x[4] = { t.x, t.y, t.z, t.w };
-  return classifiedVoxel(x, out);
-}
-#endif
-
-#if defined(__CUDA_ARCH__)
-/// fetchClassifiedTexel() by per-axis indices (no division of a flat index).
-__device__ __noinline__ inline bool fetchClassifiedTexelAt(const ChannelView& c, int i, int j, int k, float out[4])
-{
-  const float4 t = tex3D<float4>(c.voxelTexture, float(i) + 0.5f, float(j) + 0.5f, float(k) + 0.5f);
-  const float x[4] = { t.x, t.y, t.z, t.w };
-  return classifiedVoxel(x, out);
+  return classifiedTexel(c.voxelTexture, int(r - j * nx), int(j), int(k), out);
 }
 #endif
 
@@ -508,8 +515,8 @@ MCVOL_COLD TFSample sampleClassifiedCubic(const VolumeView& vol, int n, Vec3f p)
  * read gives sigma 0 (transparent). Software sampling, or on the device the
  * hardware's trilinear (or point) filter of a float4 texture of the
  * sanitised voxels where the CUDA backend holds one (a NaN-free channel
- * under texture sampling). It walks the corners itself rather than through cornersOf(): built on
- * cornersOf()'s arrays, it made the expected-value render kernel 17% slower
+ * under texture sampling). It walks the corners itself rather than through
+ * cornersOf(): built on cornersOf()'s arrays, it made the expected-value render kernel 17% slower
  * on scalar-only scenes, which never call it (H100, NYX-like, 1.06 -> 1.24
  * ms per frame).
  */
