@@ -31,6 +31,7 @@ Variants of the Monte Carlo mapper (--variants, comma separated):
   default               the mapper's defaults
   min<N>                SetMinimumSamplesPerVoxel(N) (expected-value estimator)
   collision             SetEstimatorToCollision()
+  march                 SetEstimatorToUnbiasedMarch() (default 2 strata per voxel)
 Prints a Markdown table; --csv writes the rows.
 
 Usage (from the repository, after scripts/build.sh):
@@ -156,6 +157,8 @@ def configure(m, variant, seed):
         m.SetMinimumSamplesPerVoxel(float(variant[3:]))
     elif variant == "collision":
         m.SetEstimatorToCollision()
+    elif variant == "march":
+        m.SetEstimatorToUnbiasedMarch()
     elif variant != "default":
         raise SystemExit("unknown variant " + variant)
 

@@ -100,11 +100,13 @@ struct Options
 
 mcvol::Estimator estimatorOf(const std::string& s, const std::string& option)
 {
-  if (s != "expected-value" && s != "collision")
+  if (s != "expected-value" && s != "collision" && s != "unbiased-march")
   {
-    throw std::invalid_argument(option + " takes expected-value or collision, not " + s);
+    throw std::invalid_argument(option + " takes expected-value, unbiased-march or collision, not " + s);
   }
-  return s == "collision" ? mcvol::Estimator::Collision : mcvol::Estimator::ExpectedValue;
+  return s == "collision"   ? mcvol::Estimator::Collision
+    : s == "unbiased-march" ? mcvol::Estimator::UnbiasedMarch
+                            : mcvol::Estimator::ExpectedValue;
 }
 
 mcvol::Sampler samplerOf(const std::string& s, const std::string& option)
@@ -379,7 +381,7 @@ int main(int argc, char** argv)
     const mcvol::BlendMode blend = blendOf(o.blend);
     // The estimator a render asked for `e` runs (unlit, not optimized).
     auto effective = [&](mcvol::Estimator e)
-    { return mcvol::usesExpectedValue(e, blend, false, false) ? e : mcvol::Estimator::Collision; };
+    { return mcvol::unlitEstimator(e, blend, false, false) != 0 ? e : mcvol::Estimator::Collision; };
     // Writes the image (or, with --score-only, scores it) and adds its row;
     // `mc` (Monte Carlo rows) names the estimator and sampler that ran.
     auto emit = [&](const std::string& m, const std::string& var, double p, double ms, const std::string& file,

@@ -184,7 +184,9 @@ const char* vtkMultiChannelVolumeMapper::GetTrackingMethodAsString()
 //------------------------------------------------------------------------------
 const char* vtkMultiChannelVolumeMapper::GetEstimatorAsString()
 {
-  return this->Estimator == COLLISION_ESTIMATOR ? "Collision" : "ExpectedValue";
+  return this->Estimator == COLLISION_ESTIMATOR ? "Collision"
+    : this->Estimator == UNBIASED_MARCH_ESTIMATOR ? "UnbiasedMarch"
+                                                  : "ExpectedValue";
 }
 
 //------------------------------------------------------------------------------
@@ -227,9 +229,11 @@ bool vtkMultiChannelVolumeMapper::TraceImage(const mcvol::Scene& scene, const mc
   // comes back only when asked (GetAccumulatedImage, GetEstimatedError).
   settings.readBack = !renderer->hasDisplayImage();
   settings.sampler = this->SampleSequence == INDEPENDENT_SEQUENCE ? mcvol::Sampler::Independent : mcvol::Sampler::Sobol;
-  settings.estimator =
-    this->Estimator == COLLISION_ESTIMATOR ? mcvol::Estimator::Collision : mcvol::Estimator::ExpectedValue;
+  settings.estimator = this->Estimator == COLLISION_ESTIMATOR ? mcvol::Estimator::Collision
+    : this->Estimator == UNBIASED_MARCH_ESTIMATOR             ? mcvol::Estimator::UnbiasedMarch
+                                                              : mcvol::Estimator::ExpectedValue;
   settings.minSamplesPerVoxel = float(this->MinimumSamplesPerVoxel);
+  settings.marchSamplesPerVoxel = float(this->MarchSamplesPerVoxel);
   try
   {
     renderer->render(scene, camera, settings, depth, accum);
@@ -1398,6 +1402,7 @@ void vtkMultiChannelVolumeMapper::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "SampleSequence: " << this->GetSampleSequenceAsString() << "\n";
   os << indent << "Estimator: " << this->GetEstimatorAsString() << "\n";
   os << indent << "MinimumSamplesPerVoxel: " << this->MinimumSamplesPerVoxel << "\n";
+  os << indent << "MarchSamplesPerVoxel: " << this->MarchSamplesPerVoxel << "\n";
   os << indent << "SamplesPerPixel: " << this->SamplesPerPixel << "\n";
   os << indent << "InteractiveFrameTime: " << this->InteractiveFrameTime << "\n";
   os << indent << "Progressive: " << this->Progressive << "\n";

@@ -171,7 +171,8 @@ public:
   enum Estimators
   {
     COLLISION_ESTIMATOR = 0,
-    EXPECTED_VALUE_ESTIMATOR = 1
+    EXPECTED_VALUE_ESTIMATOR = 1,
+    UNBIASED_MARCH_ESTIMATOR = 2
   };
 
   ///@{
@@ -181,16 +182,25 @@ public:
    * transmittance so far (ratio tracking of the emission) and stops by
    * Russian roulette; COLLISION_ESTIMATOR tracks to the first real collision
    * and scores its colour (the papers' estimator; TrackingMethod then picks
-   * 1-DDA or N-DDA). Both are unbiased; the expected-value estimator reaches
-   * a given error several times sooner on every dataset measured
+   * 1-DDA or N-DDA). UNBIASED_MARCH_ESTIMATOR marches each non-empty
+   * macrocell in jittered strata (MarchSamplesPerVoxel per voxel) and
+   * weights the emission by an unbiased power-series transmittance
+   * (Kettunen et al. 2021): about 2x a ray march's samples per frame and far
+   * less noise per frame; 2.2x sooner than expected value to RMSE 0.01 on
+   * the dense microscopy scene on the CPU, slower on sparse, thin scenes
+   * (Benchmarks/RESULTS.md, "The unbiased march"). Its samples are not
+   * bounded (a sample may be negative), their mean is. All three are
+   * unbiased; the expected-value estimator reaches a given error several
+   * times sooner than the collision estimator on every dataset measured
    * (Benchmarks/RESULTS.md, "Estimators"). Lit volumes (ShadeOn), the
    * composite blend mode and the visibility optimization always use the
    * collision estimator. A change restarts the progressive image.
    */
-  vtkSetClampMacro(Estimator, int, COLLISION_ESTIMATOR, EXPECTED_VALUE_ESTIMATOR);
+  vtkSetClampMacro(Estimator, int, COLLISION_ESTIMATOR, UNBIASED_MARCH_ESTIMATOR);
   vtkGetMacro(Estimator, int);
   void SetEstimatorToCollision() { this->SetEstimator(COLLISION_ESTIMATOR); }
   void SetEstimatorToExpectedValue() { this->SetEstimator(EXPECTED_VALUE_ESTIMATOR); }
+  void SetEstimatorToUnbiasedMarch() { this->SetEstimator(UNBIASED_MARCH_ESTIMATOR); }
   const char* GetEstimatorAsString();
   ///@}
 
@@ -207,6 +217,18 @@ public:
    */
   vtkSetClampMacro(MinimumSamplesPerVoxel, double, 0.0, 1e6);
   vtkGetMacro(MinimumSamplesPerVoxel, double);
+  ///@}
+
+  ///@{
+  /**
+   * Unbiased-march estimator: strata per voxel length along a ray in every
+   * macrocell that is not empty (default 2, the ray marcher's default step
+   * of half a voxel; 1 and 3 took longer to the same error on the
+   * microscopy scene). Clamped to [0.01, 1024]. No effect on the other
+   * estimators. A change restarts the progressive image.
+   */
+  vtkSetClampMacro(MarchSamplesPerVoxel, double, 0.01, 1024.0);
+  vtkGetMacro(MarchSamplesPerVoxel, double);
   ///@}
 
   enum SampleSequences
@@ -883,6 +905,7 @@ protected:
   int SampleSequence = SOBOL_SEQUENCE;
   int Estimator = EXPECTED_VALUE_ESTIMATOR;
   double MinimumSamplesPerVoxel = 0.0;
+  double MarchSamplesPerVoxel = 2.0;
   int SamplesPerPixel = 1;
   double InteractiveFrameTime = 0.0;
   int LastSamplesPerRender = 0;

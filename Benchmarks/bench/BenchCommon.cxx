@@ -50,6 +50,7 @@ void usage()
             "                   [--psnr DB] [--reference-spp N] [--density F]\n"
             "                   [--samplers independent,sobol] [--spp-max N]\n"
             "                   [--estimators collision,expected-value] [--min-samples-per-voxel 0.5,1]\n"
+            "                   [--march-samples-per-voxel 1,2] [--no-collision]\n"
             "                   [--pixel-centres]\n"
             "sections: trackers channels macrocell rebuild memory paper converge sampling effects visibility estimate\n"
             "          sequences pyramid");
@@ -147,9 +148,9 @@ Options parse(int argc, char** argv)
       o.estimators = split(argv[++i], ',');
       for (const std::string& n : o.estimators)
       {
-        if (n != "collision" && n != "expected-value")
+        if (n != "collision" && n != "expected-value" && n != "unbiased-march")
         {
-          throw std::invalid_argument("--estimators takes collision and/or expected-value, not " + n);
+          throw std::invalid_argument("--estimators takes collision, expected-value and/or unbiased-march, not " + n);
         }
       }
     }
@@ -176,6 +177,19 @@ Options parse(int argc, char** argv)
       {
         o.minSamplesPerVoxel.push_back(std::stof(n));
       }
+    }
+    else if (a == "--march-samples-per-voxel")
+    {
+      need(1);
+      o.marchSamplesPerVoxel.clear();
+      for (const std::string& n : split(argv[++i], ','))
+      {
+        o.marchSamplesPerVoxel.push_back(std::stof(n));
+      }
+    }
+    else if (a == "--no-collision")
+    {
+      o.skipCollision = true;
     }
     else if (a == "--spp-max")
     {

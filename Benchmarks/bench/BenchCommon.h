@@ -50,6 +50,11 @@ struct Options
   /// section converge: extra expected-value rows with these
   /// RenderSettings::minSamplesPerVoxel (none by default)
   std::vector<float> minSamplesPerVoxel;
+  /// section converge: unbiased-march rows with these
+  /// RenderSettings::marchSamplesPerVoxel (one at the default, 2)
+  std::vector<float> marchSamplesPerVoxel = { 2.f };
+  /// section converge: leave out the collision-estimator rows
+  bool skipCollision = false;
   /// converge: also every configuration at pixel centres
   /// (RenderSettings::jitterPixels off), against a reference at pixel centres
   bool pixelCentres = false;

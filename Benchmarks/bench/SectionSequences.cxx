@@ -71,7 +71,9 @@ void runSequences(Bench& bench)
     {
       Config c;
       c.sampler = name == "sobol" ? mcvol::Sampler::Sobol : mcvol::Sampler::Independent;
-      c.estimator = est == "expected-value" ? mcvol::Estimator::ExpectedValue : mcvol::Estimator::Collision;
+      c.estimator = est == "expected-value" ? mcvol::Estimator::ExpectedValue
+        : est == "unbiased-march"           ? mcvol::Estimator::UnbiasedMarch
+                                            : mcvol::Estimator::Collision;
       c.name = o.estimators.size() > 1 ? name + " " + est : name;
       configs.push_back(c);
     }

@@ -221,6 +221,12 @@ void vtkMultiChannelVolumeRepresentation::SetMinimumSamplesPerVoxel(double sampl
   this->GetMultiChannelMapper()->SetMinimumSamplesPerVoxel(samples);
 }
 
+//------------------------------------------------------------------------------
+void vtkMultiChannelVolumeRepresentation::SetMarchSamplesPerVoxel(double samples)
+{
+  this->GetMultiChannelMapper()->SetMarchSamplesPerVoxel(samples);
+}
+
 void vtkMultiChannelVolumeRepresentation::SetMultiChannelInterpolation(int type)
 {
   this->GetMultiChannelMapper()->SetInterpolationType(type);

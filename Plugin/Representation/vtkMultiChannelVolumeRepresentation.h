@@ -103,6 +103,8 @@ public:
   void SetEstimator(int estimator);
   /// vtkMultiChannelVolumeMapper::SetMinimumSamplesPerVoxel.
   void SetMinimumSamplesPerVoxel(double samples);
+  /// vtkMultiChannelVolumeMapper::SetMarchSamplesPerVoxel.
+  void SetMarchSamplesPerVoxel(double samples);
   /// vtkMultiChannelVolumeMapper::SetInterpolationType (-1: the volume property's).
   void SetMultiChannelInterpolation(int type);
   void SetSamplesPerRender(int spp);

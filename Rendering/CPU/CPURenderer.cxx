@@ -34,7 +34,7 @@ void renderRows(const SceneView& s, const CameraView& cam, const FrameParams& fp
   const int H = cam.height;
   Accumulator::ImportancePool* pool = Optimized ? imp.pool : nullptr;
   const int pass = pool ? pool->passes : 0;
-  const bool ev = usesExpectedValue(fp.estimator, Mode, Lit, Optimized);
+  const int unlit = unlitEstimator(fp.estimator, Mode, Lit, Optimized);
 #pragma omp parallel num_threads(threads > 0 ? threads : omp_get_max_threads()) \
   reduction(+ : dda, tentative, real, samples, scattering, shadowRays, gradients, importance, overflows)
   {
@@ -67,8 +67,9 @@ void renderRows(const SceneView& s, const CameraView& cam, const FrameParams& fp
         }
         else
         {
-          sum = ev ? renderPixel<Mode, Lit, false, true>(s, cam, fp, x, y, z, c, nullptr, evenOut)
-                   : renderPixel<Mode, Lit>(s, cam, fp, x, y, z, c, nullptr, evenOut);
+          sum = unlit == 1 ? renderPixel<Mode, Lit, false, 1>(s, cam, fp, x, y, z, c, nullptr, evenOut)
+            : unlit == 2   ? renderPixel<Mode, Lit, false, 2>(s, cam, fp, x, y, z, c, nullptr, evenOut)
+                           : renderPixel<Mode, Lit>(s, cam, fp, x, y, z, c, nullptr, evenOut);
         }
         accumulate(rgba + 4 * p, sum, previous, fp.samplesPerPixel);
         if (even)
@@ -146,6 +147,7 @@ void CPURenderer::render(const Scene& scene, const Camera& camera, const RenderS
   const CameraView cam = toView(camera);
   s.sigmaLimit = extinctionLimit(cam);
   s.minRate = settings.minSamplesPerVoxel > 0.f ? settings.minSamplesPerVoxel * voxelRate(cam) : 0.f;
+  s.marchRate = settings.marchSamplesPerVoxel * voxelRate(cam);
   const FrameParams fp = frameParams(settings, accum.samples());
   const bool lit = s.lighting.enabled;
   if (lit)

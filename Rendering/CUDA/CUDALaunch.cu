@@ -119,22 +119,10 @@ void launchRender(bool count, bool lit, bool plain, dim3 grid, dim3 block, const
   // kernels none of the expected-value estimator's (registers: ptxas); for
   // plain scenes, none of the pre-classified or cubic sampling either
   // (CUDALaunchPlain.cu).
-  const bool ev = usesExpectedValue(fp.estimator, Mode, lit, false);
+  const int unlit = unlitEstimator(fp.estimator, Mode, lit, false);
   if (plain && !lit)
   {
-    launchPlainUnlit(Mode, count, ev, grid, block, s, cam, fp, depth, accum, even, previous, counters);
-    return;
-  }
-  if (ev)
-  {
-    if (count)
-    {
-      renderKernelUnlit<Mode, true, true><<<grid, block>>>(s, cam, fp, depth, accum, even, previous, counters);
-    }
-    else
-    {
-      renderKernelUnlit<Mode, false, true><<<grid, block>>>(s, cam, fp, depth, accum, even, previous, counters);
-    }
+    launchPlainUnlit(Mode, count, unlit, grid, block, s, cam, fp, depth, accum, even, previous, counters);
   }
   else if (lit)
   {
@@ -147,13 +135,9 @@ void launchRender(bool count, bool lit, bool plain, dim3 grid, dim3 block, const
       renderKernel<Mode, false, true><<<grid, block>>>(s, cam, fp, depth, accum, even, previous, counters);
     }
   }
-  else if (count)
-  {
-    renderKernelUnlit<Mode, true, false><<<grid, block>>>(s, cam, fp, depth, accum, even, previous, counters);
-  }
   else
   {
-    renderKernelUnlit<Mode, false, false><<<grid, block>>>(s, cam, fp, depth, accum, even, previous, counters);
+    launchUnlit<Mode>(unlit, count, grid, block, s, cam, fp, depth, accum, even, previous, counters);
   }
 }
 } // namespace
@@ -237,6 +221,7 @@ void CUDARenderer::render(const Scene& scene, const Camera& camera, const Render
   const CameraView cam = toView(camera);
   s.sigmaLimit = extinctionLimit(cam);
   s.minRate = settings.minSamplesPerVoxel > 0.f ? settings.minSamplesPerVoxel * voxelRate(cam) : 0.f;
+  s.marchRate = settings.marchSamplesPerVoxel * voxelRate(cam);
   const bool lit = s.lighting.enabled;
   if (lit)
   {

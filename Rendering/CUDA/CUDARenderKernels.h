@@ -63,7 +63,7 @@ __device__ MCVOL_FORCE_INLINE void accumulateEvenPixel(float4* pixel, const Vec4
 /// running mean in `accum` (and the even samples into `even`, when not
 /// null: the error estimate). Count adds the work counters (warp sums, one
 /// atomic per warp and counter).
-template <BlendMode Mode, bool Count, bool Lit, bool ExpectedValue>
+template <BlendMode Mode, bool Count, bool Lit, int Unlit>
 __device__ __forceinline__ void renderKernelBody(const SceneView& s, const CameraView& cam, const FrameParams& fp,
   const float* __restrict__ depth, float4* __restrict__ accum, float4* __restrict__ even, uint32_t previous,
   unsigned long long* __restrict__ counters)
@@ -77,7 +77,7 @@ __device__ __forceinline__ void renderKernelBody(const SceneView& s, const Camer
     const float z = depth ? depth[p] : 1.f;
     Vec4f evenSum;
     const Vec4f sum =
-      renderPixel<Mode, Lit, false, ExpectedValue>(s, cam, fp, x, y, z, c, nullptr, even ? &evenSum : nullptr);
+      renderPixel<Mode, Lit, false, Unlit>(s, cam, fp, x, y, z, c, nullptr, even ? &evenSum : nullptr);
     accumulatePixel(accum + p, sum, previous, fp.samplesPerPixel);
     if (even)
     {
@@ -110,12 +110,12 @@ __device__ __forceinline__ void renderKernelBody(const SceneView& s, const Camer
   }
 }
 
-template <BlendMode Mode, bool Count, bool Lit, bool ExpectedValue = false>
+template <BlendMode Mode, bool Count, bool Lit, int Unlit = 0>
 __global__ void renderKernel(const __grid_constant__ SceneView s, const __grid_constant__ CameraView cam,
   const __grid_constant__ FrameParams fp, const float* __restrict__ depth, float4* __restrict__ accum,
   float4* __restrict__ even, uint32_t previous, unsigned long long* __restrict__ counters)
 {
-  renderKernelBody<Mode, Count, Lit, ExpectedValue>(s, cam, fp, depth, accum, even, previous, counters);
+  renderKernelBody<Mode, Count, Lit, Unlit>(s, cam, fp, depth, accum, even, previous, counters);
 }
 
 /// The unlit kernels, a separate entry so that a build can cap their registers
@@ -131,19 +131,59 @@ __global__ void renderKernel(const __grid_constant__ SceneView s, const __grid_c
 #else
 #define MCVOL_UNLIT_BOUNDS
 #endif
-template <BlendMode Mode, bool Count, bool ExpectedValue>
+template <BlendMode Mode, bool Count, int Unlit>
 __global__ void MCVOL_UNLIT_BOUNDS renderKernelUnlit(const __grid_constant__ SceneView s,
   const __grid_constant__ CameraView cam, const __grid_constant__ FrameParams fp, const float* __restrict__ depth,
   float4* __restrict__ accum, float4* __restrict__ even, uint32_t previous, unsigned long long* __restrict__ counters)
 {
-  renderKernelBody<Mode, Count, false, ExpectedValue>(s, cam, fp, depth, accum, even, previous, counters);
+  renderKernelBody<Mode, Count, false, Unlit>(s, cam, fp, depth, accum, even, previous, counters);
+}
+
+/// Launches the unlit kernel of estimator code Unlit (unlitEstimator()),
+/// with or without counters. Composite is only ever launched with 0.
+template <BlendMode Mode, int Unlit>
+void launchUnlitKernel(bool count, dim3 grid, dim3 block, const SceneView& s, const CameraView& cam,
+  const FrameParams& fp, const float* depth, float4* accum, float4* even, uint32_t previous,
+  unsigned long long* counters)
+{
+  if constexpr (Unlit == 0 || Mode != BlendMode::Composite)
+  {
+    if (count)
+    {
+      renderKernelUnlit<Mode, true, Unlit><<<grid, block>>>(s, cam, fp, depth, accum, even, previous, counters);
+    }
+    else
+    {
+      renderKernelUnlit<Mode, false, Unlit><<<grid, block>>>(s, cam, fp, depth, accum, even, previous, counters);
+    }
+  }
+}
+
+/// The same for a runtime estimator code.
+template <BlendMode Mode>
+void launchUnlit(int unlit, bool count, dim3 grid, dim3 block, const SceneView& s, const CameraView& cam,
+  const FrameParams& fp, const float* depth, float4* accum, float4* even, uint32_t previous,
+  unsigned long long* counters)
+{
+  if (unlit == 2)
+  {
+    launchUnlitKernel<Mode, 2>(count, grid, block, s, cam, fp, depth, accum, even, previous, counters);
+  }
+  else if (unlit == 1)
+  {
+    launchUnlitKernel<Mode, 1>(count, grid, block, s, cam, fp, depth, accum, even, previous, counters);
+  }
+  else
+  {
+    launchUnlitKernel<Mode, 0>(count, grid, block, s, cam, fp, depth, accum, even, previous, counters);
+  }
 }
 
 } // namespace
 
-/// CUDALaunchPlain.cu: launches the plain unlit kernel of `mode` (collision
-/// or expected value, with or without counters).
-void launchPlainUnlit(BlendMode mode, bool count, bool expectedValue, dim3 grid, dim3 block, const SceneView& s,
+/// CUDALaunchPlain.cu: launches the plain unlit kernel of `mode` (estimator
+/// code `unlit`, with or without counters).
+void launchPlainUnlit(BlendMode mode, bool count, int unlit, dim3 grid, dim3 block, const SceneView& s,
   const CameraView& cam, const FrameParams& fp, const float* depth, float4* accum, float4* even, uint32_t previous,
   unsigned long long* counters);
 } // namespace mcvol

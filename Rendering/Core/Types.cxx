@@ -61,7 +61,9 @@ const char* toString(Sampler s)
 
 const char* toString(Estimator e)
 {
-  return e == Estimator::ExpectedValue ? "expected-value" : "collision";
+  return e == Estimator::ExpectedValue ? "expected-value"
+    : e == Estimator::UnbiasedMarch    ? "unbiased-march"
+                                       : "collision";
 }
 
 const char* toString(Interpolation i)

@@ -9,12 +9,17 @@
 
 namespace mcvol
 {
-/// Whether a render's camera rays use the expected-value estimator: asked
-/// for, unlit, not optimized, and not post-render compositing (these keep
-/// the collision estimator, Estimator's documentation says why).
-MCVOL_FUNC bool usesExpectedValue(Estimator e, BlendMode mode, bool lit, bool optimized)
+/// The estimator a render's camera rays use, as the kernels' compile-time
+/// code: 0 collision, 1 expected value, 2 unbiased march. The last two only
+/// when asked for, unlit, not optimized and not post-render compositing
+/// (these keep the collision estimator, Estimator's documentation says why).
+MCVOL_FUNC int unlitEstimator(Estimator e, BlendMode mode, bool lit, bool optimized)
 {
-  return e == Estimator::ExpectedValue && !lit && !optimized && mode != BlendMode::Composite;
+  if (lit || optimized || mode == BlendMode::Composite)
+  {
+    return 0;
+  }
+  return e == Estimator::ExpectedValue ? 1 : (e == Estimator::UnbiasedMarch ? 2 : 0);
 }
 
 /// What one render asks of every pixel.
@@ -40,11 +45,12 @@ struct FrameParams
  * exactly the unoptimized one (the null list folds away). `even` (optional)
  * receives the sum of the samples of even index firstSample + k, the half
  * the error estimate keeps (Accumulator::estimatedMSE).
- * ExpectedValue (a compile-time choice too, so that the collision kernels
- * carry none of its code and registers; usesExpectedValue() decides it)
- * scores unlit camera rays with trackExpected().
+ * Unlit (a compile-time choice too, so that each kernel carries only its
+ * estimator's code and registers; unlitEstimator() decides it): 1 scores
+ * unlit camera rays with trackExpected(), 2 with trackUnbiasedMarch(), 0
+ * with the collision estimator.
  */
-template <BlendMode Mode, bool Lit = false, bool Optimized = false, bool ExpectedValue = false>
+template <BlendMode Mode, bool Lit = false, bool Optimized = false, int Unlit = 0>
 MCVOL_FUNC Vec4f renderPixel(const SceneView& s, const CameraView& cam, const FrameParams& fp, int x, int y,
   float depth, RayCounters& c, const RayImportance* imp = nullptr, Vec4f* even = nullptr)
 {
@@ -75,9 +81,13 @@ MCVOL_FUNC Vec4f renderPixel(const SceneView& s, const CameraView& cam, const Fr
     {
       v = traceLitSample<Mode>(s, fp.tracker, ray.o, ray.d, ray.world, ray.tmax, rng, c, sc, ri);
     }
-    else if (ExpectedValue && !Optimized && Mode != BlendMode::Composite)
+    else if (Unlit == 1 && !Optimized && Mode != BlendMode::Composite)
     {
       v = trackExpected<Mode>(s, ray.o, ray.d, 0.f, ray.tmax, rng, c);
+    }
+    else if (Unlit == 2 && !Optimized && Mode != BlendMode::Composite)
+    {
+      v = trackUnbiasedMarch<Mode>(s, ray.o, ray.d, 0.f, ray.tmax, rng, c);
     }
     else
     {

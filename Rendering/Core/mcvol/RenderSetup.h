@@ -120,6 +120,10 @@ inline void checkRenderArguments(const Camera& camera, const RenderSettings& set
   {
     throw std::invalid_argument("mcvol: the minimum samples per voxel must be between 0 and 1e6");
   }
+  if (!(settings.marchSamplesPerVoxel >= 0.01f && settings.marchSamplesPerVoxel <= 1024.f))
+  {
+    throw std::invalid_argument("mcvol: the unbiased march's samples per voxel must be between 0.01 and 1024");
+  }
   if (accum.width() != camera.width || accum.height() != camera.height)
   {
     accum.resize(camera.width, camera.height);

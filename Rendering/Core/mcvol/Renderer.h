@@ -51,6 +51,11 @@ struct RenderSettings
   /// samples in optically thin cells cost time and lower the noise of thin,
   /// bright structures. 0: the majorant alone.
   float minSamplesPerVoxel = 0.f;
+  /// Unbiased-march estimator (Estimator::UnbiasedMarch): strata per voxel
+  /// length along a ray in every macrocell that is not empty (each also at
+  /// least kMarchMajorantStrata per unit of majorant optical depth), like
+  /// the ray marcher's samples per voxel. Must be positive and finite.
+  float marchSamplesPerVoxel = 2.f;
   /// Device backends: copy the accumulated image into the Accumulator at the
   /// end of render(). false leaves it on the device (the frame may still be
   /// running when render() returns) until readBack() or the next render with

@@ -158,6 +158,10 @@ struct SceneView
   /// estimator uses in a non-empty macrocell, set per render by the backend
   /// (RenderSettings::minSamplesPerVoxel times voxelRate()); 0: off.
   float minRate = 0.f;
+  /// Strata per unit length (world units^-1) of the unbiased-march
+  /// estimator in a non-empty macrocell, set per render by the backend
+  /// (RenderSettings::marchSamplesPerVoxel times voxelRate()).
+  float marchRate = 1.f;
   LightingView lighting;
   ImportanceView importance;
 };

@@ -391,6 +391,143 @@ MCVOL_HOT Vec4f trackExpected(const SceneView& s, Vec3f o, Vec3f d, float tmin, 
   return out;
 }
 
+/// Highest order of the unbiased march's power series (Estimator::UnbiasedMarch).
+constexpr int kMarchMaxOrder = 16;
+/// Probability that the unbiased march's series goes on to the next order
+/// (0.25 and 0.75 took longer to the same error on the microscopy scenes).
+constexpr float kMarchOrderContinue = 0.5f;
+/// Strata of the unbiased march per unit of majorant optical depth, at least:
+/// keeps h sigma small where the extinction is high.
+constexpr float kMarchMajorantStrata = 0.25f;
+
+/**
+ * The unbiased-march estimator (Estimator::UnbiasedMarch) of one camera ray
+ * over [tmin, tmax], unlit: premultiplied RGB and alpha = 1 - T, like
+ * trackExpected(), but with stratified (jittered) samples instead of the
+ * majorant's Poisson process, and an unbiased transmittance after Kettunen
+ * et al. 2021 ("An unbiased ray-marching transmittance estimator").
+ * - Strata: every non-empty macrocell [a, b] of the DDA (blend majorant M, as
+ *   trackExpected) is cut into n equal strata of length h, n = ceil((b - a)
+ *   max(marchRate, kMarchMajorantStrata M)) (marchRate: RenderSettings::
+ *   marchSamplesPerVoxel per voxel length); empty cells (M = 0, so sigma =
+ *   0) have none.
+ * - March 0 puts one point at offset u0 in every stratum (one jitter per
+ *   ray): it scores the emission h sigma(t) c(t) T^(t) there and sums
+ *   X0 = sum h sigma, which E_u0 makes an unbiased quadrature of the
+ *   emission integral given unbiased T^(t).
+ * - T^(t): with the pivot P = X0 before t + u0 h sigma(t) (any value
+ *   independent of the other marches will do), exp(-tau) =
+ *   exp(-P) sum_k (P - tau)^k / k!, and (P - tau)^k is estimated without
+ *   bias by prod_{l<=k} (P - X_l(t)), X_l(t) the optical depth of march l (its
+ *   own offset v_l, one point per stratum, a point scored only where it lies
+ *   before t) up to t, an unbiased estimate of tau(t). The order K is random,
+ *   P(K >= k) = kMarchOrderContinue^k, each term divided by that, up to
+ *   kMarchMaxOrder (16: the terms left out, |P - tau|^17 / 17! and smaller,
+ *   are below 4e-7 for |P - tau| <= 3, and K reaches 16 once in 65536 rays).
+ * Unbiased, but not bounded: a sample's T^ may be negative or above 1
+ * where the marches disagree (sharp features thinner than a stratum); the
+ * mean converges to the emission-absorption integral. Russian roulette on
+ * exp(-X0) (kept as a log weight) ends the ray as in trackExpected().
+ */
+template <BlendMode Mode>
+MCVOL_HOT Vec4f trackUnbiasedMarch(
+  const SceneView& s, Vec3f o, Vec3f d, float tmin, float tmax, Rng& rng, RayCounters& c)
+{
+  Vec4f out;
+  if (s.numActive == 0)
+  {
+    return out;
+  }
+  const float u0 = rng.sequence(kGroupFlight);
+  int K = 0;
+  float v[kMarchMaxOrder];
+  while (K < kMarchMaxOrder && rng.next() < kMarchOrderContinue)
+  {
+    v[K++] = rng.next();
+  }
+  float X[kMarchMaxOrder];
+  for (int l = 0; l < K; ++l)
+  {
+    X[l] = 0.f;
+  }
+  float X0 = 0.f;
+  float logW = 0.f; // roulette weight, as a logarithm
+  bool stopped = false;
+  Vec3f L;
+  DDA dda;
+  dda.init(s.grid, o, d, tmin, tmax);
+  const int N = s.grid.numChannels;
+  while (!dda.done && !stopped)
+  {
+    ++c.ddaSteps;
+    const float* maj = s.grid.majorants + dda.cellIndex() * N;
+    float M = 0.f;
+    for (int i = 0; i < s.numActive; ++i)
+    {
+      const float m = minf(maj[s.active[i]], s.sigmaLimit);
+      M = Mode == BlendMode::Density ? M + m : maxf(M, m);
+    }
+    if (M > 0.f)
+    {
+      const float a = dda.t0;
+      const float len = dda.t1 - a;
+      const float want = len * maxf(s.marchRate, M * kMarchMajorantStrata);
+      const int n = want < 1.f ? 1 : (want < 65536.f ? int(ceilf(want)) : 65536);
+      const float h = len / float(n);
+      for (int j = 0; j < n; ++j)
+      {
+        const float s0 = a + float(j) * h;
+        ++c.tentative;
+        const PointOptics po = blendedOptics<Mode>(s, s.active, s.numActive, o + d * (s0 + u0 * h));
+        const float sig0 = minf(po.sigma, s.sigmaLimit);
+        c.samples += uint32_t(s.numActive);
+        const float pivot = X0 + u0 * h * sig0;
+        float series = 1.f;
+        float term = 1.f;
+        for (int l = 0; l < K; ++l)
+        {
+          const PointOptics pl = blendedOptics<Mode>(s, s.active, s.numActive, o + d * (s0 + v[l] * h));
+          c.samples += uint32_t(s.numActive);
+          const float dl = h * minf(pl.sigma, s.sigmaLimit);
+          term *= (pivot - (v[l] < u0 ? X[l] + dl : X[l])) / (float(l + 1) * kMarchOrderContinue);
+          series += term;
+          X[l] += dl;
+        }
+        L += po.emission * (h * sig0 * expf(logW - pivot) * series);
+        X0 += h * sig0;
+        const float est = expf(logW - X0);
+        if (est < kRouletteThreshold)
+        {
+          if (rng.next() * kRouletteThreshold >= est)
+          {
+            stopped = true;
+            break;
+          }
+          logW = logf(kRouletteThreshold) + X0;
+        }
+      }
+    }
+    dda.next();
+  }
+  float Tend = 0.f;
+  if (!stopped)
+  {
+    float series = 1.f;
+    float term = 1.f;
+    for (int l = 0; l < K; ++l)
+    {
+      term *= (X0 - X[l]) / (float(l + 1) * kMarchOrderContinue);
+      series += term;
+    }
+    Tend = expf(logW - X0) * series;
+  }
+  out.r = L.x;
+  out.g = L.y;
+  out.b = L.z;
+  out.a = 1.f - Tend;
+  return out;
+}
+
 /// One Monte Carlo sample of a ray: premultiplied RGB and alpha (1 if the
 /// path collided, else 0).
 template <BlendMode Mode>

@@ -444,9 +444,12 @@ def setup_mapper(mapper, prop, scene, channels, tfs, render_image, reference):
     mapper.SetTrackingMethod(mapper.N_DDA if scene["tracking"] == "n-dda" else mapper.ONE_DDA)
     if scene["estimator"] == "collision":
         mapper.SetEstimatorToCollision()
+    elif scene["estimator"] == "unbiased-march":
+        mapper.SetEstimatorToUnbiasedMarch()
     else:
         mapper.SetEstimatorToExpectedValue()
     mapper.SetMinimumSamplesPerVoxel(scene["min_samples_per_voxel"])
+    mapper.SetMarchSamplesPerVoxel(scene["march_samples_per_voxel"])
     if scene["sample_sequence"] == "independent":
         mapper.SetSampleSequenceToIndependent()
     else:

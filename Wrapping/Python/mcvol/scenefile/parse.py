@@ -371,6 +371,11 @@ def parse_scene(data, scene_dir, presets):
         if "min_samples_per_voxel" in data
         else 0.0
     )
+    s["march_samples_per_voxel"] = (
+        get_number(data["march_samples_per_voxel"], "march_samples_per_voxel", lo=0.01, hi=1024.0)
+        if "march_samples_per_voxel" in data
+        else 2.0
+    )
     s["backend"] = get_string(data["backend"], "backend", BACKENDS) if "backend" in data else "auto"
     s["samples_per_pixel"] = (
         get_number(data["samples_per_pixel"], "samples_per_pixel", lo=1, hi=1 << 24, integer=True)

@@ -19,7 +19,7 @@ INTERPOLATIONS = ("linear", "nearest", "cubic")
 RANGE_MODES = ("auto", "data")  # a channel's "range" as a word
 TRACKING = ("1-dda", "n-dda")
 SAMPLE_SEQUENCES = ("sobol", "independent")
-ESTIMATORS = ("expected-value", "collision")
+ESTIMATORS = ("expected-value", "collision", "unbiased-march")
 BACKENDS = ("auto", "cpu", "cuda")
 RENDERERS = ("montecarlo", "raymarch")
 COMPOSITING = ("extinction", "opacity")
@@ -57,6 +57,7 @@ TOP_KEYS = {
     "sample_sequence",
     "estimator",
     "min_samples_per_voxel",
+    "march_samples_per_voxel",
     "backend",
     "samples_per_pixel",
     "samples_per_render",
