@@ -302,6 +302,22 @@ MCVOL_HOT Vec4f trackComposite(const SceneView& s, Vec3f o, Vec3f d, float tmin,
   return out;
 }
 
+/// The blend's majorant in macrocell `cell`: the sum of the active channels'
+/// majorants (density) or their maximum (max and mix, whose extinction is the
+/// largest channel's), each at most sigmaLimit.
+template <BlendMode Mode>
+MCVOL_HOT float blendMajorant(const SceneView& s, int64_t cell)
+{
+  const float* maj = s.grid.majorants + cell * s.grid.numChannels;
+  float M = 0.f;
+  for (int i = 0; i < s.numActive; ++i)
+  {
+    const float m = minf(maj[s.active[i]], s.sigmaLimit);
+    M = Mode == BlendMode::Density ? M + m : maxf(M, m);
+  }
+  return M;
+}
+
 /// Transmittance below which the expected-value estimator plays Russian
 /// roulette: it goes on with probability T / kRouletteThreshold (T raised to
 /// the threshold) or stops (T = 0), which keeps it unbiased.
@@ -333,17 +349,10 @@ MCVOL_HOT Vec4f trackExpected(const SceneView& s, Vec3f o, Vec3f d, float tmin, 
   float tau = opticalDepthOf(rng.sequence(kGroupFlight));
   DDA dda;
   dda.init(s.grid, o, d, tmin, tmax);
-  const int N = s.grid.numChannels;
   while (!dda.done && T > 0.f)
   {
     ++c.ddaSteps;
-    const float* maj = s.grid.majorants + dda.cellIndex() * N;
-    float M = 0.f;
-    for (int i = 0; i < s.numActive; ++i)
-    {
-      const float m = minf(maj[s.active[i]], s.sigmaLimit);
-      M = Mode == BlendMode::Density ? M + m : maxf(M, m);
-    }
+    float M = blendMajorant<Mode>(s, dda.cellIndex());
     if (M > 0.f)
     {
       M = maxf(M, s.minRate); // a denser tentative process stays unbiased
@@ -456,17 +465,10 @@ MCVOL_HOT Vec4f trackUnbiasedMarch(
   Vec3f L;
   DDA dda;
   dda.init(s.grid, o, d, tmin, tmax);
-  const int N = s.grid.numChannels;
   while (!dda.done && !stopped)
   {
     ++c.ddaSteps;
-    const float* maj = s.grid.majorants + dda.cellIndex() * N;
-    float M = 0.f;
-    for (int i = 0; i < s.numActive; ++i)
-    {
-      const float m = minf(maj[s.active[i]], s.sigmaLimit);
-      M = Mode == BlendMode::Density ? M + m : maxf(M, m);
-    }
+    const float M = blendMajorant<Mode>(s, dda.cellIndex());
     if (M > 0.f)
     {
       const float a = dda.t0;
