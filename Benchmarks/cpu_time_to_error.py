@@ -32,6 +32,7 @@ Variants of the Monte Carlo mapper (--variants, comma separated):
   min<N>                SetMinimumSamplesPerVoxel(N) (expected-value estimator)
   collision             SetEstimatorToCollision()
   march                 SetEstimatorToUnbiasedMarch() (default 2 strata per voxel)
+  march<N>              the same with SetMarchSamplesPerVoxel(N)
 Prints a Markdown table; --csv writes the rows.
 
 Usage (from the repository, after scripts/build.sh):
@@ -159,6 +160,9 @@ def configure(m, variant, seed):
         m.SetEstimatorToCollision()
     elif variant == "march":
         m.SetEstimatorToUnbiasedMarch()
+    elif variant.startswith("march"):
+        m.SetEstimatorToUnbiasedMarch()
+        m.SetMarchSamplesPerVoxel(float(variant[5:]))
     elif variant != "default":
         raise SystemExit("unknown variant " + variant)
 
