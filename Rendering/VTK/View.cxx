@@ -119,10 +119,20 @@ bool HasOpaqueGeometry(vtkRenderer* ren)
   props->InitTraversal(it);
   while (vtkProp* prop = props->GetNextProp(it))
   {
-    if (prop->GetVisibility() && vtkProp3D::SafeDownCast(prop) && !vtkVolume::SafeDownCast(prop))
+    if (!prop->GetVisibility() || !vtkProp3D::SafeDownCast(prop) || vtkVolume::SafeDownCast(prop))
     {
-      return true;
+      continue;
     }
+    // A prop with no geometry (uninitialized bounds: ParaView keeps visible
+    // actors with empty inputs in every render view) cannot occlude anything,
+    // and reading the depth buffer back costs 4-12 ms a frame at 512x512
+    // with software OpenGL.
+    const double* bounds = prop->GetBounds();
+    if (bounds && !(bounds[0] <= bounds[1] && bounds[2] <= bounds[3] && bounds[4] <= bounds[5]))
+    {
+      continue;
+    }
+    return true;
   }
   return false;
 }

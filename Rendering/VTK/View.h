@@ -48,7 +48,8 @@ bool ComputeCamera(vtkRenderer* ren, vtkVolume* vol, vtkImageData* image, const 
 bool ReadDepth(vtkOpenGLRenderWindow* window, const Viewport& viewport, std::vector<float>& depth);
 
 /// True when `ren` draws something besides volumes that can occlude them: a
-/// visible 3D prop that is not a vtkVolume. Without one the depth buffer
+/// visible 3D prop that is not a vtkVolume and has geometry (initialized
+/// bounds, or none reported). Without one the depth buffer
 /// holds only the clear value, and reading it back (a full-window
 /// glReadPixels) is skipped.
 bool HasOpaqueGeometry(vtkRenderer* ren);

@@ -3,7 +3,8 @@
 // drawn before the volume. The volume fills only the half of the box behind
 // the sphere's centre (seen from the camera), so wherever the sphere is
 // visible it must look exactly as it does without the volume, while the
-// volume shows beside it.
+// volume shows beside it. A visible actor without geometry, listed before
+// the sphere, changes nothing.
 #include "vtkMultiChannelVolumeMapper.h"
 
 #include "vtkActor.h"
@@ -13,6 +14,7 @@
 #include "vtkNew.h"
 #include "vtkPiecewiseFunction.h"
 #include "vtkPointData.h"
+#include "vtkPolyData.h"
 #include "vtkPolyDataMapper.h"
 #include "vtkProperty.h"
 #include "vtkRenderWindow.h"
@@ -94,8 +96,18 @@ int TestMultiChannelVolumeMapperOcclusion(int argc, char* argv[])
   actor->SetMapper(sphereMapper);
   actor->GetProperty()->SetColor(1, 0, 0);
 
+  // A visible actor with no geometry first, as ParaView keeps in its views:
+  // it occludes nothing (the mapper skips the depth read-back for it), and
+  // must not hide the sphere behind it in the list of props.
+  vtkNew<vtkPolyData> nothing;
+  vtkNew<vtkPolyDataMapper> nothingMapper;
+  nothingMapper->SetInputData(nothing);
+  vtkNew<vtkActor> emptyActor;
+  emptyActor->SetMapper(nothingMapper);
+
   vtkNew<vtkRenderer> renderer;
   renderer->SetBackground(0, 0, 0);
+  renderer->AddActor(emptyActor);
   renderer->AddActor(actor);
   renderer->AddVolume(volume);
   vtkNew<vtkRenderWindow> window;
