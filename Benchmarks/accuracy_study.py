@@ -10,7 +10,8 @@ For each demo dataset and blend mode, `mcvol-accuracy` renders (one run):
     configuration of MC_CONFIGS (--mc-configs): the renderer's default since
     issue 14 (expected-value estimator, Owen-scrambled Sobol' points, 1-DDA),
     the collision estimator with Sobol' points, and the default before it
-    (collision estimator, independent samples, 1-DDA and N-DDA). The composite
+    (collision estimator, independent samples, 1-DDA and N-DDA), and the
+    unbiased march (Sobol', its default 2 strata per voxel). The composite
     blend keeps the collision estimator (Types.h, Estimator), so there the
     new default is the collision + Sobol' series;
   - the ray marcher at steps of 4 voxels down to 1/8 voxel, extinction- and
@@ -63,6 +64,7 @@ MC_CONFIGS = [
     ("collision", "sobol", "1dda", "col-sobol", "MC collision, Sobol', 1-DDA", "tab:purple", "-"),
     ("collision", "independent", "1dda", "old", "MC old default (collision, independent, 1-DDA)", "tab:orange", "-"),
     ("collision", "independent", "ndda", "old-ndda", "MC old default, N-DDA", "tab:brown", "--"),
+    ("unbiased-march", "sobol", "1dda", "march", "MC unbiased march (2 per voxel, Sobol')", "tab:olive", "-."),
 ]
 MARCHES = [("extinction", "RM extinction", "tab:blue", "-"), ("opacity", "RM opacity", "tab:red", "--")]
 GPU_LABEL = "GPU"
@@ -490,7 +492,8 @@ def headline(rows, datasets, args, target=35.0):
     files have the series (n/a otherwise). Returns markdown lines."""
     g = args.gpu_label
     cols = [("MC new default, CPU", "new", False), ("MC collision + Sobol', CPU", "col-sobol", False),
-            ("MC old default, CPU", "old", False), ("RM extinction, CPU", "extinction", False),
+            ("MC old default, CPU", "old", False), ("MC unbiased march, CPU", "march", False),
+            ("RM extinction, CPU", "extinction", False),
             ("RM opacity, CPU", "opacity", False), ("MC new default, %s" % g, "new", True),
             ("MC old default, %s" % g, "old", True), ("RM extinction, %s" % g, "extinction", True)]
     lines = ["| dataset | " + " | ".join(c[0] for c in cols) + " | old / new MC, CPU |",
