@@ -18,6 +18,7 @@
 #include "vtkVolumeProperty.h"
 
 #include "VTK/Accumulation.h"
+#include "mcvol/EstimatorChoice.h"
 #include "VTK/ChannelBinding.h"
 #include "VTK/DependentComponents.h"
 #include "VTK/FrameCompositor.h"
@@ -103,6 +104,35 @@ struct vtkMultiChannelVolumeMapper::vtkInternals
   bool EstimateCurrent = false;
   mcvol::adapter::SampleCost Cost; // seconds per sample, for InteractiveFrameTime
 
+  // AUTOMATIC_ESTIMATOR: the choice and what it was made for (the camera,
+  // the window size and the level of detail are left out: the choice is
+  // kept while they change).
+  struct ChoiceKey
+  {
+    unsigned long long TablesVersion = 0;
+    vtkMTimeType DataMTime = 0;
+    const mcvol::Renderer* Backend = nullptr;
+    int Blend = -1;
+    bool Lit = false;
+    bool Optimized = false;
+    unsigned int Seed = 0;
+    double MinimumSamplesPerVoxel = 0.0;
+    double TargetError = 0.0;
+    bool operator==(const ChoiceKey& o) const
+    {
+      return this->TablesVersion == o.TablesVersion && this->DataMTime == o.DataMTime &&
+        this->Backend == o.Backend && this->Blend == o.Blend && this->Lit == o.Lit &&
+        this->Optimized == o.Optimized && this->Seed == o.Seed &&
+        this->MinimumSamplesPerVoxel == o.MinimumSamplesPerVoxel && this->TargetError == o.TargetError;
+    }
+  };
+  bool ChoiceValid = false;
+  ChoiceKey ChoiceMadeFor;
+  mcvol::EstimatorChoice Choice;
+  std::string ChoiceReport = "no automatic choice made yet";
+  std::string ChosenEstimator = "none"; // backing store of GetChosenEstimatorAsString
+  int Choices = 0;                      // choices that rendered pilots
+
   // Backing store for GetActiveBackendName and GetBackendReport.
   std::string BackendName = "none";
   std::string BackendReport = "no backend chosen yet";
@@ -186,7 +216,26 @@ const char* vtkMultiChannelVolumeMapper::GetEstimatorAsString()
 {
   return this->Estimator == COLLISION_ESTIMATOR ? "Collision"
     : this->Estimator == UNBIASED_MARCH_ESTIMATOR ? "UnbiasedMarch"
+    : this->Estimator == AUTOMATIC_ESTIMATOR      ? "Automatic"
                                                   : "ExpectedValue";
+}
+
+//------------------------------------------------------------------------------
+const char* vtkMultiChannelVolumeMapper::GetChosenEstimatorAsString()
+{
+  return this->Internals->ChosenEstimator.c_str();
+}
+
+//------------------------------------------------------------------------------
+const char* vtkMultiChannelVolumeMapper::GetEstimatorReport()
+{
+  return this->Internals->ChoiceReport.c_str();
+}
+
+//------------------------------------------------------------------------------
+int vtkMultiChannelVolumeMapper::GetNumberOfEstimatorChoices()
+{
+  return this->Internals->Choices;
 }
 
 //------------------------------------------------------------------------------
@@ -210,14 +259,8 @@ const char* vtkMultiChannelVolumeMapper::GetBackendAsString()
 }
 
 //------------------------------------------------------------------------------
-bool vtkMultiChannelVolumeMapper::TraceImage(const mcvol::Scene& scene, const mcvol::Camera& camera, const float* depth,
-  mcvol::Renderer* renderer, mcvol::Accumulator& accum, std::string& error)
+mcvol::RenderSettings vtkMultiChannelVolumeMapper::MakeRenderSettings(const mcvol::Renderer& renderer)
 {
-  if (!renderer)
-  {
-    error = "no rendering backend";
-    return false;
-  }
   mcvol::RenderSettings settings;
   settings.samplesPerPixel = this->Internals->BatchSamples > 0 ? this->Internals->BatchSamples : this->SamplesPerPixel;
   settings.seed = this->Seed;
@@ -227,13 +270,51 @@ bool vtkMultiChannelVolumeMapper::TraceImage(const mcvol::Scene& scene, const mc
   // A device backend keeps the image on the device: DrawImage() copies an
   // 8-bit display image (a quarter of the float image), and the float image
   // comes back only when asked (GetAccumulatedImage, GetEstimatedError).
-  settings.readBack = !renderer->hasDisplayImage();
+  settings.readBack = !renderer.hasDisplayImage();
   settings.sampler = this->SampleSequence == INDEPENDENT_SEQUENCE ? mcvol::Sampler::Independent : mcvol::Sampler::Sobol;
+  // AUTOMATIC_ESTIMATOR: expected value until the choice is made.
   settings.estimator = this->Estimator == COLLISION_ESTIMATOR ? mcvol::Estimator::Collision
     : this->Estimator == UNBIASED_MARCH_ESTIMATOR             ? mcvol::Estimator::UnbiasedMarch
                                                               : mcvol::Estimator::ExpectedValue;
   settings.minSamplesPerVoxel = float(this->MinimumSamplesPerVoxel);
   settings.marchSamplesPerVoxel = float(this->MarchSamplesPerVoxel);
+  return settings;
+}
+
+//------------------------------------------------------------------------------
+bool vtkMultiChannelVolumeMapper::TraceImage(const mcvol::Scene& scene, const mcvol::Camera& camera, const float* depth,
+  mcvol::Renderer* renderer, mcvol::Accumulator& accum, std::string& error)
+{
+  if (!renderer)
+  {
+    error = "no rendering backend";
+    return false;
+  }
+  mcvol::RenderSettings settings = this->MakeRenderSettings(*renderer);
+  vtkInternals& in = *this->Internals;
+  if (this->Estimator == AUTOMATIC_ESTIMATOR && in.ChoiceValid)
+  {
+    settings.estimator = in.Choice.settings.estimator;
+    settings.marchSamplesPerVoxel = in.Choice.settings.marchSamplesPerVoxel;
+  }
+  {
+    const bool collision = scene.lit() || scene.optimized() || scene.blendMode() == mcvol::BlendMode::Composite ||
+      settings.estimator == mcvol::Estimator::Collision;
+    char name[64];
+    if (collision)
+    {
+      std::snprintf(name, sizeof(name), "Collision");
+    }
+    else if (settings.estimator == mcvol::Estimator::UnbiasedMarch)
+    {
+      std::snprintf(name, sizeof(name), "UnbiasedMarch(%g)", double(settings.marchSamplesPerVoxel));
+    }
+    else
+    {
+      std::snprintf(name, sizeof(name), "ExpectedValue");
+    }
+    in.ChosenEstimator = name;
+  }
   try
   {
     renderer->render(scene, camera, settings, depth, accum);
@@ -790,6 +871,7 @@ void vtkMultiChannelVolumeMapper::ReleaseGraphicsResources(vtkWindow* window)
   if (in.Backend.ReleaseDevice())
   {
     in.Accumulation.Invalidate();
+    in.ChoiceValid = false; // a new backend object may reuse the address
   }
 }
 
@@ -1065,6 +1147,7 @@ bool vtkMultiChannelVolumeMapper::UpdateScene(RenderPass& pass)
       "Could not set up the volume" << (pass.Level > 0 ? " at its level of detail" : "") << ": " << e.what());
     in.ForgetVolume();
     in.Accumulation.Invalidate();
+    in.ChoiceValid = false;
     return false;
   }
   return true;
@@ -1293,6 +1376,54 @@ void vtkMultiChannelVolumeMapper::UpdateAccumulation(RenderPass& pass)
 }
 
 //------------------------------------------------------------------------------
+bool vtkMultiChannelVolumeMapper::ChooseEstimator(RenderPass& pass)
+{
+  vtkInternals& in = *this->Internals;
+  if (this->Estimator != AUTOMATIC_ESTIMATOR || !this->AddsSamples() || !in.Backend.Get())
+  {
+    return true;
+  }
+  const mcvol::Scene& scene = *pass.Scene;
+  vtkInternals::ChoiceKey key;
+  key.TablesVersion = in.Tables.Version();
+  key.DataMTime = pass.Channels.DataMTime;
+  key.Backend = in.Backend.Get();
+  key.Blend = static_cast<int>(scene.blendMode());
+  key.Lit = scene.lit();
+  key.Optimized = scene.optimized();
+  key.Seed = this->Seed;
+  key.MinimumSamplesPerVoxel = this->MinimumSamplesPerVoxel;
+  key.TargetError = this->TargetError;
+  if (in.ChoiceValid && in.ChoiceMadeFor == key)
+  {
+    return true;
+  }
+  mcvol::RenderSettings base = this->MakeRenderSettings(*in.Backend.Get());
+  mcvol::EstimatorChoiceSettings settings;
+  if (this->TargetError > 0.0)
+  {
+    // Aim at the image's own target (an RMSE over premultiplied RGB, as the
+    // choice's MSE is).
+    settings.targetMSE = this->TargetError * this->TargetError;
+  }
+  try
+  {
+    in.Choice = mcvol::chooseEstimator(*in.Backend.Get(), scene, pass.Camera, base, settings);
+  }
+  catch (const std::exception& e)
+  {
+    vtkErrorMacro("Automatic estimator choice failed: " << e.what());
+    in.ChoiceValid = false;
+    return false;
+  }
+  in.ChoiceValid = true;
+  in.ChoiceMadeFor = key;
+  in.ChoiceReport = in.Choice.report();
+  in.Choices += in.Choice.applies ? 1 : 0;
+  return true;
+}
+
+//------------------------------------------------------------------------------
 bool vtkMultiChannelVolumeMapper::TraceBatch(RenderPass& pass)
 {
   // Progressive refinement adds a batch up to MaximumTotalSamples; without it
@@ -1316,6 +1447,14 @@ bool vtkMultiChannelVolumeMapper::TraceBatch(RenderPass& pass)
   }
   std::string error;
   in.BatchSamples = batch;
+  // The automatic estimator's pilots (once per data and transfer functions)
+  // before the timer: the frame-time budget measures samples, not pilots.
+  if (!this->ChooseEstimator(pass))
+  {
+    in.BatchSamples = 0;
+    in.Accumulation.Invalidate();
+    return false;
+  }
   const auto start = std::chrono::steady_clock::now();
   const bool ok =
     this->TraceImage(*pass.Scene, pass.Camera, in.Accumulation.Depth(), in.Backend.Get(), in.Accum, error);
@@ -1400,7 +1539,7 @@ void vtkMultiChannelVolumeMapper::PrintSelf(ostream& os, vtkIndent indent)
      << "\n";
   os << indent << "TrackingMethod: " << this->GetTrackingMethodAsString() << "\n";
   os << indent << "SampleSequence: " << this->GetSampleSequenceAsString() << "\n";
-  os << indent << "Estimator: " << this->GetEstimatorAsString() << "\n";
+  os << indent << "Estimator: " << this->GetEstimatorAsString() << " (last used: " << in.ChosenEstimator << ")\n";
   os << indent << "MinimumSamplesPerVoxel: " << this->MinimumSamplesPerVoxel << "\n";
   os << indent << "MarchSamplesPerVoxel: " << this->MarchSamplesPerVoxel << "\n";
   os << indent << "SamplesPerPixel: " << this->SamplesPerPixel << "\n";

@@ -93,6 +93,7 @@ namespace mcvol
 {
 class Accumulator;
 struct Camera;
+struct RenderSettings;
 class Renderer;
 class Scene;
 }
@@ -172,7 +173,8 @@ public:
   {
     COLLISION_ESTIMATOR = 0,
     EXPECTED_VALUE_ESTIMATOR = 1,
-    UNBIASED_MARCH_ESTIMATOR = 2
+    UNBIASED_MARCH_ESTIMATOR = 2,
+    AUTOMATIC_ESTIMATOR = 3
   };
 
   ///@{
@@ -195,13 +197,46 @@ public:
    * (Benchmarks/RESULTS.md, "Estimators"). Lit volumes (ShadeOn), the
    * composite blend mode and the visibility optimization always use the
    * collision estimator. A change restarts the progressive image.
+   *
+   * AUTOMATIC_ESTIMATOR picks, per scene, the one of expected value and the
+   * unbiased march at 1/16 to 2 strata per voxel (MarchSamplesPerVoxel
+   * is then not used) whose noise times cost per sample is lowest, from a
+   * small pilot image of each at the first render of the data and transfer
+   * functions (mcvol::chooseEstimator, Rendering/Core/mcvol/
+   * EstimatorChoice.h), aiming at TargetError where one is set, else at
+   * 35 dB PSNR (RMSE 0.0178). The cost is a model of the work the render counts,
+   * fitted per backend, not the pilot's wall time, so that a fixed seed gives
+   * the same choice and image on a backend whatever the load. The choice is
+   * kept while the camera, the window size and the level of detail change,
+   * and made again when the data, a transfer function, the blend mode, the
+   * lighting, the backend, the seed, MinimumSamplesPerVoxel or TargetError
+   * changes. The pilots cost about a
+   * frame or two once per choice (Benchmarks/RESULTS.md, "The automatic
+   * estimator"). GetChosenEstimatorAsString() says what was chosen and
+   * GetEstimatorReport() why.
    */
-  vtkSetClampMacro(Estimator, int, COLLISION_ESTIMATOR, UNBIASED_MARCH_ESTIMATOR);
+  vtkSetClampMacro(Estimator, int, COLLISION_ESTIMATOR, AUTOMATIC_ESTIMATOR);
   vtkGetMacro(Estimator, int);
   void SetEstimatorToCollision() { this->SetEstimator(COLLISION_ESTIMATOR); }
   void SetEstimatorToExpectedValue() { this->SetEstimator(EXPECTED_VALUE_ESTIMATOR); }
   void SetEstimatorToUnbiasedMarch() { this->SetEstimator(UNBIASED_MARCH_ESTIMATOR); }
+  void SetEstimatorToAutomatic() { this->SetEstimator(AUTOMATIC_ESTIMATOR); }
   const char* GetEstimatorAsString();
+  /**
+   * The estimator the last render's unlit camera rays used: "Collision",
+   * "ExpectedValue" or "UnbiasedMarch(R)" with R strata per voxel; under
+   * AUTOMATIC_ESTIMATOR the choice made. Lit volumes, composite blending and
+   * the visibility optimization report "Collision" whatever is set. "none"
+   * before the first render.
+   */
+  const char* GetChosenEstimatorAsString();
+  /// The automatic choice's pilots, one line per candidate (estimated
+  /// variance, modelled cost per sample, their product; the chosen one
+  /// marked) and their time; a sentence when no choice was made.
+  const char* GetEstimatorReport();
+  /// Automatic choices that rendered pilots so far (a choice is kept while
+  /// only the camera moves; tests count on it).
+  int GetNumberOfEstimatorChoices();
   ///@}
 
   ///@{
@@ -889,6 +924,9 @@ protected:
    */
   virtual bool TraceImage(const mcvol::Scene& scene, const mcvol::Camera& camera, const float* depth,
     mcvol::Renderer* renderer, mcvol::Accumulator& accum, std::string& error);
+  /// The Monte Carlo settings of this render from the mapper's (the
+  /// estimator as set: AUTOMATIC_ESTIMATOR's choice is applied by TraceImage).
+  mcvol::RenderSettings MakeRenderSettings(const mcvol::Renderer& renderer);
   /// Whether rendering needs a backend (Backend); without one, TraceImage
   /// gets nullptr and the Scene keeps its host grids. Both mappers use one.
   virtual bool UsesRenderBackend();
@@ -964,6 +1002,9 @@ private:
   bool SumsChannelsAtLevels(RenderPass& pass);
   bool SetUpView(RenderPass& pass);
   void UpdateAccumulation(RenderPass& pass);
+  /// AUTOMATIC_ESTIMATOR: the pilots, when the data, tables or settings the
+  /// choice was made for changed.
+  bool ChooseEstimator(RenderPass& pass);
   bool TraceBatch(RenderPass& pass);
   /// Whether TargetError stops the current image (estimate at most the target).
   bool ReachedTargetError();

@@ -51,7 +51,8 @@ void usage()
             "                   [--samplers independent,sobol] [--spp-max N]\n"
             "                   [--estimators collision,expected-value] [--min-samples-per-voxel 0.5,1]\n"
             "                   [--march-samples-per-voxel 1,2] [--no-collision]\n"
-            "                   [--pixel-centres]\n"
+            "                   [--pixel-centres] [--steady-frames N] [--only-automatic] [--choice-all]\n"
+            "                   [--cost-model RAY,DDA,TENTATIVE,SAMPLE]\n"
             "sections: trackers channels macrocell rebuild memory paper converge sampling effects visibility estimate\n"
             "          sequences pyramid");
 }
@@ -190,6 +191,32 @@ Options parse(int argc, char** argv)
     else if (a == "--no-collision")
     {
       o.skipCollision = true;
+    }
+    else if (a == "--only-automatic")
+    {
+      o.onlyAutomatic = true;
+    }
+    else if (a == "--choice-all")
+    {
+      o.choiceAll = true;
+    }
+    else if (a == "--steady-frames")
+    {
+      need(1);
+      o.steadyFrames = std::stoi(argv[++i]);
+    }
+    else if (a == "--cost-model")
+    {
+      need(1);
+      o.costModel.clear();
+      for (const std::string& n : split(argv[++i], ','))
+      {
+        o.costModel.push_back(std::stod(n));
+      }
+      if (o.costModel.size() != 4)
+      {
+        throw std::invalid_argument("--cost-model takes 4 weights: ray,dda,tentative,sample");
+      }
     }
     else if (a == "--spp-max")
     {

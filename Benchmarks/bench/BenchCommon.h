@@ -55,6 +55,19 @@ struct Options
   std::vector<float> marchSamplesPerVoxel = { 2.f };
   /// section converge: leave out the collision-estimator rows
   bool skipCollision = false;
+  /// section converge: back-to-back frames timed per configuration
+  int steadyFrames = 200;
+  /// section converge: the automatic choice's cost model, 4 weights (per
+  /// ray, DDA step, tentative collision, channel sample); empty: the
+  /// backend's default (defaultCostModel())
+  std::vector<double> costModel;
+  /// section converge: only the automatic row (with the expected-value row,
+  /// the reference for its gain)
+  bool onlyAutomatic = false;
+  /// section converge: the automatic choice tries every rate (its report
+  /// then predicts each; the choice is the same or better)
+  bool choiceAll = false;
+
   /// converge: also every configuration at pixel centres
   /// (RenderSettings::jitterPixels off), against a reference at pixel centres
   bool pixelCentres = false;

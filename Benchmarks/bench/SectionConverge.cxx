@@ -6,10 +6,15 @@
 // collision estimator with each tracker, with Sobol' points and with the
 // independent sampler (the default until issue 14), and the unbiased march
 // (--march-samples-per-voxel, default 2; --no-collision leaves the collision
-// rows out).
+// rows out), and the automatic choice (chooseEstimator(): its pilots' time
+// is added to its row's). A second table gives each configuration's work
+// counters per pixel and frame with its back-to-back frame time: the data
+// the automatic choice's cost model (defaultCostModel()) is fitted to.
 
 #include "BenchCommon.h"
 #include "Sections.h"
+
+#include "mcvol/EstimatorChoice.h"
 
 #include <algorithm>
 #include <cstdio>
@@ -52,6 +57,7 @@ void runConverge(Bench& bench)
     float minSamplesPerVoxel = 0.f;
     bool centres = false;
     float marchSamplesPerVoxel = 2.f;
+    bool automatic = false;
   };
   std::vector<Config> configs = {
     { "expected-value, sobol (default)", mcvol::Estimator::ExpectedValue, mcvol::Tracker::OneDDA,
@@ -77,6 +83,17 @@ void runConverge(Bench& bench)
     c.marchSamplesPerVoxel = m;
     configs.push_back(c);
   }
+  {
+    Config a{ "automatic", mcvol::Estimator::ExpectedValue, mcvol::Tracker::OneDDA, mcvol::Sampler::Sobol };
+    a.automatic = true;
+    configs.push_back(a);
+  }
+  if (o.onlyAutomatic)
+  {
+    configs.erase(std::remove_if(configs.begin(), configs.end(),
+                    [](const Config& c) { return !c.automatic && c.name != "expected-value, sobol (default)"; }),
+      configs.end());
+  }
   if (o.skipCollision)
   {
     configs.erase(std::remove_if(configs.begin(), configs.end(),
@@ -94,7 +111,9 @@ void runConverge(Bench& bench)
       configs.push_back(c);
     }
   }
-  for (const Config& config : configs)
+  std::string costRows;
+  std::string choiceReport;
+  for (Config config : configs)
   {
     const std::vector<float>& target = config.centres ? refCentres : refImg;
     mcvol::Accumulator acc;
@@ -107,6 +126,33 @@ void runConverge(Bench& bench)
     st.jitterPixels = !config.centres;
     st.seed = 7;
     st.readBack = false;
+    double pilotMs = 0;
+    if (config.automatic)
+    {
+      r.finish();
+      const auto t0 = Clock::now();
+      mcvol::EstimatorChoiceSettings cs;
+      cs.tryAllRates = o.choiceAll;
+      if (!o.marchSamplesPerVoxel.empty() && o.choiceAll)
+      {
+        cs.marchRates = o.marchSamplesPerVoxel; // predictions for the rows measured
+      }
+      if (!o.costModel.empty())
+      {
+        cs.customModel = true;
+        cs.model.perRay = o.costModel[0];
+        cs.model.perDdaStep = o.costModel[1];
+        cs.model.perTentative = o.costModel[2];
+        cs.model.perChannelSample = o.costModel[3];
+      }
+      const mcvol::EstimatorChoice choice = mcvol::chooseEstimator(r, s.scene, cam, st, cs);
+      r.finish();
+      pilotMs = 1e3 * seconds(t0);
+      st = choice.settings;
+      config.name = "automatic: " + choice.chosenName() + " (pilots " + std::to_string(pilotMs).substr(0, 5) +
+        " ms, included)";
+      choiceReport = choice.report();
+    }
     // Warm-up on a throw-away accumulator, then timed frames; the PSNR is
     // checked between frames (not timed).
     {
@@ -117,7 +163,7 @@ void runConverge(Bench& bench)
       }
       r.finish();
     }
-    double ms = 0;
+    double ms = pilotMs;
     double q = 0;
     int frames = 0;
     while (frames < o.maxConvergeFrames)
@@ -138,7 +184,7 @@ void runConverge(Bench& bench)
     // and the GPU clocks down in the gaps; frames rendered back to back, as
     // an application draws them, cost this (after a warm-up, so that the
     // figure is the steady state's, as the frame-rate section's is):
-    const int steady = 200;
+    const int steady = std::max(1, o.steadyFrames);
     {
       mcvol::Accumulator w;
       for (int i = 0; i < 50; ++i)
@@ -154,6 +200,18 @@ void runConverge(Bench& bench)
       }
       r.finish();
       const double per = 1e3 * seconds(t0) / steady;
+      // The work of one frame, per pixel (for the cost model's fit).
+      mcvol::RenderCounters rc;
+      w.reset();
+      mcvol::RenderSettings sc = st;
+      sc.readBack = true;
+      r.render(s.scene, cam, sc, nullptr, w, &rc);
+      const double px = double(cam.width) * double(cam.height);
+      char line[256];
+      std::snprintf(line, sizeof(line), "| %s | %.4f | %.3f | %.3f | %.3f | %.3f |\n", config.name.c_str(),
+        double(rc.rays) / px, double(rc.ddaSteps) / px, double(rc.tentativeCollisions) / px,
+        double(rc.channelSamples) / px, per);
+      costRows += line;
       std::printf("| %s | %d | %.2f | %.2f | %.3f | %.2f |\n", config.name.c_str(), frames, ms, q, per, per * frames);
       bench.row("converge", ds, s.volume.numChannels(), o.macrocell, config.name, ms, "ms",
         "frames=" + std::to_string(frames) + " psnr=" + std::to_string(q) +
@@ -161,6 +219,13 @@ void runConverge(Bench& bench)
     }
     std::fflush(stdout);
   }
-  std::printf("\n");
+  std::printf("\nWork per pixel and frame (the automatic choice's cost model is fitted to these):\n\n"
+              "| configuration | rays | DDA steps | tentative | channel samples | ms per frame |\n"
+              "|---|---|---|---|---|---|\n%s\n",
+    costRows.c_str());
+  if (!choiceReport.empty())
+  {
+    std::printf("Automatic choice's pilots:\n\n```\n%s```\n\n", choiceReport.c_str());
+  }
 }
 } // namespace mcvolbench

@@ -21,6 +21,13 @@
 #             and box4 levels 1 and 2 (density blend), classify/build time and
 #             memory; CUDA at 1024^2 (target: level 1 >= 4x faster than level
 #             0), the CPU at 1024^2 and 512^2
+#   estimator the automatic estimator choice (issue 14, item 1): time to 35 dB
+#             at 1024^2 of expected value, the unbiased march at 0.0625-2
+#             strata per voxel and the automatic choice (pilots included),
+#             the four paper-sized datasets; then the cost model fitted to
+#             their frame times (fit_cost_model.py) and the automatic rows
+#             again with the fitted weights, trying every rate so that the
+#             report predicts each row measured (estimator-fit-*.md)
 #   big       a volume of FRACTION (default 0.6) of the device's memory
 #             (figure3, 3 x float32, generated cheaply) renders: device bytes
 #             and frame time (issue 14, item 5)
@@ -64,6 +71,26 @@ for stage in "$@"; do
           --size 1024 1024 --reference-spp 4096 --spp-max 128 --sections sequences \
           --estimators collision,expected-value
         grep -A5 "^| sampler |" "$out/sequences-$key.md" | sed -n 3,6p | sed "s/^/$label /"
+      done
+      ;;
+    estimator)
+      for s in "${sets[@]}"; do
+        read -r key ds x y z ch label <<< "$s"
+        run "estimator-$key" --backend cuda --dataset "$ds" --dims "$x" "$y" "$z" --channels "$ch" --label "$label" \
+          --size 1024 1024 --reference-spp 4096 --sections converge --no-collision \
+          --march-samples-per-voxel 0.0625,0.125,0.25,0.5,1,2
+        grep -E "^\| (expected-value, sobol \(default\)|automatic)" "$out/estimator-$key.md" | sed "s/^/$label /"
+      done
+      here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
+      python3 "$here/../fit_cost_model.py" "$out"/estimator-*.md > "$out/cost-model-fit.md"
+      tail -3 "$out/cost-model-fit.md"
+      model="$(tail -1 "$out/cost-model-fit.md" | sed 's/^--cost-model //')"
+      for s in "${sets[@]}"; do
+        read -r key ds x y z ch label <<< "$s"
+        run "estimator-fit-$key" --backend cuda --dataset "$ds" --dims "$x" "$y" "$z" --channels "$ch" \
+          --label "$label" --size 1024 1024 --reference-spp 4096 --sections converge --no-collision \
+          --only-automatic --choice-all --march-samples-per-voxel 0.0625,0.125,0.25,0.5,1,2 --cost-model "$model"
+        grep -E "^\| automatic" "$out/estimator-fit-$key.md" | head -1 | sed "s/^/$label fitted /"
       done
       ;;
     dense)

@@ -70,6 +70,11 @@ MCVOL_FUNC Vec4f renderPixel(const SceneView& s, const CameraView& cam, const Fr
     if (fp.jitter)
     {
       rng.sequence2(kGroupPixel, jx, jy);
+      if (cam.jitterScale != 1.f)
+      {
+        jx = 0.5f + (jx - 0.5f) * cam.jitterScale;
+        jy = 0.5f + (jy - 0.5f) * cam.jitterScale;
+      }
     }
     IndexRay ray;
     if (!generateRay(cam, s.volume, float(x) + jx, float(y) + jy, depth, ray))

@@ -14,6 +14,7 @@ struct CameraView
   int height = 0;
   double invViewProj[16];
   double worldToIndex[12];
+  float jitterScale = 1.f; ///< Camera::jitterScale
 };
 
 /// A ray in index space, clipped to the volume box: points o + t d for t in

@@ -25,6 +25,7 @@ inline CameraView toView(const Camera& c)
   {
     v.worldToIndex[i] = c.worldToIndex[i];
   }
+  v.jitterScale = c.jitterScale;
   return v;
 }
 

@@ -28,6 +28,12 @@ struct Camera
   int height = 0;
   double invViewProj[16] = { 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1 };
   double worldToIndex[12] = { 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0 };
+  /// Span of the sub-pixel jitter (RenderSettings::jitterPixels) in pixels,
+  /// centred on the pixel: 1 (default) covers the pixel. The automatic
+  /// estimator choice renders a small image of the view whose pixels each
+  /// stand for s x s of the image's, with 1/s, so that its rays jitter over
+  /// an image pixel's footprint, as the image's do (EstimatorChoice.h).
+  float jitterScale = 1.f;
 };
 
 struct RenderSettings

@@ -446,6 +446,8 @@ def setup_mapper(mapper, prop, scene, channels, tfs, render_image, reference):
         mapper.SetEstimatorToCollision()
     elif scene["estimator"] == "unbiased-march":
         mapper.SetEstimatorToUnbiasedMarch()
+    elif scene["estimator"] == "automatic":
+        mapper.SetEstimatorToAutomatic()
     else:
         mapper.SetEstimatorToExpectedValue()
     mapper.SetMinimumSamplesPerVoxel(scene["min_samples_per_voxel"])

@@ -1,0 +1,261 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "mcvol/EstimatorChoice.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
+
+namespace mcvol
+{
+double CostModel::cost(const RenderCounters& c) const
+{
+  return this->perRay * double(c.rays) + this->perDdaStep * double(c.ddaSteps) +
+    this->perTentative * double(c.tentativeCollisions) + this->perChannelSample * double(c.channelSamples);
+}
+
+CostModel defaultCostModel(const std::string& backendName)
+{
+  // Fitted by Benchmarks/fit_cost_model.py to the frame times of
+  // `mcvol-bench --sections converge` on the four paper-sized datasets at
+  // 1024^2 (CUDA, H100) and on the four demo datasets at 256^2 (CPU, 2
+  // cores): Benchmarks/RESULTS.md, "The automatic estimator". The fit keeps
+  // the weights non-negative; the per-ray weight came out 0 on both (the
+  // DDA steps carry the per-ray cost).
+  CostModel m;
+  if (backendName == "cuda")
+  {
+    m.perRay = 0.0;
+    m.perDdaStep = 0.02527;
+    m.perTentative = 0.05904;
+    m.perChannelSample = 0.01309;
+    return m;
+  }
+  m.perRay = 0.0;
+  m.perDdaStep = 34.42;
+  m.perTentative = 11.61;
+  m.perChannelSample = 10.57;
+  return m;
+}
+
+namespace
+{
+std::string candidateName(const EstimatorCandidate& c)
+{
+  if (c.estimator == Estimator::UnbiasedMarch)
+  {
+    char buf[64];
+    std::snprintf(buf, sizeof(buf), "UnbiasedMarch(%g)", double(c.marchSamplesPerVoxel));
+    return buf;
+  }
+  return c.estimator == Estimator::ExpectedValue ? "ExpectedValue" : "Collision";
+}
+} // namespace
+
+std::string EstimatorChoice::chosenName() const
+{
+  if (this->chosen < 0)
+  {
+    EstimatorCandidate c;
+    c.estimator = this->settings.estimator;
+    c.marchSamplesPerVoxel = this->settings.marchSamplesPerVoxel;
+    return candidateName(c);
+  }
+  return candidateName(this->trials[size_t(this->chosen)].candidate);
+}
+
+std::string EstimatorChoice::report() const
+{
+  if (!this->applies)
+  {
+    return "estimator choice: not needed (lit, optimized or composite: the collision estimator)\n";
+  }
+  std::string out;
+  char line[256];
+  for (size_t i = 0; i < this->trials.size(); ++i)
+  {
+    const EstimatorTrial& t = this->trials[i];
+    std::snprintf(line, sizeof(line), "%s %-20s MSE(1) %.4g  decay %.2f  frames %g  cost/sample %.4g  predicted %.4g\n",
+      int(i) == this->chosen ? "*" : " ", candidateName(t.candidate).c_str(), t.firstFrameMSE, t.decay, t.frames,
+      t.costPerSample, t.score);
+    out += line;
+  }
+  std::snprintf(line, sizeof(line), "pilots took %.1f ms\n", 1e3 * this->seconds);
+  out += line;
+  return out;
+}
+
+namespace
+{
+/// Mean over pixels and premultiplied R, G, B of the squared difference.
+double meanSquaredDifference(const float* x, const float* y, int width, int height)
+{
+  const size_t n = size_t(width) * size_t(height);
+  double sum = 0;
+  for (size_t p = 0; p < n; ++p)
+  {
+    for (int c = 0; c < 3; ++c)
+    {
+      const double d = double(x[4 * p + size_t(c)]) - double(y[4 * p + size_t(c)]);
+      sum += d * d;
+    }
+  }
+  return n > 0 ? sum / double(3 * n) : 0.0;
+}
+} // namespace
+
+EstimatorChoice chooseEstimator(Renderer& renderer, const Scene& scene, const Camera& camera,
+  const RenderSettings& base, const EstimatorChoiceSettings& choice)
+{
+  if (choice.pilotSamples < 2)
+  {
+    throw std::invalid_argument("mcvol: chooseEstimator needs at least 2 pilot samples per pixel");
+  }
+  if (!(choice.targetMSE > 0) || !std::isfinite(choice.targetMSE))
+  {
+    throw std::invalid_argument("mcvol: chooseEstimator's target MSE must be positive and finite");
+  }
+  for (float r : choice.marchRates)
+  {
+    if (!(r > 0.f) || !std::isfinite(r))
+    {
+      throw std::invalid_argument("mcvol: chooseEstimator's march rates must be positive and finite");
+    }
+  }
+  EstimatorChoice out;
+  out.settings = base;
+  if (scene.lit() || scene.optimized() || scene.blendMode() == BlendMode::Composite)
+  {
+    return out; // the estimator setting does not reach these renders
+  }
+  out.applies = true;
+  const auto start = std::chrono::steady_clock::now();
+
+  // The same view at a smaller size: the rays unproject normalised device
+  // coordinates, so only the pixel counts change.
+  Camera pilot = camera;
+  const int longer = std::max(camera.width, camera.height);
+  const int size = std::max(1, choice.pilotSize);
+  if (longer > size)
+  {
+    const double f = double(size) / double(longer);
+    pilot.width = std::max(1, int(std::lround(camera.width * f)));
+    pilot.height = std::max(1, int(std::lround(camera.height * f)));
+    // Jitter over one image pixel's footprint: the image's own
+    // anti-aliasing noise, which every candidate pays alike.
+    pilot.jitterScale = float(camera.jitterScale * std::min(double(pilot.width) / double(camera.width),
+                                                      double(pilot.height) / double(camera.height)));
+  }
+  const double pixels = double(pilot.width) * double(pilot.height);
+
+  std::vector<EstimatorCandidate> candidates;
+  {
+    EstimatorCandidate ev;
+    ev.estimator = Estimator::ExpectedValue;
+    ev.marchSamplesPerVoxel = base.marchSamplesPerVoxel;
+    candidates.push_back(ev);
+  }
+  std::vector<float> rates = choice.marchRates;
+  std::sort(rates.begin(), rates.end());
+  for (float r : rates)
+  {
+    EstimatorCandidate m;
+    m.estimator = Estimator::UnbiasedMarch;
+    m.marchSamplesPerVoxel = r;
+    candidates.push_back(m);
+  }
+
+  const CostModel model = choice.customModel ? choice.model : defaultCostModel(renderer.name());
+  // Replicate seeds: fixed functions of the image's seed (any two distinct
+  // seeds scramble independently).
+  const uint32_t seeds[2] = { base.seed * 2654435761u + 0x2545F491u, base.seed * 2654435761u + 0x9E3779B9u };
+  double best = 0;
+  for (const EstimatorCandidate& c : candidates)
+  {
+    const size_t n = out.trials.size();
+    if (!choice.tryAllRates && c.estimator == Estimator::UnbiasedMarch && n >= 1 &&
+      out.trials[n - 1].candidate.estimator == Estimator::UnbiasedMarch)
+    {
+      const EstimatorTrial& last = out.trials[n - 1];
+      // A higher rate costs at least as much per sample and takes at least
+      // one: no better than `best` once the last rate's sample cost that.
+      // (No stop where a prediction merely rose: at the lowest rates the
+      // majorant's strata floor keeps the noise nearly flat, and the
+      // prediction's own noise made one rise there on the Zebrafish-like
+      // set, stopping the search before the rate that won 4x.)
+      if (last.costPerSample >= best)
+      {
+        break;
+      }
+    }
+    RenderSettings st = base;
+    st.estimator = c.estimator;
+    st.marchSamplesPerVoxel = c.marchSamplesPerVoxel;
+    st.readBack = true;
+    // Each replicate: one sample per pixel, a copy of that image, then the
+    // rest. With Sobol' points a pixel's samples are negatively correlated,
+    // so n MSE(n) understates the noise of a single sample: the 1-sample
+    // images decide whether one frame suffices, the n-sample means predict
+    // the frames beyond.
+    Accumulator rep[2];
+    std::vector<float> first[2];
+    RenderCounters counters;
+    for (int k = 0; k < 2; ++k)
+    {
+      st.seed = seeds[k];
+      rep[k].setErrorEstimation(false);
+      rep[k].resize(pilot.width, pilot.height);
+      rep[k].reset();
+      st.samplesPerPixel = 1;
+      renderer.render(scene, pilot, st, nullptr, rep[k], k == 0 ? &counters : nullptr);
+      first[k].assign(rep[k].rgba(), rep[k].rgba() + 4 * size_t(pilot.width) * size_t(pilot.height));
+      if (choice.pilotSamples > 1)
+      {
+        st.samplesPerPixel = choice.pilotSamples - 1;
+        renderer.render(scene, pilot, st, nullptr, rep[k], k == 0 ? &counters : nullptr);
+      }
+    }
+    EstimatorTrial t;
+    t.candidate = c;
+    t.counters = counters;
+    // E[(m1 - m2)^2] = 2 MSE(n) for independent replicates of an n-sample
+    // mean.
+    t.firstFrameMSE = 0.5 * meanSquaredDifference(first[0].data(), first[1].data(), pilot.width, pilot.height);
+    const double mse = 0.5 *
+      meanSquaredDifference(rep[0].rgba(), rep[1].rgba(), pilot.width, pilot.height);
+    t.variance = mse * double(choice.pilotSamples);
+    // MSE(N) = MSE(1) N^-decay through the two measured points, the decay
+    // held to [1, 2] (1: independent samples; Sobol' points fall faster
+    // while they stratify).
+    t.decay = 1.0;
+    if (mse > 0 && t.firstFrameMSE > mse)
+    {
+      t.decay = std::log(t.firstFrameMSE / mse) / std::log(double(choice.pilotSamples));
+      t.decay = std::min(2.0, std::max(1.0, t.decay));
+    }
+    t.frames = t.firstFrameMSE <= choice.targetMSE
+      ? 1.0
+      : std::max(2.0, std::ceil(std::pow(t.firstFrameMSE / choice.targetMSE, 1.0 / t.decay) - 1e-9));
+    t.costPerSample = model.cost(counters) / (pixels * double(choice.pilotSamples));
+    t.score = t.frames * t.costPerSample;
+    out.trials.push_back(t);
+    best = out.trials.size() == 1 ? t.score : std::min(best, t.score);
+  }
+  // The lowest prediction; ties (e.g. nothing visible: one frame each) go to
+  // the earlier candidate, the expected-value estimator first.
+  out.chosen = 0;
+  for (size_t i = 1; i < out.trials.size(); ++i)
+  {
+    if (out.trials[i].score < out.trials[size_t(out.chosen)].score)
+    {
+      out.chosen = int(i);
+    }
+  }
+  const EstimatorCandidate& chosen = out.trials[size_t(out.chosen)].candidate;
+  out.settings.estimator = chosen.estimator;
+  out.settings.marchSamplesPerVoxel = chosen.marchSamplesPerVoxel;
+  out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return out;
+}
+} // namespace mcvol

@@ -1,0 +1,148 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#pragma once
+
+#include "mcvol/Renderer.h"
+
+#include <string>
+#include <vector>
+
+namespace mcvol
+{
+/**
+ * The automatic estimator choice (issue 14, item 1: the estimator that
+ * reaches a given error soonest, per scene). No estimator wins everywhere:
+ * the expected-value estimator reaches 35 dB sooner on thin, sparse data
+ * (cosmology, weather), the unbiased march on dense data (microscopy), and
+ * the march's best rate depends on the data too (Benchmarks/RESULTS.md, "The
+ * unbiased march"). chooseEstimator() renders a small pilot image of the
+ * scene with each candidate and keeps the one predicted to reach the target
+ * error (35 dB by default) in the least time:
+ *   frames = 1 if MSE(1) <= target, else max(2, ceil((MSE(1) / target)^(1/a))),
+ *   a = log(MSE(1) / MSE(n)) / log(n) held to [1, 2],  time = frames x cost
+ *   per sample,
+ * MSE(k) the pilot's mean squared error after k samples per pixel, measured
+ * from two replicates with independent scrambles (seeds): the squared
+ * difference of their means is twice the MSE of one. The decay a is 1 for
+ * independent samples; with Sobol' points a pixel's samples are negatively
+ * correlated and the error falls faster (a = 1.3-1.6 for expected value on
+ * the paper-sized sets), which a 1/N extrapolation from n samples missed by
+ * up to 2.4x in frames (19 predicted where 8 were needed on NYX-like). Unlike the
+ * image's half-buffer estimate (Accumulator::estimatedMSE), which overstates
+ * the noise of Sobol'-sampled images by an amount that differs between
+ * estimators (up to 4x for expected value), replicates measure the noise of
+ * the very sequence the image uses. The frame count's floor of 1 matters:
+ * the march's noise falls faster than its cost grows, so without a target
+ * the highest rate would always win, while a rate that is clean in one frame
+ * is all an image needs.
+ *
+ * The cost is not the pilot's wall time but a linear model of the work
+ * counters the render reports (CostModel), so that the choice, and with it
+ * the image, is the same for a fixed seed whatever the machine's load or the
+ * thread count (the rule for Monte Carlo output). The model's weights are
+ * fitted per backend to measured frame times (defaultCostModel(),
+ * Benchmarks/fit_cost_model.py).
+ */
+struct EstimatorCandidate
+{
+  Estimator estimator = Estimator::ExpectedValue;
+  /// RenderSettings::marchSamplesPerVoxel for the unbiased march.
+  float marchSamplesPerVoxel = 2.f;
+};
+
+/// Cost of one sample as a weighted sum of the work counters (nanoseconds
+/// per item on the machine it was fitted on; only ratios matter).
+struct CostModel
+{
+  double perRay = 0;
+  double perDdaStep = 0;
+  double perTentative = 0; ///< tentative collisions, and the march's strata
+  double perChannelSample = 0;
+  double cost(const RenderCounters& c) const;
+};
+
+/// The model fitted for the backend of that name (Renderer::name(): "cpu",
+/// "cuda"); the CPU's for any other.
+CostModel defaultCostModel(const std::string& backendName);
+
+struct EstimatorChoiceSettings
+{
+  /// The pilot image's longer side in pixels: the camera's whole view at
+  /// this size, its rays jittered (where the image's are) over one image
+  /// pixel's footprint (Camera::jitterScale), not over the pilot pixel's,
+  /// which would add the image's variation across many pixels to every
+  /// candidate's noise and hide their differences. The whole view, not
+  /// tiles of the image: the march's noise sits in few pixels (thin features
+  /// across a stratum), and 9 tiles of 16^2 pixels missed them (on the CPU
+  /// at 256^2: 1 frame to 35 dB predicted where 6 were needed, 6 where 360
+  /// were; the whole view at 48^2: 1 and 127-391; Benchmarks/RESULTS.md,
+  /// "The automatic estimator").
+  int pilotSize = 48;
+  /// Samples per pixel of each of a candidate's two replicates (at least
+  /// 2): the first alone decides whether one frame suffices, all of them
+  /// predict the frames beyond.
+  int pilotSamples = 2;
+  /// The error the prediction aims at, as the MSE over premultiplied RGB
+  /// (peak 1): 10^-3.5, i.e. 35 dB PSNR, by default. A mapper with a
+  /// TargetError (an RMSE) aims at its square.
+  double targetMSE = 3.1622776601683794e-4;
+  /// The unbiased march's candidate rates (strata per voxel). The expected
+  /// value estimator (with the settings' minSamplesPerVoxel) is always a
+  /// candidate, and goes first.
+  /// They are tried in ascending order; the search stops at the first rate
+  /// predicted slower than the rate before it, and before a rate when the
+  /// one before it cost as much per sample as the best prediction so far (a
+  /// higher rate costs more per sample, and takes at least one).
+  std::vector<float> marchRates = { 0.0625f, 0.125f, 0.25f, 0.5f, 1.f, 2.f };
+  /// Try every rate (no early stop): the benchmark's --choice-all, to
+  /// compare each prediction with the measured time.
+  bool tryAllRates = false;
+  /// Use `model` instead of defaultCostModel(renderer.name()) (the
+  /// benchmark's --cost-model, to try a fit without rebuilding).
+  bool customModel = false;
+  CostModel model;
+};
+
+/// One candidate's pilot.
+struct EstimatorTrial
+{
+  EstimatorCandidate candidate;
+  double firstFrameMSE = 0; ///< MSE of one sample per pixel (RGB, mean over pixels)
+  double variance = 0;      ///< n x MSE(n), n = pilotSamples
+  double decay = 1;         ///< a: MSE(N) ~ MSE(1) N^-a through MSE(1) and MSE(n)
+  double frames = 0;        ///< predicted samples per pixel to the target (see chooseEstimator)
+  double costPerSample = 0; ///< the model's cost of one sample of one pixel
+  double score = 0;         ///< frames x cost: the predicted time to the target (model units)
+  RenderCounters counters;
+};
+
+struct EstimatorChoice
+{
+  /// False where the estimator does not matter (lit scenes, the visibility
+  /// optimization and composite blending always take the collision
+  /// estimator): then no pilot ran and `settings` is the input.
+  bool applies = false;
+  /// The input settings with the chosen estimator (and march rate).
+  RenderSettings settings;
+  std::vector<EstimatorTrial> trials;
+  int chosen = -1; ///< index into trials
+  double seconds = 0; ///< wall time of the pilots (reported, not used)
+  /// One line per candidate, the chosen one marked.
+  std::string report() const;
+  /// "ExpectedValue" or "UnbiasedMarch(1)" (rate in parentheses).
+  std::string chosenName() const;
+};
+
+/**
+ * Renders the pilots on `renderer` (the backend that will render the image:
+ * the cost model is its own) through `camera` scaled to settings.pilotSize,
+ * without depth (geometry is not in the pilot), each
+ * candidate as two replicates with seeds derived from `base`'s, with its
+ * sampler, and picks the lowest score; ties go to the earlier candidate
+ * (expected value first), so images with no noise at all (nothing visible)
+ * keep the expected-value estimator. Throws what the renderer throws,
+ * std::invalid_argument for a pilotSamples below 2, a target that is not
+ * positive, or a march rate that is not positive and finite.
+ */
+EstimatorChoice chooseEstimator(Renderer& renderer, const Scene& scene, const Camera& camera,
+  const RenderSettings& base, const EstimatorChoiceSettings& choice = EstimatorChoiceSettings());
+} // namespace mcvol
