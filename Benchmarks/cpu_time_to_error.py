@@ -33,6 +33,13 @@ Variants of the Monte Carlo mapper (--variants, comma separated):
   collision             SetEstimatorToCollision()
   march                 SetEstimatorToUnbiasedMarch() (default 2 strata per voxel)
   march<N>              the same with SetMarchSamplesPerVoxel(N)
+  auto                  SetEstimatorToAutomatic() (aiming at 35 dB, the default)
+  autotarget            the same with SetTargetError(--target): the choice aims
+                        at the target (the image also stops there: adaptive
+                        stopping)
+The automatic variants' pilots run in the warm-up render (once per data and
+transfer functions, as in an application); their time is printed after the
+table, with the choice.
 Prints a Markdown table; --csv writes the rows.
 
 Usage (from the repository, after scripts/build.sh):
@@ -163,6 +170,8 @@ def configure(m, variant, seed):
     elif variant.startswith("march"):
         m.SetEstimatorToUnbiasedMarch()
         m.SetMarchSamplesPerVoxel(float(variant[5:]))
+    elif variant in ("auto", "autotarget"):
+        m.SetEstimatorToAutomatic()
     elif variant != "default":
         raise SystemExit("unknown variant " + variant)
 
@@ -172,6 +181,8 @@ def monte_carlo(scene, variant, ref, target, max_spp):
     (spp, ms, rmse reached)."""
     m = vtkMultiChannelVolumeMapper()
     configure(m, variant, 1)
+    if variant == "autotarget":
+        m.SetTargetError(target)
     m.SetMaximumTotalSamples(max_spp)
     scene.attach(m)
     # Warm-up on a throw-away mapper state: the first render builds the
@@ -183,11 +194,16 @@ def monte_carlo(scene, variant, ref, target, max_spp):
         t0 = time.perf_counter()
         scene.window.Render()
         total += 1e3 * (time.perf_counter() - t0)
-        spp = m.GetTotalSamples()
+        previous, spp = spp, m.GetTotalSamples()
         err = rmse(image(m, scene.args.size), ref)
-        if err <= target:
+        if err <= target or spp == previous:  # reached, or stopped by TargetError
             break
+    if variant in ("auto", "autotarget"):
+        CHOICES.append("%s: %s\n%s" % (variant, m.GetChosenEstimatorAsString(), m.GetEstimatorReport()))
     return spp, total, err
+
+
+CHOICES = []
 
 
 def mc_reference(scene, spp):
@@ -231,6 +247,11 @@ def main():
                 case, variant, spp, "" if reached else " (not reached)", ms, err, ms / march_ms))
             rows.append([case, "mc-" + variant, spp, ms, err, ms / march_ms, ref_name])
         print("")
+    if CHOICES:
+        print("Automatic choices (pilots in the warm-up render, not in the times above):\n\n```")
+        for c in CHOICES:
+            print(c)
+        print("```")
     if args.out:
         os.makedirs(args.out, exist_ok=True)
         with open(os.path.join(args.out, "time_to_error.csv"), "w", newline="") as f:
