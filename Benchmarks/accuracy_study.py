@@ -495,7 +495,8 @@ def headline(rows, datasets, args, target=35.0):
             ("MC old default, CPU", "old", False), ("MC unbiased march, CPU", "march", False),
             ("RM extinction, CPU", "extinction", False),
             ("RM opacity, CPU", "opacity", False), ("MC new default, %s" % g, "new", True),
-            ("MC old default, %s" % g, "old", True), ("RM extinction, %s" % g, "extinction", True)]
+            ("MC old default, %s" % g, "old", True), ("MC unbiased march, %s" % g, "march", True),
+            ("RM extinction, %s" % g, "extinction", True)]
     lines = ["| dataset | " + " | ".join(c[0] for c in cols) + " | old / new MC, CPU |",
              "|---|" + "---|" * (len(cols) + 1)]
     pairs = {k: [] for k in ("old-new", "new-rm", "old-rm", "gold-gnew", "gnew-grm")}

@@ -126,14 +126,16 @@ for stage in "$@"; do
       # float rounding): merged by accuracy_study.py --gpu.
       # The Monte Carlo configurations are the study's (accuracy_study.py
       # MC_CONFIGS): the new default (expected value, Sobol', 1-DDA),
-      # collision + Sobol', and the old default (collision, independent,
-      # 1-DDA and N-DDA). Writes accuracy/<dataset>-<mode>.csv, the layout
-      # accuracy_study.py --gpu reads, and packs them with their logs into
-      # accuracy.tgz, one file to bring back. ACCURACY_MODES (default: all
-      # four) shortens the stage.
+      # collision + Sobol', the old default (collision, independent,
+      # 1-DDA and N-DDA) and the unbiased march (2 per voxel, Sobol').
+      # Writes accuracy/<dataset>-<mode>.csv, the layout accuracy_study.py
+      # --gpu reads, and packs them with their logs into accuracy.tgz, one
+      # file to bring back. ACCURACY_MODES (default: all four) and
+      # ACCURACY_DATASETS (default: all four) shorten the stage.
       mkdir -p "$out/accuracy"
       configs="expected-value:sobol:1dda,collision:sobol:1dda,collision:independent:1dda,collision:independent:ndda"
-      for ds in figure3 microscopy cosmology weather; do
+      configs="$configs,unbiased-march:sobol:1dda"
+      for ds in ${ACCURACY_DATASETS:-figure3 microscopy cosmology weather}; do
         for mode in ${ACCURACY_MODES:-density max mix composite}; do
           work="$(mktemp -d)"
           t0=$SECONDS
