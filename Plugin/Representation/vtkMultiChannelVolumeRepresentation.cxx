@@ -430,6 +430,13 @@ const char* vtkMultiChannelVolumeRepresentation::GetLevelOfDetailReport()
 }
 
 //------------------------------------------------------------------------------
+const char* vtkMultiChannelVolumeRepresentation::GetChosenEstimator()
+{
+  this->ChosenEstimator = this->GetMultiChannelMapper()->GetChosenEstimatorAsString();
+  return this->ChosenEstimator.c_str();
+}
+
+//------------------------------------------------------------------------------
 int vtkMultiChannelVolumeRepresentation::ProcessViewRequest(
   vtkInformationRequestKey* request_type, vtkInformation* inInfo, vtkInformation* outInfo)
 {

@@ -212,6 +212,9 @@ public:
   /// The level of detail of the mapper's last render, and why.
   int GetLastLevelOfDetail();
   const char* GetLevelOfDetailReport();
+  /// The estimator the last render used (the Automatic choice, e.g.
+  /// "UnbiasedMarch(1)"; "Collision" for lit volumes).
+  const char* GetChosenEstimator();
   const char* GetChannelStatus() { return this->ChannelStatus.c_str(); }
   double GetImportanceMemory();
   double GetImportanceOverflows();
@@ -252,6 +255,7 @@ protected:
   std::string ChannelStatus;
   std::string BackendReport;
   std::string LevelOfDetailReport;
+  std::string ChosenEstimator;
   int LevelOfDetail = 0;
   int InteractiveLevelOfDetail = 1;
   bool RenderingWithLOD = false; // this render is one with ParaView's LOD

@@ -97,6 +97,16 @@ reference = image()
 expect_property("MinimumSamplesPerVoxel", 2.0, True, "MinimumSamplesPerVoxel with the expected-value estimator")
 rep.Estimator = "Collision"
 reference = image()
+# Automatic: a new image (expected value or the march instead of the pinned
+# collision estimator), and the information property says which.
+checks.check(T.info(rep, "ChosenEstimator") == "Collision", "ChosenEstimator with the collision estimator (%s)"
+             % T.info(rep, "ChosenEstimator"))
+expect("Estimator = Automatic", setter("Estimator", "Automatic"), True)
+chosen = T.info(rep, "ChosenEstimator")
+checks.check(chosen == "ExpectedValue" or chosen.startswith("UnbiasedMarch("),
+             "ChosenEstimator with Estimator = Automatic (%s)" % chosen)
+rep.Estimator = "Collision"
+reference = image()
 expect_property("MultiChannelInterpolation", "Cubic B-Spline", True)
 expect_property("MultiChannelInterpolation", "Nearest", True)
 # The override set to what the volume property already says (Linear) draws
