@@ -297,24 +297,7 @@ bool vtkMultiChannelVolumeMapper::TraceImage(const mcvol::Scene& scene, const mc
     settings.estimator = in.Choice.settings.estimator;
     settings.marchSamplesPerVoxel = in.Choice.settings.marchSamplesPerVoxel;
   }
-  {
-    const bool collision = scene.lit() || scene.optimized() || scene.blendMode() == mcvol::BlendMode::Composite ||
-      settings.estimator == mcvol::Estimator::Collision;
-    char name[64];
-    if (collision)
-    {
-      std::snprintf(name, sizeof(name), "Collision");
-    }
-    else if (settings.estimator == mcvol::Estimator::UnbiasedMarch)
-    {
-      std::snprintf(name, sizeof(name), "UnbiasedMarch(%g)", double(settings.marchSamplesPerVoxel));
-    }
-    else
-    {
-      std::snprintf(name, sizeof(name), "ExpectedValue");
-    }
-    in.ChosenEstimator = name;
-  }
+  in.ChosenEstimator = mcvol::estimatorName(mcvol::effectiveEstimator(scene, settings), settings.marchSamplesPerVoxel);
   try
   {
     renderer->render(scene, camera, settings, depth, accum);

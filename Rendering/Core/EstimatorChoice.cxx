@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "mcvol/EstimatorChoice.h"
 
+#include "mcvol/Integrator.h"
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -39,17 +41,35 @@ CostModel defaultCostModel(const std::string& backendName)
   return m;
 }
 
+Estimator effectiveEstimator(const Scene& scene, const RenderSettings& settings)
+{
+  switch (unlitEstimator(settings.estimator, scene.blendMode(), scene.lit(), scene.optimized()))
+  {
+    case 1:
+      return Estimator::ExpectedValue;
+    case 2:
+      return Estimator::UnbiasedMarch;
+    default:
+      return Estimator::Collision;
+  }
+}
+
+std::string estimatorName(Estimator estimator, float marchSamplesPerVoxel)
+{
+  if (estimator == Estimator::UnbiasedMarch)
+  {
+    char buf[64];
+    std::snprintf(buf, sizeof(buf), "UnbiasedMarch(%g)", double(marchSamplesPerVoxel));
+    return buf;
+  }
+  return estimator == Estimator::ExpectedValue ? "ExpectedValue" : "Collision";
+}
+
 namespace
 {
 std::string candidateName(const EstimatorCandidate& c)
 {
-  if (c.estimator == Estimator::UnbiasedMarch)
-  {
-    char buf[64];
-    std::snprintf(buf, sizeof(buf), "UnbiasedMarch(%g)", double(c.marchSamplesPerVoxel));
-    return buf;
-  }
-  return c.estimator == Estimator::ExpectedValue ? "ExpectedValue" : "Collision";
+  return estimatorName(c.estimator, c.marchSamplesPerVoxel);
 }
 } // namespace
 
@@ -125,7 +145,9 @@ EstimatorChoice chooseEstimator(Renderer& renderer, const Scene& scene, const Ca
   }
   EstimatorChoice out;
   out.settings = base;
-  if (scene.lit() || scene.optimized() || scene.blendMode() == BlendMode::Composite)
+  RenderSettings probe = base;
+  probe.estimator = Estimator::ExpectedValue;
+  if (effectiveEstimator(scene, probe) == Estimator::Collision)
   {
     return out; // the estimator setting does not reach these renders
   }

@@ -102,6 +102,17 @@ struct EstimatorChoiceSettings
   CostModel model;
 };
 
+/**
+ * The estimator a render of `scene` with `settings` runs for its unlit
+ * camera rays: settings.estimator, except where the scene keeps the
+ * collision estimator (lit, the visibility optimization, composite blending;
+ * unlitEstimator() in Integrator.h, the kernels' own rule).
+ */
+Estimator effectiveEstimator(const Scene& scene, const RenderSettings& settings);
+/// "Collision", "ExpectedValue", or "UnbiasedMarch(R)" with R strata per
+/// voxel: the names the choice's report and the mapper use.
+std::string estimatorName(Estimator estimator, float marchSamplesPerVoxel);
+
 /// One candidate's pilot.
 struct EstimatorTrial
 {
