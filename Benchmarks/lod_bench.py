@@ -104,6 +104,7 @@ def main():
     p.add_argument("--opacity", type=float, default=0.05)
     p.add_argument("--backend", default="CPU", choices=["CPU", "CUDA"],
                    help="the representation's Backend (CUDA on the GPU machine, Benchmarks/gpu/vtk.sh)")
+    p.add_argument("--macrocell", type=int, default=0, help="the representation's MacrocellSize (0: its default)")
     p.add_argument("--out", help="folder for README.md and lod.csv")
     args = p.parse_args()
     T.load_plugin()
@@ -129,6 +130,8 @@ def main():
     rep.SamplesPerRender = 1
     rep.InteractiveFrameTime = 0  # one sample per pixel per frame
     rep.MaximumTotalSamples = 0
+    if args.macrocell > 0:
+        rep.MacrocellSize = args.macrocell
     simple.ResetCamera(view)
     t0 = time.perf_counter()
     simple.Render(view)  # level 0: bounds, tables, macrocell and majorant grids

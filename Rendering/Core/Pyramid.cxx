@@ -9,6 +9,10 @@
 #endif
 
 #include <algorithm>
+#include <cstdint>
+#if defined(__linux__)
+#include <sys/mman.h>
+#endif
 #include <array>
 #include <cmath>
 #include <deque>
@@ -20,6 +24,33 @@
 
 namespace mcvol
 {
+namespace
+{
+/**
+ * Resize v to n floats (zeros), asking the kernel to back its storage with
+ * transparent huge pages where it allows them (Linux, THP mode "madvise").
+ * A level is sampled at random positions by every ray: with 4 KiB pages
+ * nearly every corner read of a large level also misses the TLB.
+ */
+void resizeHuge(std::vector<float>& v, size_t n)
+{
+  v.clear();
+  v.shrink_to_fit();
+  v.reserve(n);
+#if defined(__linux__) && defined(MADV_HUGEPAGE)
+  constexpr uintptr_t kHuge = uintptr_t(2) << 20;
+  const uintptr_t lo = (reinterpret_cast<uintptr_t>(v.data()) + kHuge - 1) & ~(kHuge - 1);
+  const uintptr_t hi = (reinterpret_cast<uintptr_t>(v.data() + n)) & ~(kHuge - 1);
+  if (hi > lo)
+  {
+    // Advice only: where it is refused the pages stay 4 KiB.
+    (void)madvise(reinterpret_cast<void*>(lo), size_t(hi - lo), MADV_HUGEPAGE);
+  }
+#endif
+  v.resize(n);
+}
+} // namespace
+
 namespace
 {
 /// Smallest averaged transparency the opacity baseline turns back into
@@ -596,7 +627,7 @@ PyramidLevel streamLevel(const int dims[3], const double spacing[3], const doubl
     stageDims[size_t(l)] = { stage[0], stage[1], stage[2] };
     levelDims(stage, 1, stage);
   }
-  out.voxels.resize(out.numVoxels() * 4);
+  resizeHuge(out.voxels, out.numVoxels() * 4);
   const size_t outSlice = size_t(out.dims[0]) * size_t(out.dims[1]) * 4;
   const size_t inSlice = size_t(dims[0]) * size_t(dims[1]) * 4;
 
