@@ -96,8 +96,9 @@ std::string EstimatorChoice::report() const
   for (size_t i = 0; i < this->trials.size(); ++i)
   {
     const EstimatorTrial& t = this->trials[i];
-    std::snprintf(line, sizeof(line), "%s %-20s MSE(1) %.4g  decay %.2f  frames %g  cost/sample %.4g  predicted %.4g\n",
-      int(i) == this->chosen ? "*" : " ", candidateName(t.candidate).c_str(), t.firstFrameMSE, t.decay, t.frames,
+    std::snprintf(line, sizeof(line), "%s %-20s MSE(1) %.4g  MSE(%d) %.4g  decay %.2f  frames %g  cost/sample %.4g  predicted %.4g\n",
+      int(i) == this->chosen ? "*" : " ", candidateName(t.candidate).c_str(), t.firstFrameMSE, t.pilotSamples,
+      t.pilotSamples > 0 ? t.variance / double(t.pilotSamples) : 0.0, t.decay, t.frames,
       t.costPerSample, t.score);
     out += line;
   }
@@ -215,13 +216,23 @@ EstimatorChoice chooseEstimator(Renderer& renderer, const Scene& scene, const Ca
     st.estimator = c.estimator;
     st.marchSamplesPerVoxel = c.marchSamplesPerVoxel;
     st.readBack = true;
-    // Each replicate: one sample per pixel, a copy of that image, then the
-    // rest. With Sobol' points a pixel's samples are negatively correlated,
-    // so n MSE(n) understates the noise of a single sample: the 1-sample
-    // images decide whether one frame suffices, the n-sample means predict
-    // the frames beyond.
+    // Each replicate is rendered in doublings (1, 2, 4, ... samples per
+    // pixel, up to the candidate's pilot samples), and the replicates' mean
+    // squared difference taken at each: MSE(1), MSE(2), MSE(4), ... With
+    // Sobol' points a pixel's samples are negatively correlated, so n MSE(n)
+    // understates the noise of a single sample: the 1-sample images decide
+    // whether one frame suffices, the later ones predict the frames beyond.
+    const int samples = c.estimator == Estimator::ExpectedValue
+      ? std::max(choice.pilotSamples, choice.expectedValuePilotSamples)
+      : choice.pilotSamples;
     Accumulator rep[2];
-    std::vector<float> first[2];
+    std::vector<int> checkpoints;
+    for (int k = 1; k < samples; k *= 2)
+    {
+      checkpoints.push_back(k);
+    }
+    checkpoints.push_back(samples);
+    std::vector<std::vector<float>> images[2];
     RenderCounters counters;
     for (int k = 0; k < 2; ++k)
     {
@@ -229,37 +240,63 @@ EstimatorChoice chooseEstimator(Renderer& renderer, const Scene& scene, const Ca
       rep[k].setErrorEstimation(false);
       rep[k].resize(pilot.width, pilot.height);
       rep[k].reset();
-      st.samplesPerPixel = 1;
-      renderer.render(scene, pilot, st, nullptr, rep[k], k == 0 ? &counters : nullptr);
-      first[k].assign(rep[k].rgba(), rep[k].rgba() + 4 * size_t(pilot.width) * size_t(pilot.height));
-      if (choice.pilotSamples > 1)
+      int done = 0;
+      for (int upTo : checkpoints)
       {
-        st.samplesPerPixel = choice.pilotSamples - 1;
+        st.samplesPerPixel = upTo - done;
         renderer.render(scene, pilot, st, nullptr, rep[k], k == 0 ? &counters : nullptr);
+        done = upTo;
+        images[k].emplace_back(rep[k].rgba(), rep[k].rgba() + 4 * size_t(pilot.width) * size_t(pilot.height));
       }
+    }
+    std::vector<double> mse(checkpoints.size());
+    for (size_t i = 0; i < checkpoints.size(); ++i)
+    {
+      mse[i] = 0.5 * meanSquaredDifference(images[0][i].data(), images[1][i].data(), pilot.width, pilot.height);
     }
     EstimatorTrial t;
     t.candidate = c;
     t.counters = counters;
-    // E[(m1 - m2)^2] = 2 MSE(n) for independent replicates of an n-sample
-    // mean.
-    t.firstFrameMSE = 0.5 * meanSquaredDifference(first[0].data(), first[1].data(), pilot.width, pilot.height);
-    const double mse = 0.5 *
-      meanSquaredDifference(rep[0].rgba(), rep[1].rgba(), pilot.width, pilot.height);
-    t.variance = mse * double(choice.pilotSamples);
-    // MSE(N) = MSE(1) N^-decay through the two measured points, the decay
-    // held to [1, 2] (1: independent samples; Sobol' points fall faster
-    // while they stratify).
-    t.decay = 1.0;
-    if (mse > 0 && t.firstFrameMSE > mse)
+    t.pilotSamples = samples;
+    t.firstFrameMSE = mse[0];
+    t.variance = mse.back() * double(samples);
+    // The decay between two checkpoints: MSE(N) ~ N^-a, held to [1, 2] (1:
+    // independent samples; Sobol' points fall faster, and their gain fades
+    // as N grows, so the last doubling is the one to extrapolate with).
+    const auto decayBetween = [&](size_t i) {
+      double a = 1.0;
+      if (mse[i] > 0 && mse[i - 1] > mse[i])
+      {
+        a = std::log(mse[i - 1] / mse[i]) / std::log(double(checkpoints[i]) / double(checkpoints[i - 1]));
+      }
+      return std::min(2.0, std::max(1.0, a));
+    };
+    t.decay = decayBetween(checkpoints.size() - 1);
+    if (mse[0] <= choice.targetMSE)
     {
-      t.decay = std::log(t.firstFrameMSE / mse) / std::log(double(choice.pilotSamples));
-      t.decay = std::min(2.0, std::max(1.0, t.decay));
+      t.frames = 1.0;
     }
-    t.frames = t.firstFrameMSE <= choice.targetMSE
-      ? 1.0
-      : std::max(2.0, std::ceil(std::pow(t.firstFrameMSE / choice.targetMSE, 1.0 / t.decay) - 1e-9));
-    t.costPerSample = model.cost(counters) / (pixels * double(choice.pilotSamples));
+    else
+    {
+      // The first checkpoint at or below the target bounds the frames; they
+      // are interpolated from the checkpoint before it with that doubling's
+      // decay, or extrapolated from the last checkpoint with its decay.
+      size_t i = 1;
+      while (i < checkpoints.size() && mse[i] > choice.targetMSE)
+      {
+        ++i;
+      }
+      const size_t from = i < checkpoints.size() ? i - 1 : checkpoints.size() - 1;
+      const double a = decayBetween(i < checkpoints.size() ? i : checkpoints.size() - 1);
+      double f = std::ceil(double(checkpoints[from]) * std::pow(mse[from] / choice.targetMSE, 1.0 / a) - 1e-9);
+      f = std::max(f, double(checkpoints[from] + 1));
+      if (i < checkpoints.size())
+      {
+        f = std::min(f, double(checkpoints[i]));
+      }
+      t.frames = f;
+    }
+    t.costPerSample = model.cost(counters) / (pixels * double(samples));
     t.score = t.frames * t.costPerSample;
     out.trials.push_back(t);
     best = out.trials.size() == 1 ? t.score : std::min(best, t.score);

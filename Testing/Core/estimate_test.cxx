@@ -334,6 +334,42 @@ int framesToTarget(Renderer& r, const Scene& scene, const Camera& cam, const Est
   }
   return cap;
 }
+
+/// A renderer whose image after N samples per pixel is 0.5 + e(N) z, z =
+/// +-1/sqrt(2) by the seed: two replicates (different seeds)
+/// differ by sqrt(2) e(N), so the choice measures MSE(N) = e(N)^2 exactly.
+/// MSE(N) = V(N) for expected value and W(N) for the march, both given.
+class SyntheticNoiseRenderer : public Renderer
+{
+public:
+  std::function<double(Estimator, double)> Mse;
+  void render(const Scene&, const Camera& camera, const RenderSettings& settings, const float*, Accumulator& accum,
+    RenderCounters* counters) override
+  {
+    accum.addSamples(uint32_t(settings.samplesPerPixel));
+    const double e = std::sqrt(this->Mse(settings.estimator, double(accum.samples())));
+    // The first seed seen gets +, the next one -, and so on.
+    const auto it = this->Signs.emplace(settings.seed, this->Signs.size() % 2 == 0 ? 1.0 : -1.0).first;
+    const float v = float(0.5 + it->second * e / std::sqrt(2.0));
+    float* rgba = accum.rgbaForOverwrite();
+    const size_t n = size_t(camera.width) * size_t(camera.height);
+    for (size_t p = 0; p < 4 * n; ++p)
+    {
+      rgba[p] = v;
+    }
+    if (counters)
+    {
+      // Equal work per sample for every candidate: the frames decide.
+      counters->rays += uint64_t(n) * uint64_t(settings.samplesPerPixel);
+      counters->ddaSteps += uint64_t(n) * uint64_t(settings.samplesPerPixel);
+    }
+  }
+  void march(const Scene&, const Camera&, const MarchSettings&, const float*, Accumulator&, MarchCounters*) override
+  {
+  }
+  const char* name() const override { return "cpu"; }
+  std::map<uint32_t, double> Signs;
+};
 } // namespace
 
 // The choice is made where the estimator matters, and only there: lit
@@ -368,8 +404,76 @@ TEST(EstimatorChoice, NoPilotsWhereTheEstimatorDoesNotApply)
   configureDemo(scene, v, 4);
   const EstimatorChoice c = chooseEstimator(r, scene, cam, RenderSettings());
   EXPECT_TRUE(c.applies);
-  EXPECT_EQ(r.Renders, 4 * int(c.trials.size())); // two replicates of 1 + 1 samples each
+  // Two replicates each: the marches' of 1 + 1 samples, expected value's
+  // of 1 + 1 + 2 (its decay is taken between 2 and 4).
+  EXPECT_EQ(r.Renders, 4 * int(c.trials.size()) + 2);
+  ASSERT_FALSE(c.trials.empty());
+  EXPECT_EQ(c.trials[0].candidate.estimator, Estimator::ExpectedValue);
+  EXPECT_EQ(c.trials[0].pilotSamples, 4);
+  for (size_t i = 1; i < c.trials.size(); ++i)
+  {
+    EXPECT_EQ(c.trials[i].pilotSamples, 2) << i;
+  }
   EXPECT_GE(c.trials.size(), 3u); // expected value and at least two march rates
+}
+
+// The frames predicted from the pilots' checkpoints, as documented in
+// EstimatorChoice.h: expected value's MSE falls as N^-1.6 over its first
+// two samples and as N^-1 after (a Sobol' gain that fades), so the decay
+// must come from its last doubling (2 to 4), where the first one's would
+// predict far too few frames; a checkpoint below the target bounds the
+// frames from above; one frame where MSE(1) is on target.
+TEST(EstimatorChoice, FramesFromTheLastDoubling)
+{
+  const DemoVolume v = makeDemo("cosmology", { 16, 16, 16 });
+  Scene scene;
+  configureDemo(scene, v, 4);
+  const Camera cam = demoCam(v, 32, 32);
+  SyntheticNoiseRenderer r;
+  const double target = 1e-4;
+  // Expected value: V(1) = 0.01, V(2) = 0.01 2^-1.6, then V(N) = V(2) 2 / N.
+  const auto ev = [](double n) { return n <= 1 ? 0.01 : 0.01 * std::pow(2.0, -1.6) * 2.0 / n; };
+  // The march: W(N) = W1 / N, W1 set per case.
+  double w1 = 1.0;
+  r.Mse = [&](Estimator e, double n) { return e == Estimator::ExpectedValue ? ev(n) : w1 / n; };
+  EstimatorChoiceSettings cs;
+  cs.targetMSE = target;
+  cs.marchRates = { 1.f };
+  cs.tryAllRates = true;
+  {
+    const EstimatorChoice c = chooseEstimator(r, scene, cam, RenderSettings(), cs);
+    ASSERT_EQ(c.trials.size(), 2u);
+    const EstimatorTrial& e = c.trials[0];
+    EXPECT_EQ(e.pilotSamples, 4);
+    EXPECT_NEAR(e.decay, 1.0, 1e-3);
+    // V(N) <= 1e-4 from N = 2 * V(2) / 1e-4 = 65.98: 66 frames. The first
+    // doubling's decay (1.6) would have predicted (V(1)/target)^(1/1.6) = 18.
+    EXPECT_EQ(e.frames, 66.0);
+    // The march: 1 / N <= 1e-4 at N = 10000, extrapolated from MSE(2) with a = 1.
+    EXPECT_EQ(c.trials[1].pilotSamples, 2);
+    EXPECT_EQ(c.trials[1].frames, 10000.0);
+    EXPECT_EQ(c.chosen, 0);
+  }
+  {
+    // The march's MSE(2) under the target: 2 frames (interpolated within (1, 2]).
+    w1 = 1.5e-4;
+    const EstimatorChoice c = chooseEstimator(r, scene, cam, RenderSettings(), cs);
+    EXPECT_EQ(c.trials[1].frames, 2.0);
+    EXPECT_EQ(c.chosen, 1);
+    // Under the target with one sample: 1 frame.
+    w1 = 0.9e-4;
+    const EstimatorChoice d = chooseEstimator(r, scene, cam, RenderSettings(), cs);
+    EXPECT_EQ(d.trials[1].frames, 1.0);
+  }
+  {
+    // Expected value's MSE(4) under the target: its frames lie in (2, 4].
+    cs.targetMSE = ev(3.5);
+    const EstimatorChoice c = chooseEstimator(r, scene, cam, RenderSettings(), cs);
+    EXPECT_EQ(c.trials[0].frames, 4.0);
+    cs.targetMSE = ev(2.9);
+    const EstimatorChoice d = chooseEstimator(r, scene, cam, RenderSettings(), cs);
+    EXPECT_EQ(d.trials[0].frames, 3.0);
+  }
 }
 
 // Nothing visible: every candidate is exact (no noise); the tie keeps the

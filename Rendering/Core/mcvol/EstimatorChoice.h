@@ -17,9 +17,14 @@ namespace mcvol
  * unbiased march"). chooseEstimator() renders a small pilot image of the
  * scene with each candidate and keeps the one predicted to reach the target
  * error (35 dB by default) in the least time:
- *   frames = 1 if MSE(1) <= target, else max(2, ceil((MSE(1) / target)^(1/a))),
- *   a = log(MSE(1) / MSE(n)) / log(n) held to [1, 2],  time = frames x cost
- *   per sample,
+ *   frames = 1 if MSE(1) <= target; else, with checkpoints k = 1, 2, 4, ...,
+ *   n (the pilot's samples) and a_k = log2(MSE(k/2) / MSE(k)) held to
+ *   [1, 2] (log(MSE(k') / MSE(n)) / log(n / k') for a last step from k' to
+ *   n that is not a doubling), the first checkpoint k with
+ *   MSE(k) <= target gives frames = ceil((k/2) (MSE(k/2) / target)^(1/a_k))
+ *   within (k/2, k]; if none, frames = ceil(n (MSE(n) / target)^(1/a_n)).
+ *   With n = 2 that is max(2, ceil((MSE(1) / target)^(1/a))). time =
+ *   frames x cost per sample,
  * MSE(k) the pilot's mean squared error after k samples per pixel, measured
  * from two replicates with independent scrambles (seeds): the squared
  * difference of their means is twice the MSE of one. The decay a is 1 for
@@ -81,6 +86,15 @@ struct EstimatorChoiceSettings
   /// 2): the first alone decides whether one frame suffices, all of them
   /// predict the frames beyond.
   int pilotSamples = 2;
+  /// Samples per pixel of the expected-value candidate's replicates (the
+  /// larger of this and pilotSamples), rendered in doublings: its Sobol'
+  /// gain fades over the first samples, so its decay is measured between 2
+  /// and 4 rather than 1 and 2. The marches' gain does not fade as early:
+  /// their frames were predicted exactly from 2 (H100, every rate needing
+  /// up to 6 frames). With 2, expected value's frames to 35 dB were
+  /// predicted low in 6 of 8 cases (CPU and H100, by 1 to 8 frames);
+  /// Benchmarks/RESULTS.md, "The automatic estimator".
+  int expectedValuePilotSamples = 4;
   /// The error the prediction aims at, as the MSE over premultiplied RGB
   /// (peak 1): 10^-3.5, i.e. 35 dB PSNR, by default. A mapper with a
   /// TargetError (an RMSE) aims at its square.
@@ -118,8 +132,9 @@ struct EstimatorTrial
 {
   EstimatorCandidate candidate;
   double firstFrameMSE = 0; ///< MSE of one sample per pixel (RGB, mean over pixels)
-  double variance = 0;      ///< n x MSE(n), n = pilotSamples
-  double decay = 1;         ///< a: MSE(N) ~ MSE(1) N^-a through MSE(1) and MSE(n)
+  int pilotSamples = 0;     ///< n: samples per pixel of each replicate
+  double variance = 0;      ///< n x MSE(n)
+  double decay = 1;         ///< a: MSE(N) ~ N^-a through MSE(n / 2) and MSE(n), held to [1, 2]
   double frames = 0;        ///< predicted samples per pixel to the target (see chooseEstimator)
   double costPerSample = 0; ///< the model's cost of one sample of one pixel
   double score = 0;         ///< frames x cost: the predicted time to the target (model units)
