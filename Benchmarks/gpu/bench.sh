@@ -28,6 +28,9 @@
 #             their frame times (fit_cost_model.py) and the automatic rows
 #             again with the fitted weights, trying every rate so that the
 #             report predicts each row measured (estimator-fit-*.md)
+#   automatic the automatic choice alone at 1024^2: its time to 35 dB with the
+#             default rate search (automatic-*.md), then every candidate's
+#             prediction (--choice-all, automatic-all-*.md)
 #   big       a volume of FRACTION (default 0.6) of the device's memory
 #             (figure3, 3 x float32, generated cheaply) renders: device bytes
 #             and frame time (issue 14, item 5)
@@ -91,6 +94,21 @@ for stage in "$@"; do
           --label "$label" --size 1024 1024 --reference-spp 4096 --sections converge --no-collision \
           --only-automatic --choice-all --march-samples-per-voxel 0.0625,0.125,0.25,0.5,1,2 --cost-model "$model"
         grep -E "^\| automatic" "$out/estimator-fit-$key.md" | head -1 | sed "s/^/$label fitted /"
+      done
+      ;;
+    automatic)
+      # The automatic estimator alone: its time to 35 dB with the default
+      # rate search (pilots included), then every candidate's prediction
+      # (--choice-all) to set against the estimator stage's measured times.
+      for s in "${sets[@]}"; do
+        read -r key ds x y z ch label <<< "$s"
+        run "automatic-$key" --backend cuda --dataset "$ds" --dims "$x" "$y" "$z" --channels "$ch" \
+          --label "$label" --size 1024 1024 --reference-spp 4096 --sections converge --no-collision --only-automatic
+        grep -E "^\| automatic" "$out/automatic-$key.md" | head -1 | sed "s/^/$label /"
+        run "automatic-all-$key" --backend cuda --dataset "$ds" --dims "$x" "$y" "$z" --channels "$ch" \
+          --label "$label" --size 1024 1024 --reference-spp 4096 --sections converge --no-collision --only-automatic \
+          --choice-all --march-samples-per-voxel 0.0625,0.125,0.25,0.5,1,2
+        grep -E "^[* ] (ExpectedValue|UnbiasedMarch)" "$out/automatic-all-$key.md" | sed "s/^/$label /"
       done
       ;;
     dense)

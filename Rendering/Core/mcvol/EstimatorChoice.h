@@ -94,7 +94,7 @@ struct EstimatorChoiceSettings
   /// up to 6 frames). With 2, expected value's frames to 35 dB were
   /// predicted low in 6 of 8 cases (CPU and H100, by 1 to 8 frames);
   /// Benchmarks/RESULTS.md, "The automatic estimator".
-  int expectedValuePilotSamples = 4;
+  int expectedValuePilotSamples = 8;
   /// The error the prediction aims at, as the MSE over premultiplied RGB
   /// (peak 1): 10^-3.5, i.e. 35 dB PSNR, by default. A mapper with a
   /// TargetError (an RMSE) aims at its square.
