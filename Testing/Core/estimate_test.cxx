@@ -404,12 +404,15 @@ TEST(EstimatorChoice, NoPilotsWhereTheEstimatorDoesNotApply)
   configureDemo(scene, v, 4);
   const EstimatorChoice c = chooseEstimator(r, scene, cam, RenderSettings());
   EXPECT_TRUE(c.applies);
-  // Two replicates each: the marches' of 1 + 1 samples, expected value's
-  // of 1 + 1 + 2 (its decay is taken between 2 and 4).
-  EXPECT_EQ(r.Renders, 4 * int(c.trials.size()) + 2);
+  // Two replicates each, rendered in doublings: the marches' of 1 + 1
+  // samples, expected value's of 1 + 1 + 2 + 4 (its decay is taken between
+  // 4 and 8).
+  const EstimatorChoiceSettings defaults;
+  ASSERT_EQ(defaults.expectedValuePilotSamples, 8);
+  EXPECT_EQ(r.Renders, 2 * 4 + 4 * (int(c.trials.size()) - 1));
   ASSERT_FALSE(c.trials.empty());
   EXPECT_EQ(c.trials[0].candidate.estimator, Estimator::ExpectedValue);
-  EXPECT_EQ(c.trials[0].pilotSamples, 4);
+  EXPECT_EQ(c.trials[0].pilotSamples, 8);
   for (size_t i = 1; i < c.trials.size(); ++i)
   {
     EXPECT_EQ(c.trials[i].pilotSamples, 2) << i;
@@ -420,7 +423,7 @@ TEST(EstimatorChoice, NoPilotsWhereTheEstimatorDoesNotApply)
 // The frames predicted from the pilots' checkpoints, as documented in
 // EstimatorChoice.h: expected value's MSE falls as N^-1.6 over its first
 // two samples and as N^-1 after (a Sobol' gain that fades), so the decay
-// must come from its last doubling (2 to 4), where the first one's would
+// must come from its last doubling (4 to 8), where the first one's would
 // predict far too few frames; a checkpoint below the target bounds the
 // frames from above; one frame where MSE(1) is on target.
 TEST(EstimatorChoice, FramesFromTheLastDoubling)
@@ -444,7 +447,7 @@ TEST(EstimatorChoice, FramesFromTheLastDoubling)
     const EstimatorChoice c = chooseEstimator(r, scene, cam, RenderSettings(), cs);
     ASSERT_EQ(c.trials.size(), 2u);
     const EstimatorTrial& e = c.trials[0];
-    EXPECT_EQ(e.pilotSamples, 4);
+    EXPECT_EQ(e.pilotSamples, cs.expectedValuePilotSamples);
     EXPECT_NEAR(e.decay, 1.0, 1e-3);
     // V(N) <= 1e-4 from N = 2 * V(2) / 1e-4 = 65.98: 66 frames. The first
     // doubling's decay (1.6) would have predicted (V(1)/target)^(1/1.6) = 18.
@@ -473,6 +476,16 @@ TEST(EstimatorChoice, FramesFromTheLastDoubling)
     cs.targetMSE = ev(2.9);
     const EstimatorChoice d = chooseEstimator(r, scene, cam, RenderSettings(), cs);
     EXPECT_EQ(d.trials[0].frames, 3.0);
+    // Its MSE(8) under the target: (4, 8].
+    cs.targetMSE = ev(6.5);
+    const EstimatorChoice f = chooseEstimator(r, scene, cam, RenderSettings(), cs);
+    EXPECT_EQ(f.trials[0].frames, 7.0);
+    // With 4 pilot samples the decay comes from 2 to 4 and still fits.
+    cs.expectedValuePilotSamples = 4;
+    cs.targetMSE = target;
+    const EstimatorChoice g = chooseEstimator(r, scene, cam, RenderSettings(), cs);
+    EXPECT_EQ(g.trials[0].pilotSamples, 4);
+    EXPECT_EQ(g.trials[0].frames, 66.0);
   }
 }
 

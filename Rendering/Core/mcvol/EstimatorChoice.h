@@ -88,12 +88,14 @@ struct EstimatorChoiceSettings
   int pilotSamples = 2;
   /// Samples per pixel of the expected-value candidate's replicates (the
   /// larger of this and pilotSamples), rendered in doublings: its Sobol'
-  /// gain fades over the first samples, so its decay is measured between 2
-  /// and 4 rather than 1 and 2. The marches' gain does not fade as early:
+  /// gain fades over the first samples, so its decay is measured between 4
+  /// and 8 rather than 1 and 2. The marches' gain does not fade as early:
   /// their frames were predicted exactly from 2 (H100, every rate needing
   /// up to 6 frames). With 2, expected value's frames to 35 dB were
-  /// predicted low in 6 of 8 cases (CPU and H100, by 1 to 8 frames);
-  /// Benchmarks/RESULTS.md, "The automatic estimator".
+  /// predicted low in 6 of 8 cases (CPU and H100, by 1 to 8 frames); with
+  /// 8, exactly on NYX-, Hurricane- and Miranda-like (H100). Its pilots
+  /// cost little: 2 x 8 samples of a 48-pixel image. Benchmarks/RESULTS.md,
+  /// "The automatic estimator".
   int expectedValuePilotSamples = 8;
   /// The error the prediction aims at, as the MSE over premultiplied RGB
   /// (peak 1): 10^-3.5, i.e. 35 dB PSNR, by default. A mapper with a
