@@ -425,7 +425,7 @@ TEST(EstimatorChoice, NoPilotsWhereTheEstimatorDoesNotApply)
 // two samples and as N^-1 after (a Sobol' gain that fades), so the decay
 // must come from its last doubling (4 to 8), where the first one's would
 // predict far too few frames; a checkpoint below the target bounds the
-// frames from above; one frame where MSE(1) is on target.
+// frames from above; one frame where MSE(1) is under it.
 TEST(EstimatorChoice, FramesFromTheLastDoubling)
 {
   const DemoVolume v = makeDemo("cosmology", { 16, 16, 16 });
