@@ -249,6 +249,7 @@ EstimatorChoice chooseEstimator(Renderer& renderer, const Scene& scene, const Ca
         images[k].emplace_back(rep[k].rgba(), rep[k].rgba() + 4 * size_t(pilot.width) * size_t(pilot.height));
       }
     }
+    // E[(m1 - m2)^2] = 2 MSE(n) for independent replicates of an n-sample mean.
     std::vector<double> mse(checkpoints.size());
     for (size_t i = 0; i < checkpoints.size(); ++i)
     {
