@@ -148,6 +148,7 @@ void CPURenderer::render(const Scene& scene, const Camera& camera, const RenderS
   s.sigmaLimit = extinctionLimit(cam);
   s.minRate = settings.minSamplesPerVoxel > 0.f ? settings.minSamplesPerVoxel * voxelRate(cam) : 0.f;
   s.marchRate = settings.marchSamplesPerVoxel * voxelRate(cam);
+  s.marchControlVariates = marchControlVariates(settings, camera);
   const FrameParams fp = frameParams(settings, accum.samples());
   const bool lit = s.lighting.enabled;
   if (lit)

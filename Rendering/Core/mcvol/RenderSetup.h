@@ -92,6 +92,13 @@ inline void setImportanceFrame(SceneView& s, const Camera& camera)
 }
 
 /// What a render asks of every pixel, continuing after `firstSample` samples.
+/// Whether the unbiased march takes its control variates (SceneView::
+/// marchControlVariates; kMarchControlVariateRate says when and why).
+inline bool marchControlVariates(const RenderSettings& s, const Camera& camera)
+{
+  return s.marchSamplesPerVoxel >= kMarchControlVariateRate && !(s.jitterPixels && camera.jitterScale > 0.f);
+}
+
 inline FrameParams frameParams(const RenderSettings& s, uint32_t firstSample)
 {
   FrameParams fp;

@@ -139,6 +139,21 @@ struct ImportanceView
   float invLengthUnit = 1.f;
 };
 
+/// Strata per voxel from which the unbiased march takes control variates
+/// (SceneView::marchControlVariates, trackControlMarch()) when the camera
+/// rays go through the pixel centres (RenderSettings::jitterPixels off).
+/// Where strata resolve the voxels, a trapezoid march through their
+/// boundaries is close to the integral and the residual left to chance is
+/// small: on the CPU target's microscopy scene (256^2, pixel centres, one
+/// sample) 1 per voxel reached 38.2 dB where the plain strata reached
+/// 31.8 dB, for 1.4x the time. With jittered pixels the noise of the pixel
+/// footprint, which the control variates leave alone, dominates: on the
+/// H100 the Zebrafish-like set's 1 per voxel got 1.5x less noise for 1.4x
+/// the frame time, and took 13.3 ms to 35 dB instead of 9.6. Below 1 per
+/// voxel the strata are wider than the data's detail and it was not
+/// measured (Benchmarks/RESULTS.md, "Eleventh session").
+constexpr float kMarchControlVariateRate = 1.f;
+
 struct SceneView
 {
   VolumeView volume;
@@ -162,6 +177,11 @@ struct SceneView
   /// estimator in a non-empty macrocell, set per render by the backend
   /// (RenderSettings::marchSamplesPerVoxel times voxelRate()).
   float marchRate = 1.f;
+  /// The unbiased march takes its control variates (trackControlMarch())
+  /// instead of the plain strata: set per render by the backend
+  /// (marchControlVariates()) where RenderSettings::marchSamplesPerVoxel >=
+  /// kMarchControlVariateRate and the pixels are not jittered.
+  bool marchControlVariates = false;
   LightingView lighting;
   ImportanceView importance;
 };

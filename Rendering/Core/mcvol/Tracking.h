@@ -424,6 +424,126 @@ MCVOL_HOST_DEVICE inline float marchOrderProbability(int k)
 constexpr float kMarchMajorantStrata = 0.25f;
 
 /**
+ * The unbiased march with control variates (Estimator::UnbiasedMarch where
+ * SceneView::marchControlVariates): the strata of trackUnbiasedMarch(), and
+ * in each stratum [s0, s1] of length h the point optics at both ends (the
+ * end shared with the next stratum), which define
+ * - sigma~(t): sigma interpolated linearly between the ends, tau~ its exact
+ *   integral (a trapezoid per stratum, quadratic inside one) and
+ *   T~ = exp(-tau~);
+ * - the control variate g(t) = cbar sigma~(t) T~(t), cbar the ends' mean
+ *   colour, whose integral over the stratum is cbar (T~(s0) - T~(s1)): the
+ *   ray marcher's compositing of a stratum, added deterministically.
+ * What is left to chance is the residual. The emission adds
+ * h (sigma(t) c(t) T^(t) - g(t)) at the jittered point t = s0 + u0 h, and
+ * T^(t) is trackUnbiasedMarch()'s power series with the pivot tau~(t) and
+ * the correction marches replaced by tau~(t) + R_l(t), R_l the sum of
+ * h (sigma - sigma~) at march l's points before t (each an unbiased
+ * estimate of tau(t) - tau~(t)): T^ = T~(t) sum_k prod_{l<=k} (-R_l(t)) /
+ * (l P(K >= l)). Every term is an unbiased estimate (the end points are not
+ * random; u0 and the v_l are independent), so the sum is; where sigma and
+ * the colour are close to linear across a stratum the residuals, and with
+ * them the noise, are small. It costs one more lookup per stratum (the
+ * end), about 3.3 instead of 2.3. Russian roulette on T~.
+ */
+template <BlendMode Mode>
+MCVOL_HOT Vec4f trackControlMarch(const SceneView& s, Vec3f o, Vec3f d, float tmin, float tmax, float u0,
+  const float* v, int K, Rng& rng, RayCounters& c)
+{
+  float R[kMarchMaxOrder];
+  for (int l = 0; l < K; ++l)
+  {
+    R[l] = 0.f;
+  }
+  float tau = 0.f;  // tau~ at the last stratum's end
+  float logW = 0.f; // roulette weight, as a logarithm
+  bool stopped = false;
+  Vec3f L;
+  float tEnd = -1.f; // where the last non-empty cell ended, and its optics there
+  PointOptics pEnd;
+  DDA dda;
+  dda.init(s.grid, o, d, tmin, tmax);
+  while (!dda.done && !stopped)
+  {
+    ++c.ddaSteps;
+    const float M = blendMajorant<Mode>(s, dda.cellIndex());
+    if (M > 0.f)
+    {
+      const float a = dda.t0;
+      const float b = dda.t1;
+      const float want = (b - a) * maxf(s.marchRate, M * kMarchMajorantStrata);
+      const int n = want < 1.f ? 1 : (want < 65536.f ? int(ceilf(want)) : 65536);
+      const float h = (b - a) / float(n);
+      PointOptics e0 = pEnd;
+      if (tEnd != a)
+      {
+        e0 = blendedOptics<Mode>(s, s.active, s.numActive, o + d * a);
+        c.samples += uint32_t(s.numActive);
+      }
+      for (int j = 0; j < n; ++j)
+      {
+        const float s0 = a + float(j) * h;
+        ++c.tentative;
+        const PointOptics e1 = blendedOptics<Mode>(s, s.active, s.numActive, o + d * (j + 1 == n ? b : s0 + h));
+        const PointOptics po = blendedOptics<Mode>(s, s.active, s.numActive, o + d * (s0 + u0 * h));
+        c.samples += 2u * uint32_t(s.numActive);
+        const float sA = minf(e0.sigma, s.sigmaLimit);
+        const float dS = minf(e1.sigma, s.sigmaLimit) - sA;
+        float series = 1.f;
+        float term = 1.f;
+        for (int l = 0; l < K; ++l)
+        {
+          const PointOptics pl = blendedOptics<Mode>(s, s.active, s.numActive, o + d * (s0 + v[l] * h));
+          c.samples += uint32_t(s.numActive);
+          const float r = h * (minf(pl.sigma, s.sigmaLimit) - (sA + dS * v[l]));
+          term *= -(v[l] < u0 ? R[l] + r : R[l]) / (float(l + 1) * marchOrderProbability(l));
+          series += term;
+          R[l] += r;
+        }
+        const float tauEnd = tau + h * (sA + 0.5f * dS);
+        const Vec3f cbar = (e0.emission + e1.emission) * 0.5f;
+        const float Tt = expf(logW - (tau + h * u0 * (sA + 0.5f * dS * u0)));
+        L += cbar * (expf(logW - tau) - expf(logW - tauEnd));
+        L += po.emission * (h * minf(po.sigma, s.sigmaLimit) * Tt * series) - cbar * (h * (sA + dS * u0) * Tt);
+        tau = tauEnd;
+        e0 = e1;
+        const float est = expf(logW - tau);
+        if (est < kRouletteThreshold)
+        {
+          if (rng.next() * kRouletteThreshold >= est)
+          {
+            stopped = true;
+            break;
+          }
+          logW = logf(kRouletteThreshold) + tau;
+        }
+      }
+      pEnd = e0;
+      tEnd = b;
+    }
+    dda.next();
+  }
+  float Tend = 0.f;
+  if (!stopped)
+  {
+    float series = 1.f;
+    float term = 1.f;
+    for (int l = 0; l < K; ++l)
+    {
+      term *= -R[l] / (float(l + 1) * marchOrderProbability(l));
+      series += term;
+    }
+    Tend = expf(logW - tau) * series;
+  }
+  Vec4f out;
+  out.r = L.x;
+  out.g = L.y;
+  out.b = L.z;
+  out.a = 1.f - Tend;
+  return out;
+}
+
+/**
  * The unbiased-march estimator (Estimator::UnbiasedMarch) of one camera ray
  * over [tmin, tmax], unlit: premultiplied RGB and alpha = 1 - T, like
  * trackExpected(), but with stratified (jittered) samples instead of the
@@ -452,6 +572,8 @@ constexpr float kMarchMajorantStrata = 0.25f;
  * where the marches disagree (sharp features thinner than a stratum); the
  * mean converges to the emission-absorption integral. Russian roulette on
  * exp(-X0) (kept as a log weight) ends the ray as in trackExpected().
+ * From kMarchControlVariateRate strata per voxel it hands the ray, with its
+ * random numbers drawn, to trackControlMarch().
  */
 template <BlendMode Mode>
 MCVOL_HOT Vec4f trackUnbiasedMarch(
@@ -468,6 +590,10 @@ MCVOL_HOT Vec4f trackUnbiasedMarch(
   while (K < kMarchMaxOrder && rng.next() < marchOrderProbability(K))
   {
     v[K++] = rng.next();
+  }
+  if (s.marchControlVariates)
+  {
+    return trackControlMarch<Mode>(s, o, d, tmin, tmax, u0, v, K, rng, c);
   }
   float X[kMarchMaxOrder];
   for (int l = 0; l < K; ++l)
