@@ -3,7 +3,7 @@ TestAutomaticEstimator.py: microscopy phantom 128x112x64, 256x224, camera
 azimuth 30 / elevation 20, CPU): MSE of premultiplied RGB (unclipped /
 clipped to [0, 1]) against --ref-spp samples of expected value (another
 seed) after N samples per pixel, for expected value and the unbiased march
-at 4, 3, 2 and 1 per voxel (two seeds each), then the median time of a 1-sample
+at 4, 3, 2, 1.5, 1.25 and 1 per voxel (two seeds each), then the median time of a 1-sample
 render of each, and the automatic choice at 35 dB and at RMSE 0.01.
 
   PYTHONPATH=build/lib/python3.11/site-packages xvfb-run -a /usr/bin/python3 \\
@@ -100,6 +100,8 @@ for name, setup, checkpoints in [("expected value", ev, [1, 2, 4, 8, 16, 23, 26,
                                  ("march 4", march(4.0), [1, 2]),
                                  ("march 3", march(3.0), [1, 2, 4]),
                                  ("march 2", march(2.0), [1, 2, 3, 4, 7]),
+                                 ("march 1.5", march(1.5), [1, 2]),
+                                 ("march 1.25", march(1.25), [1, 2]),
                                  ("march 1", march(1.0), [1, 2, 4])]:
     for seed in (3, 4):
         m, w = view(setup, seed)
@@ -112,7 +114,8 @@ for name, setup, checkpoints in [("expected value", ev, [1, 2, 4, 8, 16, 23, 26,
             out.append("%d: %.3g/%.3g" % (k, np.mean((x - ref) ** 2),
                                           np.mean((np.clip(x, 0, 1) - np.clip(ref, 0, 1)) ** 2)))
         print("  %s, seed %d: %s" % (name, seed, ", ".join(out)))
-for name, setup in [("expected value", ev), ("march 2", march(2.0)), ("march 3", march(3.0)),
+for name, setup in [("expected value", ev), ("march 1", march(1.0)), ("march 1.25", march(1.25)),
+                    ("march 1.5", march(1.5)), ("march 2", march(2.0)), ("march 3", march(3.0)),
                     ("march 4", march(4.0))]:
     m, w = view(setup, 5)
     w.Render()

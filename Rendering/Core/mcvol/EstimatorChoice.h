@@ -108,13 +108,18 @@ struct EstimatorChoiceSettings
   /// the one before it cost as much per sample as the best prediction so far
   /// (a higher rate costs more per sample, and takes at least one). A
   /// prediction that rose does not stop it (see chooseEstimator()).
-  /// Rates 3 and 4 serve tight targets on dense data: on the microscopy
-  /// scene of the CPU target (256^2, pixel centres) one sample at 2 per
-  /// voxel reached 38.0 dB and at 3 per voxel 41.2 dB, so at RMSE 0.01
-  /// (40 dB) 3 per voxel takes one sample where 2 takes two, in about 70%
-  /// of the time (Benchmarks/RESULTS.md, "tenth session"). Where a lower
-  /// rate already wins they are never rendered (the rules above).
-  std::vector<float> marchRates = { 0.0625f, 0.125f, 0.25f, 0.5f, 1.f, 2.f, 3.f, 4.f };
+  /// Rates 3 and 4 serve tight targets on dense data with the plain strata:
+  /// on the microscopy scene of the CPU target (256^2, pixel centres) one
+  /// sample at 2 per voxel reached 38.0 dB and at 3 per voxel 41.2 dB
+  /// (Benchmarks/RESULTS.md, "tenth session"). With the control variates
+  /// (pixel centres, from kMarchControlVariateRate) the noise falls faster
+  /// than the rate rises, and 1.25 and 1.5 per voxel fill the gap where 1 is
+  /// just short of a target: on that scene, through the VTK API, RMSE 0.01
+  /// took 1 sample at 1.25 per voxel (RMSE 0.0099, 306 ms), 1.5 (0.0088,
+  /// 351 ms) or 2 (0.0077, 453 ms), and 2 at 1 per voxel ("Eleventh
+  /// session"). Where a lower rate already wins the higher ones are never
+  /// rendered (the rules above).
+  std::vector<float> marchRates = { 0.0625f, 0.125f, 0.25f, 0.5f, 1.f, 1.25f, 1.5f, 2.f, 3.f, 4.f };
   /// Try every rate (no early stop): the benchmark's --choice-all, to
   /// compare each prediction with the measured time.
   bool tryAllRates = false;
