@@ -222,7 +222,8 @@ void CUDARenderer::render(const Scene& scene, const Camera& camera, const Render
   s.sigmaLimit = extinctionLimit(cam);
   s.minRate = settings.minSamplesPerVoxel > 0.f ? settings.minSamplesPerVoxel * voxelRate(cam) : 0.f;
   s.marchRate = settings.marchSamplesPerVoxel * voxelRate(cam);
-  s.marchControlVariates = marchControlVariates(settings, camera);
+  // The device keeps the plain strata (Tracking.h, trackUnbiasedMarch()).
+  s.marchControlVariates = false;
   const bool lit = s.lighting.enabled;
   if (lit)
   {

@@ -93,7 +93,8 @@ inline void setImportanceFrame(SceneView& s, const Camera& camera)
 
 /// What a render asks of every pixel, continuing after `firstSample` samples.
 /// Whether the unbiased march takes its control variates (SceneView::
-/// marchControlVariates; kMarchControlVariateRate says when and why).
+/// marchControlVariates; kMarchControlVariateRate says when and why). The
+/// CPU backend's rule; the CUDA backend keeps the plain strata for now.
 inline bool marchControlVariates(const RenderSettings& s, const Camera& camera)
 {
   return s.marchSamplesPerVoxel >= kMarchControlVariateRate && !(s.jitterPixels && camera.jitterScale > 0.f);

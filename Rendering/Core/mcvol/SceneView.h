@@ -178,9 +178,10 @@ struct SceneView
   /// (RenderSettings::marchSamplesPerVoxel times voxelRate()).
   float marchRate = 1.f;
   /// The unbiased march takes its control variates (trackControlMarch())
-  /// instead of the plain strata: set per render by the backend
+  /// instead of the plain strata: set per render by the CPU backend
   /// (marchControlVariates()) where RenderSettings::marchSamplesPerVoxel >=
-  /// kMarchControlVariateRate and the pixels are not jittered.
+  /// kMarchControlVariateRate and the pixels are not jittered; the CUDA
+  /// backend keeps the plain strata for now (Tracking.h).
   bool marchControlVariates = false;
   LightingView lighting;
   ImportanceView importance;

@@ -572,8 +572,9 @@ MCVOL_HOT Vec4f trackControlMarch(const SceneView& s, Vec3f o, Vec3f d, float tm
  * where the marches disagree (sharp features thinner than a stratum); the
  * mean converges to the emission-absorption integral. Russian roulette on
  * exp(-X0) (kept as a log weight) ends the ray as in trackExpected().
- * From kMarchControlVariateRate strata per voxel it hands the ray, with its
- * random numbers drawn, to trackControlMarch().
+ * From kMarchControlVariateRate strata per voxel at pixel centres it hands
+ * the ray, with its random numbers drawn, to trackControlMarch() (CPU only:
+ * the CUDA backend keeps the plain strata, marchControlVariates()).
  */
 template <BlendMode Mode>
 MCVOL_HOT Vec4f trackUnbiasedMarch(
@@ -591,10 +592,16 @@ MCVOL_HOT Vec4f trackUnbiasedMarch(
   {
     v[K++] = rng.next();
   }
+#if !defined(__CUDA_ARCH__)
+  // Host only for now: inlined into the GPU's march kernel (its plain
+  // strata's kernel too), it made the plain frames 3-10% slower on the H100,
+  // and out of line 25-45% (Benchmarks/RESULTS.md, "Eleventh session"); a
+  // kernel instance of its own is the way to have both.
   if (s.marchControlVariates)
   {
     return trackControlMarch<Mode>(s, o, d, tmin, tmax, u0, v, K, rng, c);
   }
+#endif
   float X[kMarchMaxOrder];
   for (int l = 0; l < K; ++l)
   {
