@@ -91,7 +91,6 @@ inline void setImportanceFrame(SceneView& s, const Camera& camera)
   s.importance.invLengthUnit = unit > 0.0 && std::isfinite(unit) ? float(1.0 / unit) : 1.f;
 }
 
-/// What a render asks of every pixel, continuing after `firstSample` samples.
 /// Whether the unbiased march takes its control variates (SceneView::
 /// marchControlVariates; kMarchControlVariateRate says when and why). The
 /// CPU backend's rule; the CUDA backend keeps the plain strata for now.
@@ -100,6 +99,7 @@ inline bool marchControlVariates(const RenderSettings& s, const Camera& camera)
   return s.marchSamplesPerVoxel >= kMarchControlVariateRate && !(s.jitterPixels && camera.jitterScale > 0.f);
 }
 
+/// What a render asks of every pixel, continuing after `firstSample` samples.
 inline FrameParams frameParams(const RenderSettings& s, uint32_t firstSample)
 {
   FrameParams fp;
