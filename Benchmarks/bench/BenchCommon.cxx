@@ -51,7 +51,7 @@ void usage()
             "                   [--samplers independent,sobol] [--spp-max N]\n"
             "                   [--estimators collision,expected-value] [--min-samples-per-voxel 0.5,1]\n"
             "                   [--march-samples-per-voxel 1,2] [--no-collision]\n"
-            "                   [--pixel-centres] [--steady-frames N] [--only-automatic] [--choice-all]\n"
+            "                   [--pixel-centres] [--centres-only] [--steady-frames N] [--only-automatic] [--choice-all]\n"
             "                   [--cost-model RAY,DDA,TENTATIVE,SAMPLE]\n"
             "sections: trackers channels macrocell rebuild memory paper converge sampling effects visibility estimate\n"
             "          sequences pyramid");
@@ -170,6 +170,11 @@ Options parse(int argc, char** argv)
     else if (a == "--pixel-centres")
     {
       o.pixelCentres = true;
+    }
+    else if (a == "--centres-only")
+    {
+      o.pixelCentres = true;
+      o.centresOnly = true;
     }
     else if (a == "--min-samples-per-voxel")
     {

@@ -71,6 +71,7 @@ struct Options
   /// converge: also every configuration at pixel centres
   /// (RenderSettings::jitterPixels off), against a reference at pixel centres
   bool pixelCentres = false;
+  bool centresOnly = false; ///< --centres-only: the pixel-centre rows alone
 };
 
 void usage();

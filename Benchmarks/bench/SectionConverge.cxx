@@ -35,19 +35,21 @@ void runConverge(Bench& bench)
   // --pixel-centres a second one at pixel centres, for the same
   // configurations at pixel centres (each scored against its own limit).
   mcvol::Accumulator ref;
-  const std::vector<float> refImg = renderReference(o, r, s.scene, cam, ref);
+  const std::vector<float> refImg = o.centresOnly ? std::vector<float>() : renderReference(o, r, s.scene, cam, ref);
   std::vector<float> refCentres;
+  uint32_t refSamples = ref.samples();
   if (o.pixelCentres)
   {
     mcvol::Accumulator refC;
     mcvol::RenderSettings rc;
     rc.jitterPixels = false;
     refCentres = renderReference(o, r, s.scene, cam, refC, rc);
+    refSamples = refC.samples();
   }
   std::printf("## Time to converge: %s, %dx%d, 1 spp per frame, target PSNR %.1f dB (peak 1, RGB over black) "
               "against %u spp\n\n| estimator, tracker, sampler | frames | ms (rendering only) | PSNR reached | ms per frame back to back "
               "| frames x that |\n|---|---|---|---|---|---|\n",
-    ds.c_str(), o.width, o.height, o.psnr, ref.samples());
+    ds.c_str(), o.width, o.height, o.psnr, refSamples);
   struct Config
   {
     std::string name;
@@ -58,6 +60,7 @@ void runConverge(Bench& bench)
     bool centres = false;
     float marchSamplesPerVoxel = 2.f;
     bool automatic = false;
+    bool controlVariates = true; ///< RenderSettings::marchControlVariates
   };
   std::vector<Config> configs = {
     { "expected-value, sobol (default)", mcvol::Estimator::ExpectedValue, mcvol::Tracker::OneDDA,
@@ -109,7 +112,20 @@ void runConverge(Bench& bench)
       c.name += ", pixel centres";
       c.centres = true;
       configs.push_back(c);
+      if (c.estimator == mcvol::Estimator::UnbiasedMarch && !c.automatic &&
+        c.marchSamplesPerVoxel >= mcvol::kMarchControlVariateRate)
+      {
+        // The same strata without the control variates they take there.
+        c.name += ", plain strata";
+        c.controlVariates = false;
+        configs.push_back(c);
+      }
     }
+  }
+  if (o.centresOnly)
+  {
+    configs.erase(
+      std::remove_if(configs.begin(), configs.end(), [](const Config& c) { return !c.centres; }), configs.end());
   }
   std::string costRows;
   std::string choiceReport;
@@ -124,6 +140,7 @@ void runConverge(Bench& bench)
     st.minSamplesPerVoxel = config.minSamplesPerVoxel;
     st.marchSamplesPerVoxel = config.marchSamplesPerVoxel;
     st.jitterPixels = !config.centres;
+    st.marchControlVariates = config.controlVariates;
     st.seed = 7;
     st.readBack = false;
     double pilotMs = 0;

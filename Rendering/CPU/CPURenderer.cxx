@@ -34,7 +34,7 @@ void renderRows(const SceneView& s, const CameraView& cam, const FrameParams& fp
   const int H = cam.height;
   Accumulator::ImportancePool* pool = Optimized ? imp.pool : nullptr;
   const int pass = pool ? pool->passes : 0;
-  const int unlit = unlitEstimator(fp.estimator, Mode, Lit, Optimized);
+  const int unlit = unlitEstimator(fp.estimator, Mode, Lit, Optimized, s.marchControlVariates);
 #pragma omp parallel num_threads(threads > 0 ? threads : omp_get_max_threads()) \
   reduction(+ : dda, tentative, real, samples, scattering, shadowRays, gradients, importance, overflows)
   {
@@ -69,6 +69,7 @@ void renderRows(const SceneView& s, const CameraView& cam, const FrameParams& fp
         {
           sum = unlit == 1 ? renderPixel<Mode, Lit, false, 1>(s, cam, fp, x, y, z, c, nullptr, evenOut)
             : unlit == 2   ? renderPixel<Mode, Lit, false, 2>(s, cam, fp, x, y, z, c, nullptr, evenOut)
+            : unlit == 3   ? renderPixel<Mode, Lit, false, 3>(s, cam, fp, x, y, z, c, nullptr, evenOut)
                            : renderPixel<Mode, Lit>(s, cam, fp, x, y, z, c, nullptr, evenOut);
         }
         accumulate(rgba + 4 * p, sum, previous, fp.samplesPerPixel);

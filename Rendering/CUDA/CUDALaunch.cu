@@ -119,7 +119,7 @@ void launchRender(bool count, bool lit, bool plain, dim3 grid, dim3 block, const
   // kernels none of the expected-value estimator's (registers: ptxas); for
   // plain scenes, none of the pre-classified or cubic sampling either
   // (CUDALaunchPlain.cu).
-  const int unlit = unlitEstimator(fp.estimator, Mode, lit, false);
+  const int unlit = unlitEstimator(fp.estimator, Mode, lit, false, s.marchControlVariates);
   if (plain && !lit)
   {
     launchPlainUnlit(Mode, count, unlit, grid, block, s, cam, fp, depth, accum, even, previous, counters);
@@ -222,8 +222,7 @@ void CUDARenderer::render(const Scene& scene, const Camera& camera, const Render
   s.sigmaLimit = extinctionLimit(cam);
   s.minRate = settings.minSamplesPerVoxel > 0.f ? settings.minSamplesPerVoxel * voxelRate(cam) : 0.f;
   s.marchRate = settings.marchSamplesPerVoxel * voxelRate(cam);
-  // The device keeps the plain strata (Tracking.h, trackUnbiasedMarch()).
-  s.marchControlVariates = false;
+  s.marchControlVariates = marchControlVariates(settings, camera);
   const bool lit = s.lighting.enabled;
   if (lit)
   {

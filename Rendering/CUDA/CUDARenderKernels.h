@@ -165,7 +165,11 @@ void launchUnlit(int unlit, bool count, dim3 grid, dim3 block, const SceneView& 
   const FrameParams& fp, const float* depth, float4* accum, float4* even, uint32_t previous,
   unsigned long long* counters)
 {
-  if (unlit == 2)
+  if (unlit == 3)
+  {
+    launchUnlitKernel<Mode, 3>(count, grid, block, s, cam, fp, depth, accum, even, previous, counters);
+  }
+  else if (unlit == 2)
   {
     launchUnlitKernel<Mode, 2>(count, grid, block, s, cam, fp, depth, accum, even, previous, counters);
   }

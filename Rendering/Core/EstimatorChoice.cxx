@@ -48,6 +48,7 @@ Estimator effectiveEstimator(const Scene& scene, const RenderSettings& settings)
     case 1:
       return Estimator::ExpectedValue;
     case 2:
+    case 3:
       return Estimator::UnbiasedMarch;
     default:
       return Estimator::Collision;

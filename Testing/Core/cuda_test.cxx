@@ -10,6 +10,7 @@
 
 #include "mcvol/CUDARenderer.h"
 #include "mcvol/MarchSetup.h"
+#include "mcvol/RenderSetup.h"
 
 #include <algorithm>
 #include <cmath>
@@ -267,13 +268,15 @@ TEST(CudaAgreement, SameSeedGlobalSamplingNearlyIdentical)
 // same seed gives the same image as the CPU's, pixel by pixel within 1e-4
 // for at least 99% of the pixels (global-memory sampling, as above; a
 // roulette decision at a float rounding's distance may differ), every blend
-// mode it serves.
+// mode it serves, with jittered pixels (the plain strata) and at pixel
+// centres (the control variates, their own kernel on the device).
 TEST(CudaAgreement, UnbiasedMarchSameSeedAsCpu)
 {
   CPURenderer cpu;
   const std::unique_ptr<CUDARenderer> g = cudaRenderer(CudaSampling::Global);
   const TypedVolume v(ScalarType::Float32, 4, 32, 30, 28);
   const Camera cam = orbitCamera(v.dims, std::array<double, 3>{ 1, 1, 1 }.data(), 48, 48, 35, 25);
+  for (const bool jitter : { true, false })
   for (BlendMode mode : { BlendMode::Density, BlendMode::Max, BlendMode::Mix })
   {
     Scene scene;
@@ -287,6 +290,8 @@ TEST(CudaAgreement, UnbiasedMarchSameSeedAsCpu)
       st.seed = 77;
       st.samplesPerPixel = 16;
       st.estimator = Estimator::UnbiasedMarch;
+      st.jitterPixels = jitter;
+      EXPECT_EQ(marchControlVariates(st, cam), !jitter);
       rs[k]->render(scene, cam, st, nullptr, acc);
       rs[k]->readBack(acc);
       img[k].assign(acc.rgba(), acc.rgba() + size_t(cam.width) * cam.height * 4);
@@ -304,7 +309,8 @@ TEST(CudaAgreement, UnbiasedMarchSameSeedAsCpu)
       close += same ? 1 : 0;
     }
     const double frac = double(close) / double(img[0].size() / 4);
-    std::printf("unbiased march, same seed, %s: %.4f of pixels within 1e-4\n", toString(mode), frac);
+    std::printf("unbiased march, same seed, %s, %s: %.4f of pixels within 1e-4\n", toString(mode),
+      jitter ? "jittered" : "pixel centres", frac);
     EXPECT_GT(sum, 1.0) << toString(mode);
     EXPECT_GE(frac, 0.99) << toString(mode);
   }

@@ -11,6 +11,7 @@
 #include "TestUtil.h"
 
 #include "mcvol/RayMarcher.h"
+#include "mcvol/RenderSetup.h"
 
 #include <limits>
 
@@ -601,7 +602,8 @@ TEST(RayMarch, UnbiasedMarchConvergesToRayMarch)
         const double var = std::max(0.0, (sumSq[i] - batches * mean * mean) / (batches - 1));
         const double T = std::max(0.0, 1.0 - double(ref[i - i % 4 + 3]));
         D[i] = mean - double(ref[i]);
-        V[i] = var / batches + T * kRouletteThreshold / (8.0 * batches);
+        const double threshold = rate >= kMarchControlVariateRate ? kControlRouletteThreshold : kRouletteThreshold;
+        V[i] = var / batches + T * threshold / (8.0 * batches);
       }
       const std::string what = std::string(name) + " " + toString(mode) + " unbiased march " + std::to_string(rate);
       expectZeroDifference(D, V, alpha, what);
@@ -654,6 +656,59 @@ TEST(RayMarch, UnbiasedMarchConvergesToRayMarch)
 // count from 4 spp, and its fitted log-log slope is at least as steep (up to
 // 0.02, the slopes' standard errors being about 0.01). Measured: see the
 // printed slopes.
+
+// The control variates are taken exactly where marchControlVariates() says:
+// at pixel centres, from kMarchControlVariateRate strata per voxel, unless
+// RenderSettings::marchControlVariates is off. Each stratum then reads the
+// optics at its end too: one more channel sample per active channel and
+// stratum (counters), and a different image from the plain strata's.
+TEST(RayMarch, ControlVariatesFollowTheRule)
+{
+  const DemoVolume v = makeDemo("microscopy", { 24, 24, 24 });
+  const Camera cam = demoCam(v, 33, 33);
+  Scene scene;
+  configureDemo(scene, v, 4, 128, 1.0, BlendMode::Density);
+  CPURenderer mc;
+  const double channels = double(scene.view().numActive);
+  ASSERT_GT(channels, 0.0);
+  struct Case
+  {
+    bool jitter;
+    float rate;
+    bool setting;
+    bool expectControl;
+  };
+  const Case cases[] = { { false, 2.f, true, true }, { false, kMarchControlVariateRate, true, true },
+    { false, 2.f, false, false }, { true, 2.f, true, false }, { false, 0.5f, true, false } };
+  for (const Case& k : cases)
+  {
+    RenderSettings rs;
+    rs.estimator = Estimator::UnbiasedMarch;
+    rs.jitterPixels = k.jitter;
+    rs.marchSamplesPerVoxel = k.rate;
+    rs.marchControlVariates = k.setting;
+    rs.samplesPerPixel = 4;
+    rs.seed = 5;
+    EXPECT_EQ(marchControlVariates(rs, cam), k.expectControl);
+    Accumulator acc;
+    RenderCounters n;
+    mc.render(scene, cam, rs, nullptr, acc, &n);
+    ASSERT_GT(n.tentativeCollisions, 0u);
+    // Per stratum: 1 + K lookups (plain) or 2 + K plus the cells' first ends
+    // (control variates), times the active channels. E[K] = 4/3.
+    const double perStratum = double(n.channelSamples) / double(n.tentativeCollisions) / channels;
+    std::printf("jitter %d, %g per voxel, setting %d: %.3f lookups per stratum and channel\n", int(k.jitter),
+      double(k.rate), int(k.setting), perStratum);
+    if (k.expectControl)
+    {
+      EXPECT_GT(perStratum, 3.0);
+    }
+    else
+    {
+      EXPECT_LT(perStratum, 2.6);
+    }
+  }
+}
 TEST(RayMarch, SobolErrorFallsFasterThanIndependent)
 {
   const DemoVolume v = makeDemo("cosmology", { 24, 24, 24 });

@@ -155,12 +155,12 @@ expect(np.array_equal(auto_image, accumulated(twin)), "same seed, same image")
 # - nearest-voxel sampling, pixel jitter, 35 dB: expected value needs about
 #   10 samples of 42 ms, the march at 2 per voxel 4 of 120 ms;
 # - linear sampling at pixel centres, RMSE 0.01 (MSE 1e-4; the protocol of
-#   the CPU target, Benchmarks/cpu_time_to_error.py; eleventh
-#   session, results/cpu-cv-s11, the march with control variates at pixel
-#   centres): the march at 1.25 per voxel reaches MSE 0.81e-4 (clipped to
-#   [0, 1] as displayed) in 1 sample of 232 ms, at 1.5 per voxel 0.67e-4 in
-#   1 of 273 ms, at 2 per voxel 0.48e-4 in 1 of 358 ms, at 1 per voxel
-#   1.24e-4 in 1 of 192 ms (so 2 samples), expected value needs 23 of 70 ms.
+#   the CPU target, Benchmarks/cpu_time_to_error.py; twelfth
+#   session, results/cpu-s12, the march with control variates at pixel
+#   centres and their roulette at 0.005): the march at 1 per voxel reaches
+#   MSE 0.90e-4 (clipped to [0, 1] as displayed; two seeds) in 1 sample of
+#   199 ms, at 1.25 per voxel 0.47e-4 in 1 of 239 ms, at 2 per voxel
+#   0.12e-4 in 1 of 366 ms; expected value needs 23 of 69 ms.
 if mapper.GetActiveBackendName() == "cpu":
     plain, pwindow, _, _ = make_view()
     plain.SetTargetError(0.0)
@@ -171,8 +171,8 @@ if mapper.GetActiveBackendName() == "cpu":
     centres.SetPixelJitter(False)
     centres.SetEstimatorToAutomatic()
     render(cwindow, 1)
-    expect_equal(centres.GetChosenEstimatorAsString(), "UnbiasedMarch(1.25)",
-                 "linear, pixel centres, RMSE 0.01: the march at 1.25 per voxel")
+    expect_equal(centres.GetChosenEstimatorAsString(), "UnbiasedMarch(1)",
+                 "linear, pixel centres, RMSE 0.01: the march at 1 per voxel")
 
 # Camera moves keep the choice; a transfer-function change makes it again.
 renderer.GetActiveCamera().Azimuth(40)

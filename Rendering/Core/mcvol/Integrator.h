@@ -10,16 +10,22 @@
 namespace mcvol
 {
 /// The estimator a render's camera rays use, as the kernels' compile-time
-/// code: 0 collision, 1 expected value, 2 unbiased march. The last two only
+/// code: 0 collision, 1 expected value, 2 unbiased march with plain strata,
+/// 3 unbiased march with control variates (`controlVariates`: SceneView::
+/// marchControlVariates, marchControlVariates()). The last three only
 /// when asked for, unlit, not optimized and not post-render compositing
 /// (these keep the collision estimator, Estimator's documentation says why).
-MCVOL_FUNC int unlitEstimator(Estimator e, BlendMode mode, bool lit, bool optimized)
+MCVOL_FUNC int unlitEstimator(Estimator e, BlendMode mode, bool lit, bool optimized, bool controlVariates = false)
 {
   if (lit || optimized || mode == BlendMode::Composite)
   {
     return 0;
   }
-  return e == Estimator::ExpectedValue ? 1 : (e == Estimator::UnbiasedMarch ? 2 : 0);
+  if (e == Estimator::UnbiasedMarch)
+  {
+    return controlVariates ? 3 : 2;
+  }
+  return e == Estimator::ExpectedValue ? 1 : 0;
 }
 
 /// What one render asks of every pixel.
@@ -47,8 +53,9 @@ struct FrameParams
  * the error estimate keeps (Accumulator::estimatedMSE).
  * Unlit (a compile-time choice too, so that each kernel carries only its
  * estimator's code and registers; unlitEstimator() decides it): 1 scores
- * unlit camera rays with trackExpected(), 2 with trackUnbiasedMarch(), 0
- * with the collision estimator.
+ * unlit camera rays with trackExpected(), 2 with trackUnbiasedMarch(), 3
+ * with trackUnbiasedMarch()'s control variates, 0 with the collision
+ * estimator.
  */
 template <BlendMode Mode, bool Lit = false, bool Optimized = false, int Unlit = 0>
 MCVOL_FUNC Vec4f renderPixel(const SceneView& s, const CameraView& cam, const FrameParams& fp, int x, int y,
@@ -90,9 +97,9 @@ MCVOL_FUNC Vec4f renderPixel(const SceneView& s, const CameraView& cam, const Fr
     {
       v = trackExpected<Mode>(s, ray.o, ray.d, 0.f, ray.tmax, rng, c);
     }
-    else if (Unlit == 2 && !Optimized && Mode != BlendMode::Composite)
+    else if ((Unlit == 2 || Unlit == 3) && !Optimized && Mode != BlendMode::Composite)
     {
-      v = trackUnbiasedMarch<Mode>(s, ray.o, ray.d, 0.f, ray.tmax, rng, c);
+      v = trackUnbiasedMarch<Mode, Unlit == 3>(s, ray.o, ray.d, 0.f, ray.tmax, rng, c);
     }
     else
     {

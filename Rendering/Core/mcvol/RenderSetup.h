@@ -92,11 +92,12 @@ inline void setImportanceFrame(SceneView& s, const Camera& camera)
 }
 
 /// Whether the unbiased march takes its control variates (SceneView::
-/// marchControlVariates; kMarchControlVariateRate says when and why). The
-/// CPU backend's rule; the CUDA backend keeps the plain strata for now.
+/// marchControlVariates; kMarchControlVariateRate says when and why). Both
+/// backends' rule.
 inline bool marchControlVariates(const RenderSettings& s, const Camera& camera)
 {
-  return s.marchSamplesPerVoxel >= kMarchControlVariateRate && !(s.jitterPixels && camera.jitterScale > 0.f);
+  return s.marchControlVariates && s.marchSamplesPerVoxel >= kMarchControlVariateRate &&
+    !(s.jitterPixels && camera.jitterScale > 0.f);
 }
 
 /// What a render asks of every pixel, continuing after `firstSample` samples.

@@ -178,10 +178,11 @@ struct SceneView
   /// (RenderSettings::marchSamplesPerVoxel times voxelRate()).
   float marchRate = 1.f;
   /// The unbiased march takes its control variates (trackControlMarch())
-  /// instead of the plain strata: set per render by the CPU backend
+  /// instead of the plain strata: set per render by the backend
   /// (marchControlVariates()) where RenderSettings::marchSamplesPerVoxel >=
-  /// kMarchControlVariateRate and the pixels are not jittered; the CUDA
-  /// backend keeps the plain strata for now (Tracking.h).
+  /// kMarchControlVariateRate and the pixels are not jittered. The kernels
+  /// choose by it (unlitEstimator() code 3: a kernel instance of its own on
+  /// the GPU, so the plain strata's kernels carry none of its code).
   bool marchControlVariates = false;
   LightingView lighting;
   ImportanceView importance;

@@ -423,6 +423,106 @@ MCVOL_HOST_DEVICE inline float marchOrderProbability(int k)
 /// keeps h sigma small where the extinction is high.
 constexpr float kMarchMajorantStrata = 0.25f;
 
+/// Strata of the unbiased march in a non-empty macrocell of length `len` and
+/// blend majorant M at `rate` strata per unit length (SceneView::marchRate):
+/// ceil(len max(rate, kMarchMajorantStrata M)), at least 1, at most 65536.
+MCVOL_HOST_DEVICE inline int marchStrata(float len, float M, float rate)
+{
+  const float want = len * maxf(rate, M * kMarchMajorantStrata);
+  return want < 1.f ? 1 : (want < 65536.f ? int(ceilf(want)) : 65536);
+}
+
+/// One order l of the unbiased march's power series at a point: the term
+/// times (pivot - X_l(t)) / ((l + 1) P(K > l | K >= l)), where X_l(t) is
+/// march l's sum `Xl` plus its point in this stratum `dl` if that point lies
+/// before t (`before`); then the point joins the sum. Returns the new term
+/// (the caller adds it to the series).
+MCVOL_HOST_DEVICE inline float marchSeriesStep(float term, float pivot, float& Xl, float dl, bool before, int l)
+{
+  term *= (pivot - (before ? Xl + dl : Xl)) / (float(l + 1) * marchOrderProbability(l));
+  Xl += dl;
+  return term;
+}
+
+/// The unbiased march's power series at the ray's end: sum over k <= K of
+/// prod_{l<=k} (pivot - X[l]) / ((l + 1) P(K > l | K >= l)).
+MCVOL_HOST_DEVICE inline float marchSeriesEnd(const float* X, float pivot, int K)
+{
+  float series = 1.f;
+  float term = 1.f;
+  for (int l = 0; l < K; ++l)
+  {
+    term *= (pivot - X[l]) / (float(l + 1) * marchOrderProbability(l));
+    series += term;
+  }
+  return series;
+}
+
+/// The unbiased march's Russian roulette (as trackExpected()'s) on the
+/// estimate exp(logW - tau): below `threshold` the ray goes on with
+/// probability estimate / threshold, its weight raised to the threshold, or
+/// stops (returns true).
+MCVOL_HOT bool marchRoulette(float& logW, float tau, Rng& rng, float threshold)
+{
+  const float est = expf(logW - tau);
+  if (est < threshold)
+  {
+    if (rng.next() * threshold >= est)
+    {
+      return true;
+    }
+    logW = logf(threshold) + tau;
+  }
+  return false;
+}
+
+/// Roulette threshold of the unbiased march with control variates, lower
+/// than kRouletteThreshold: once the control variates have taken out the
+/// strata's noise, the roulette's is what is left. A ray that survives it
+/// carries its weight raised to the threshold, so its variance is up to
+/// about threshold times the emission still ahead. On the CPU target's
+/// microscopy scene (256^2, pixel centres, one sample) going from 0.05 to
+/// 0.005 took one sample's MSE at 1 stratum per voxel from 1.35e-4 to
+/// 0.91e-4, for about 6% more strata per ray (Benchmarks/RESULTS.md,
+/// "Twelfth session").
+constexpr float kControlRouletteThreshold = 0.005f;
+
+/// Walks the unbiased march's macrocells along the ray (one DDA): for every
+/// non-empty one [a, b] (blend majorant M > 0; empty cells have sigma = 0
+/// and no strata), `cell(a, b, n, h)` with its n strata of length h
+/// (marchStrata()). Stops where `cell` returns true.
+template <BlendMode Mode, typename Cell>
+MCVOL_HOT void forEachMarchCell(const SceneView& s, Vec3f o, Vec3f d, float tmin, float tmax, RayCounters& c, Cell&& cell)
+{
+  DDA dda;
+  dda.init(s.grid, o, d, tmin, tmax);
+  while (!dda.done)
+  {
+    ++c.ddaSteps;
+    const float M = blendMajorant<Mode>(s, dda.cellIndex());
+    if (M > 0.f)
+    {
+      const int n = marchStrata(dda.t1 - dda.t0, M, s.marchRate);
+      if (cell(dda.t0, dda.t1, n, (dda.t1 - dda.t0) / float(n)))
+      {
+        return;
+      }
+    }
+    dda.next();
+  }
+}
+
+/// Premultiplied RGB `L` and alpha 1 - T.
+MCVOL_HOT Vec4f premultipliedRGBA(const Vec3f& L, float T)
+{
+  Vec4f out;
+  out.r = L.x;
+  out.g = L.y;
+  out.b = L.z;
+  out.a = 1.f - T;
+  return out;
+}
+
 /**
  * The unbiased march with control variates (Estimator::UnbiasedMarch where
  * SceneView::marchControlVariates): the strata of trackUnbiasedMarch(), and
@@ -461,86 +561,52 @@ MCVOL_HOT Vec4f trackControlMarch(const SceneView& s, Vec3f o, Vec3f d, float tm
   Vec3f L;
   float tEnd = -1.f; // where the last non-empty cell ended, and its optics there
   PointOptics pEnd;
-  DDA dda;
-  dda.init(s.grid, o, d, tmin, tmax);
-  while (!dda.done && !stopped)
-  {
-    ++c.ddaSteps;
-    const float M = blendMajorant<Mode>(s, dda.cellIndex());
-    if (M > 0.f)
+  forEachMarchCell<Mode>(s, o, d, tmin, tmax, c, [&](float a, float b, int n, float h) {
+    PointOptics e0 = pEnd;
+    if (tEnd != a)
     {
-      const float a = dda.t0;
-      const float b = dda.t1;
-      const float want = (b - a) * maxf(s.marchRate, M * kMarchMajorantStrata);
-      const int n = want < 1.f ? 1 : (want < 65536.f ? int(ceilf(want)) : 65536);
-      const float h = (b - a) / float(n);
-      PointOptics e0 = pEnd;
-      if (tEnd != a)
+      e0 = blendedOptics<Mode>(s, s.active, s.numActive, o + d * a);
+      c.samples += uint32_t(s.numActive);
+    }
+    for (int j = 0; j < n; ++j)
+    {
+      const float s0 = a + float(j) * h;
+      ++c.tentative;
+      const PointOptics e1 = blendedOptics<Mode>(s, s.active, s.numActive, o + d * (j + 1 == n ? b : s0 + h));
+      const PointOptics po = blendedOptics<Mode>(s, s.active, s.numActive, o + d * (s0 + u0 * h));
+      c.samples += 2u * uint32_t(s.numActive);
+      const float sA = minf(e0.sigma, s.sigmaLimit);
+      const float dS = minf(e1.sigma, s.sigmaLimit) - sA;
+      float series = 1.f;
+      float term = 1.f;
+      for (int l = 0; l < K; ++l)
       {
-        e0 = blendedOptics<Mode>(s, s.active, s.numActive, o + d * a);
+        const PointOptics pl = blendedOptics<Mode>(s, s.active, s.numActive, o + d * (s0 + v[l] * h));
         c.samples += uint32_t(s.numActive);
+        // The residual against the linear sigma~: the series of
+        // (tau~ - (tau~ + R_l)) = -R_l, i.e. pivot 0 over the sums R.
+        const float r = h * (minf(pl.sigma, s.sigmaLimit) - (sA + dS * v[l]));
+        term = marchSeriesStep(term, 0.f, R[l], r, v[l] < u0, l);
+        series += term;
       }
-      for (int j = 0; j < n; ++j)
+      const float tauEnd = tau + h * (sA + 0.5f * dS);
+      const Vec3f cbar = (e0.emission + e1.emission) * 0.5f;
+      const float Tt = expf(logW - (tau + h * u0 * (sA + 0.5f * dS * u0)));
+      L += cbar * (expf(logW - tau) - expf(logW - tauEnd));
+      L += po.emission * (h * minf(po.sigma, s.sigmaLimit) * Tt * series) - cbar * (h * (sA + dS * u0) * Tt);
+      tau = tauEnd;
+      e0 = e1;
+      if (marchRoulette(logW, tau, rng, kControlRouletteThreshold))
       {
-        const float s0 = a + float(j) * h;
-        ++c.tentative;
-        const PointOptics e1 = blendedOptics<Mode>(s, s.active, s.numActive, o + d * (j + 1 == n ? b : s0 + h));
-        const PointOptics po = blendedOptics<Mode>(s, s.active, s.numActive, o + d * (s0 + u0 * h));
-        c.samples += 2u * uint32_t(s.numActive);
-        const float sA = minf(e0.sigma, s.sigmaLimit);
-        const float dS = minf(e1.sigma, s.sigmaLimit) - sA;
-        float series = 1.f;
-        float term = 1.f;
-        for (int l = 0; l < K; ++l)
-        {
-          const PointOptics pl = blendedOptics<Mode>(s, s.active, s.numActive, o + d * (s0 + v[l] * h));
-          c.samples += uint32_t(s.numActive);
-          const float r = h * (minf(pl.sigma, s.sigmaLimit) - (sA + dS * v[l]));
-          term *= -(v[l] < u0 ? R[l] + r : R[l]) / (float(l + 1) * marchOrderProbability(l));
-          series += term;
-          R[l] += r;
-        }
-        const float tauEnd = tau + h * (sA + 0.5f * dS);
-        const Vec3f cbar = (e0.emission + e1.emission) * 0.5f;
-        const float Tt = expf(logW - (tau + h * u0 * (sA + 0.5f * dS * u0)));
-        L += cbar * (expf(logW - tau) - expf(logW - tauEnd));
-        L += po.emission * (h * minf(po.sigma, s.sigmaLimit) * Tt * series) - cbar * (h * (sA + dS * u0) * Tt);
-        tau = tauEnd;
-        e0 = e1;
-        const float est = expf(logW - tau);
-        if (est < kRouletteThreshold)
-        {
-          if (rng.next() * kRouletteThreshold >= est)
-          {
-            stopped = true;
-            break;
-          }
-          logW = logf(kRouletteThreshold) + tau;
-        }
+        stopped = true;
+        return true;
       }
-      pEnd = e0;
-      tEnd = b;
     }
-    dda.next();
-  }
-  float Tend = 0.f;
-  if (!stopped)
-  {
-    float series = 1.f;
-    float term = 1.f;
-    for (int l = 0; l < K; ++l)
-    {
-      term *= -R[l] / (float(l + 1) * marchOrderProbability(l));
-      series += term;
-    }
-    Tend = expf(logW - tau) * series;
-  }
-  Vec4f out;
-  out.r = L.x;
-  out.g = L.y;
-  out.b = L.z;
-  out.a = 1.f - Tend;
-  return out;
+    pEnd = e0;
+    tEnd = b;
+    return false;
+  });
+  return premultipliedRGBA(L, stopped ? 0.f : expf(logW - tau) * marchSeriesEnd(R, 0.f, K));
 }
 
 /**
@@ -572,18 +638,18 @@ MCVOL_HOT Vec4f trackControlMarch(const SceneView& s, Vec3f o, Vec3f d, float tm
  * where the marches disagree (sharp features thinner than a stratum); the
  * mean converges to the emission-absorption integral. Russian roulette on
  * exp(-X0) (kept as a log weight) ends the ray as in trackExpected().
- * From kMarchControlVariateRate strata per voxel at pixel centres it hands
- * the ray, with its random numbers drawn, to trackControlMarch() (CPU only:
- * the CUDA backend keeps the plain strata, marchControlVariates()).
+ * Control (a compile-time choice: the kernels that run the plain strata
+ * contain none of its code; unlitEstimator() code 3, from
+ * kMarchControlVariateRate strata per voxel at pixel centres) hands the ray,
+ * with its random numbers drawn, to trackControlMarch().
  */
-template <BlendMode Mode>
+template <BlendMode Mode, bool Control = false>
 MCVOL_HOT Vec4f trackUnbiasedMarch(
   const SceneView& s, Vec3f o, Vec3f d, float tmin, float tmax, Rng& rng, RayCounters& c)
 {
-  Vec4f out;
   if (s.numActive == 0)
   {
-    return out;
+    return Vec4f();
   }
   const float u0 = rng.sequence(kGroupFlight);
   int K = 0;
@@ -592,16 +658,10 @@ MCVOL_HOT Vec4f trackUnbiasedMarch(
   {
     v[K++] = rng.next();
   }
-#if !defined(__CUDA_ARCH__)
-  // Host only for now: inlined into the GPU's march kernel (its plain
-  // strata's kernel too), it made the plain frames 3-10% slower on the H100,
-  // and out of line 25-45% (Benchmarks/RESULTS.md, "Eleventh session"); a
-  // kernel instance of its own is the way to have both.
-  if (s.marchControlVariates)
+  if constexpr (Control)
   {
     return trackControlMarch<Mode>(s, o, d, tmin, tmax, u0, v, K, rng, c);
   }
-#endif
   float X[kMarchMaxOrder];
   for (int l = 0; l < K; ++l)
   {
@@ -611,71 +671,35 @@ MCVOL_HOT Vec4f trackUnbiasedMarch(
   float logW = 0.f; // roulette weight, as a logarithm
   bool stopped = false;
   Vec3f L;
-  DDA dda;
-  dda.init(s.grid, o, d, tmin, tmax);
-  while (!dda.done && !stopped)
-  {
-    ++c.ddaSteps;
-    const float M = blendMajorant<Mode>(s, dda.cellIndex());
-    if (M > 0.f)
+  forEachMarchCell<Mode>(s, o, d, tmin, tmax, c, [&](float a, float, int n, float h) {
+    for (int j = 0; j < n; ++j)
     {
-      const float a = dda.t0;
-      const float len = dda.t1 - a;
-      const float want = len * maxf(s.marchRate, M * kMarchMajorantStrata);
-      const int n = want < 1.f ? 1 : (want < 65536.f ? int(ceilf(want)) : 65536);
-      const float h = len / float(n);
-      for (int j = 0; j < n; ++j)
+      const float s0 = a + float(j) * h;
+      ++c.tentative;
+      const PointOptics po = blendedOptics<Mode>(s, s.active, s.numActive, o + d * (s0 + u0 * h));
+      const float sig0 = minf(po.sigma, s.sigmaLimit);
+      c.samples += uint32_t(s.numActive);
+      const float pivot = X0 + u0 * h * sig0;
+      float series = 1.f;
+      float term = 1.f;
+      for (int l = 0; l < K; ++l)
       {
-        const float s0 = a + float(j) * h;
-        ++c.tentative;
-        const PointOptics po = blendedOptics<Mode>(s, s.active, s.numActive, o + d * (s0 + u0 * h));
-        const float sig0 = minf(po.sigma, s.sigmaLimit);
+        const PointOptics pl = blendedOptics<Mode>(s, s.active, s.numActive, o + d * (s0 + v[l] * h));
         c.samples += uint32_t(s.numActive);
-        const float pivot = X0 + u0 * h * sig0;
-        float series = 1.f;
-        float term = 1.f;
-        for (int l = 0; l < K; ++l)
-        {
-          const PointOptics pl = blendedOptics<Mode>(s, s.active, s.numActive, o + d * (s0 + v[l] * h));
-          c.samples += uint32_t(s.numActive);
-          const float dl = h * minf(pl.sigma, s.sigmaLimit);
-          term *= (pivot - (v[l] < u0 ? X[l] + dl : X[l])) / (float(l + 1) * marchOrderProbability(l));
-          series += term;
-          X[l] += dl;
-        }
-        L += po.emission * (h * sig0 * expf(logW - pivot) * series);
-        X0 += h * sig0;
-        const float est = expf(logW - X0);
-        if (est < kRouletteThreshold)
-        {
-          if (rng.next() * kRouletteThreshold >= est)
-          {
-            stopped = true;
-            break;
-          }
-          logW = logf(kRouletteThreshold) + X0;
-        }
+        term = marchSeriesStep(term, pivot, X[l], h * minf(pl.sigma, s.sigmaLimit), v[l] < u0, l);
+        series += term;
+      }
+      L += po.emission * (h * sig0 * expf(logW - pivot) * series);
+      X0 += h * sig0;
+      if (marchRoulette(logW, X0, rng, kRouletteThreshold))
+      {
+        stopped = true;
+        return true;
       }
     }
-    dda.next();
-  }
-  float Tend = 0.f;
-  if (!stopped)
-  {
-    float series = 1.f;
-    float term = 1.f;
-    for (int l = 0; l < K; ++l)
-    {
-      term *= (X0 - X[l]) / (float(l + 1) * marchOrderProbability(l));
-      series += term;
-    }
-    Tend = expf(logW - X0) * series;
-  }
-  out.r = L.x;
-  out.g = L.y;
-  out.b = L.z;
-  out.a = 1.f - Tend;
-  return out;
+    return false;
+  });
+  return premultipliedRGBA(L, stopped ? 0.f : expf(logW - X0) * marchSeriesEnd(X, X0, K));
 }
 
 /// One Monte Carlo sample of a ray: premultiplied RGB and alpha (1 if the
