@@ -258,11 +258,7 @@ MCVOL_HOT Vec4f marchOptimized(const SceneView& s, const MarchParams& mp, const 
       }
     }
   }
-  out.r = C.x;
-  out.g = C.y;
-  out.b = C.z;
-  out.a = 1.f - T;
-  return out;
+  return premultipliedRGBA(C, T);
 }
 
 /// Front-to-back march over [0, tmax] with the listed channels; premultiplied
@@ -338,11 +334,7 @@ MCVOL_HOT Vec4f marchChannels(const SceneView& s, const MarchParams& mp, const i
     }
     dda.next();
   }
-  out.r = C.x;
-  out.g = C.y;
-  out.b = C.z;
-  out.a = 1.f - T;
-  return out;
+  return premultipliedRGBA(C, T);
 }
 
 /// Transmittance from index point x along index direction dl (unit world
@@ -584,12 +576,7 @@ MCVOL_HOT Vec4f marchLit(
       }
     }
   }
-  Vec4f out;
-  out.r = C.x;
-  out.g = C.y;
-  out.b = C.z;
-  out.a = 1.f - T;
-  return out;
+  return premultipliedRGBA(C, T);
 }
 
 /// Phase of a pixel's sample lattice: 0.5 (midpoint rule), or with jitter a

@@ -149,9 +149,15 @@ struct ImportanceView
 /// 31.8 dB, for 1.4x the time. With jittered pixels the noise of the pixel
 /// footprint, which the control variates leave alone, dominates: on the
 /// H100 the Zebrafish-like set's 1 per voxel got 1.5x less noise for 1.4x
-/// the frame time, and took 13.3 ms to 35 dB instead of 9.6. Below 1 per
-/// voxel the strata are wider than the data's detail and it was not
-/// measured (Benchmarks/RESULTS.md, "Eleventh session").
+/// the frame time, and took 13.3 ms to 35 dB instead of 9.6 (Benchmarks/
+/// RESULTS.md, "Eleventh session"). At pixel centres on the GPU (H100,
+/// 1024^2) the frames cost 1.33-1.45x the plain strata's: Zebrafish-like
+/// reached 35 dB in one 6.8 ms frame at 1 per voxel instead of 9.4 ms.
+/// Below 1 per voxel, a trial on the CPU scene (0.25-0.75 per voxel) also
+/// needed fewer samples to 35 dB, but the thin sets' low rates (0.0625-
+/// 0.125 per voxel) already reach 35 dB in one plain frame, where the
+/// control variates would only add cost, and the automatic choice is not
+/// offered both; so the rule starts at 1 ("Twelfth session").
 constexpr float kMarchControlVariateRate = 1.f;
 
 struct SceneView

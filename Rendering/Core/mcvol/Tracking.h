@@ -393,11 +393,7 @@ MCVOL_HOT Vec4f trackExpected(const SceneView& s, Vec3f o, Vec3f d, float tmin, 
     }
     dda.next();
   }
-  out.r = L.x;
-  out.g = L.y;
-  out.b = L.z;
-  out.a = 1.f - T;
-  return out;
+  return premultipliedRGBA(L, T);
 }
 
 /// Highest order of the unbiased march's power series (Estimator::UnbiasedMarch).
@@ -510,17 +506,6 @@ MCVOL_HOT void forEachMarchCell(const SceneView& s, Vec3f o, Vec3f d, float tmin
     }
     dda.next();
   }
-}
-
-/// Premultiplied RGB `L` and alpha 1 - T.
-MCVOL_HOT Vec4f premultipliedRGBA(const Vec3f& L, float T)
-{
-  Vec4f out;
-  out.r = L.x;
-  out.g = L.y;
-  out.b = L.z;
-  out.a = 1.f - T;
-  return out;
 }
 
 /**

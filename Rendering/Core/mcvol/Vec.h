@@ -66,6 +66,17 @@ struct Vec4f
   float r = 0.f, g = 0.f, b = 0.f, a = 0.f;
 };
 
+/// Premultiplied RGB `rgb` with alpha 1 - T (T: the transmittance left).
+MCVOL_FUNC Vec4f premultipliedRGBA(Vec3f rgb, float T)
+{
+  Vec4f out;
+  out.r = rgb.x;
+  out.g = rgb.y;
+  out.b = rgb.z;
+  out.a = 1.f - T;
+  return out;
+}
+
 /// min without fminf's NaN rules, which compilers turn into library calls.
 MCVOL_FUNC float minf(float a, float b)
 {
