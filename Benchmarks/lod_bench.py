@@ -105,6 +105,10 @@ def main():
     p.add_argument("--backend", default="CPU", choices=["CPU", "CUDA"],
                    help="the representation's Backend (CUDA on the GPU machine, Benchmarks/gpu/vtk.sh)")
     p.add_argument("--macrocell", type=int, default=0, help="the representation's MacrocellSize (0: its default)")
+    p.add_argument("--precision", default="half", choices=["half", "float", "both"],
+                   help="levels above 0 in half precision (the default, LevelOfDetailHalfPrecision) or float32; "
+                        "both: each level in float32, then in half precision (an A/B in one run)")
+    p.add_argument("--repeat", type=int, default=1, help="run the list of levels this many times (A/B on a noisy machine)")
     p.add_argument("--out", help="folder for README.md and lod.csv")
     args = p.parse_args()
     T.load_plugin()
@@ -138,23 +142,33 @@ def main():
     first_still_s = time.perf_counter() - t0
     mapper = T.local_mapper(rep)
     rows = []
+    configs = []
     for level in args.levels:
+        if level == 0:
+            configs.append((0, args.precision != "float"))
+        elif args.precision == "both":
+            configs += [(level, False), (level, True)]
+        else:
+            configs.append((level, args.precision == "half"))
+    for level, half in configs * max(1, args.repeat):
+        rep.LevelOfDetailHalfPrecision = int(half)
         rep.InteractiveLevelOfDetail = level  # 0: the still level (0) while interacting
         builds = mapper.GetNumberOfLevelOfDetailBuilds()
-        memory_before = mapper.GetLevelOfDetailMemory()
         rss_before = rss_mib()
         first = frames(view, 1)[0]
         built = mapper.GetNumberOfLevelOfDetailBuilds() > builds
         build_ms = 1e3 * mapper.GetLastLevelOfDetailBuildTime() if built else 0.0
         work_mib = mapper.GetLastLevelOfDetailBuildMemory() / 1048576.0 if built else 0.0
-        level_mib = (mapper.GetLevelOfDetailMemory() - memory_before) / 1048576.0 if level > 0 else data_mib
+        # The levels the mapper keeps after this level's first frame (a
+        # precision change drops the others; without one, the levels so far).
+        level_mib = mapper.GetLevelOfDetailMemory() / 1048576.0 if level > 0 else data_mib
         rss_growth = rss_mib() - rss_before
         cpu = []
         times = frames(view, args.frames, cpu)
         used = T.info(rep, "LastLevelOfDetail")
         width = mapper.GetAccumulatedImageWidth()
         trace_ms = 1e3 * mapper.GetLastTraceTime()
-        rows.append(dict(level=used, frame_ms=1e3 * statistics.median(times), cpu_ms=1e3 * statistics.median(cpu),
+        rows.append(dict(level=used, precision="half" if half and used > 0 else "float", frame_ms=1e3 * statistics.median(times), cpu_ms=1e3 * statistics.median(cpu),
                          min_ms=1e3 * min(times),
                          max_ms=1e3 * max(times), trace_ms=trace_ms, first_ms=1e3 * first, build_ms=build_ms,
                          level_mib=level_mib, work_mib=work_mib, rss_growth=rss_growth, width=width))
@@ -162,6 +176,7 @@ def main():
         sys.stdout.flush()
 
     # Rebuild after a transfer-function edit while interacting at level 1.
+    rep.LevelOfDetailHalfPrecision = int(args.precision != "float")
     rep.InteractiveLevelOfDetail = 1
     frames(view, 2)
     builds = mapper.GetNumberOfLevelOfDetailBuilds()
@@ -174,14 +189,15 @@ def main():
     rebuild_ms = 1e3 * mapper.GetLastLevelOfDetailBuildTime()
 
     lines = []
-    lines.append("| level | grid | frame ms, moving camera (median; min-max) | CPU ms a frame, all threads | trace ms | "
-                 "build ms of the level | memory of the level MiB | build work MiB | RSS growth MiB |")
-    lines.append("|---|---|---|---|---|---|---|---|---|")
+    lines.append("| level | precision | grid | frame ms, moving camera (median; min-max) | CPU ms a frame, all threads | trace ms | "
+                 "build ms of the level | levels kept MiB (level 0: the data) | build work MiB | RSS growth MiB |")
+    lines.append("|---|---|---|---|---|---|---|---|---|---|")
     for r in rows:
         n = -(-args.dims // (1 << r["level"]))
-        grid = "%d^3 x %s" % (n, "4 float" if r["level"] == 0 else "1 float4 (summed)")
-        lines.append("| %d | %s | %.0f (%.0f-%.0f) | %.0f | %.0f | %s | %.0f | %s | %.0f |" % (
-            r["level"], grid, r["frame_ms"], r["min_ms"], r["max_ms"], r["cpu_ms"], r["trace_ms"],
+        grid = "%d^3 x %s" % (n, "4 float" if r["level"] == 0 else
+                              "1 half4 (summed)" if r["precision"] == "half" else "1 float4 (summed)")
+        lines.append("| %d | %s | %s | %.0f (%.0f-%.0f) | %.0f | %.0f | %s | %.0f | %s | %.0f |" % (
+            r["level"], r["precision"], grid, r["frame_ms"], r["min_ms"], r["max_ms"], r["cpu_ms"], r["trace_ms"],
             "%.0f" % r["build_ms"] if r["level"] > 0 else "-", r["level_mib"],
             "%.1f" % r["work_mib"] if r["level"] > 0 else "-", r["rss_growth"]))
     table = "\n".join(lines)

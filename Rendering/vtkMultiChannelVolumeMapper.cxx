@@ -48,7 +48,7 @@ static_assert(kMaxChannels == mcvol::kMaxChannels, "channel limits of mapper and
 /// values), the transfer-function tables (scalar channels), the filter and
 /// whether the channels are summed.
 mcvol::adapter::LevelOfDetailCache::Key LevelKey(const mcvol::adapter::BoundChannels& channels, bool classified,
-  unsigned long long tablesVersion, int filter, bool summed)
+  unsigned long long tablesVersion, int filter, bool summed, bool halfPrecision)
 {
   mcvol::adapter::LevelOfDetailCache::Key key;
   key.Sources.assign(channels.Sources.begin(), channels.Sources.begin() + channels.Count);
@@ -59,6 +59,7 @@ mcvol::adapter::LevelOfDetailCache::Key LevelKey(const mcvol::adapter::BoundChan
   key.TablesVersion = classified ? 0 : tablesVersion;
   key.Filter = filter;
   key.Summed = summed;
+  key.HalfPrecision = halfPrecision;
   return key;
 }
 } // namespace
@@ -874,6 +875,11 @@ struct vtkMultiChannelVolumeMapper::RenderPass
   /// data (level > 0), and the Scene traced (level 0's or the level's).
   int Level = 0;
   bool SumChannels = false;
+  /// Levels L > 0 converted to half precision: LevelOfDetailHalfPrecision
+  /// on a backend that reads them in place (the CPU). The CUDA backend
+  /// holds float32 on the device whatever the host keeps, so there the
+  /// conversion would only add time to every rebuild.
+  bool HalfLevels = false;
   const mcvol::adapter::LevelOfDetailCache::Level* LevelData = nullptr;
   mcvol::Scene* Scene = nullptr;
   vtkMTimeType LightsMTime = 0;
@@ -1067,7 +1073,8 @@ bool vtkMultiChannelVolumeMapper::UpdateScene(RenderPass& pass)
       // Levels kept for interaction stay while they are current; stale ones
       // (new data or functions) would be rebuilt anyway: free them now.
       in.Levels.DropIfStale(
-        LevelKey(pass.Channels, pass.Classified, in.Tables.Version(), this->LevelOfDetailFilter, pass.SumChannels));
+        LevelKey(pass.Channels, pass.Classified, in.Tables.Version(), this->LevelOfDetailFilter, pass.SumChannels,
+          pass.HalfLevels));
     }
     mcvol::Scene& scene = *pass.Scene;
     const int sceneChannels = scene.numChannels();
@@ -1171,6 +1178,8 @@ bool vtkMultiChannelVolumeMapper::ChooseLevelOfDetail(RenderPass& pass)
   policy.MemoryBudget = this->MemoryBudget;
   // The CUDA backend copies the channels (float64 as float32).
   policy.DeviceCopy = in.Backend.ActiveName(this->UsesRenderBackend(), this->Backend) == "cuda";
+  policy.HalfPrecision = this->LevelOfDetailHalfPrecision;
+  pass.HalfLevels = this->LevelOfDetailHalfPrecision && !policy.DeviceCopy;
 
   // Level 0's voxel size in world units per axis: spacing, direction and
   // the volume's matrix.
@@ -1255,7 +1264,8 @@ bool vtkMultiChannelVolumeMapper::UpdateLevelScene(RenderPass& pass)
 {
   vtkInternals& in = *this->Internals;
   const mcvol::adapter::LevelOfDetailCache::Key key =
-    LevelKey(pass.Channels, pass.Classified, in.Tables.Version(), this->LevelOfDetailFilter, pass.SumChannels);
+    LevelKey(pass.Channels, pass.Classified, in.Tables.Version(), this->LevelOfDetailFilter, pass.SumChannels,
+      pass.HalfLevels);
   std::vector<const mcvol::TransferFunctionDesc*> tables;
   if (!pass.Classified)
   {
@@ -1552,6 +1562,7 @@ void vtkMultiChannelVolumeMapper::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "LevelOfDetail: " << this->LevelOfDetail
      << (this->LevelOfDetail == LEVEL_OF_DETAIL_AUTOMATIC ? " (automatic)" : "") << "\n";
   os << indent << "LevelOfDetailFilter: " << this->GetLevelOfDetailFilterAsString() << "\n";
+  os << indent << "LevelOfDetailHalfPrecision: " << (this->LevelOfDetailHalfPrecision ? "On" : "Off") << "\n";
   os << indent << "MemoryBudget: " << this->MemoryBudget << " bytes" << (this->MemoryBudget > 0.0 ? "" : " (no cap)")
      << "\n";
   os << indent << "LastLevelOfDetail: " << this->LastLevelOfDetail << "\n";

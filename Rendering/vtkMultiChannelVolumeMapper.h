@@ -750,6 +750,22 @@ public:
 
   ///@{
   /**
+   * Levels L > 0 in half precision (default on): each pre-classified voxel
+   * as 4 binary16 values times a power-of-two scale per level, 8 bytes
+   * instead of 16 (relative error at most 2^-11 per value; the images
+   * differ from float32 levels by far less than one 8-bit step:
+   * Benchmarks/RESULTS.md, "Thirteenth session: half-precision levels"). Halves the levels'
+   * host memory on the CPU backend; the CUDA backend keeps float32 levels
+   * whatever the setting (it holds float32 on the device). Level 0 is never
+   * converted. A change rebuilds the levels (CPU).
+   */
+  vtkSetMacro(LevelOfDetailHalfPrecision, bool);
+  vtkGetMacro(LevelOfDetailHalfPrecision, bool);
+  vtkBooleanMacro(LevelOfDetailHalfPrecision, bool);
+  ///@}
+
+  ///@{
+  /**
    * Memory budget of the volume in bytes (0, the default: no cap). Where the
    * level asked for (0, L or the automatic one) needs more, the finest
    * coarser level that fits is rendered instead, GetLevelOfDetailReport()
@@ -759,7 +775,8 @@ public:
    * they are (native type; the CPU reads them in place, the CUDA backend
    * holds each channel once with float64 as float32; the classified copy
    * of dependent components is 16 bytes a voxel), a level L > 0 16 bytes a
-   * voxel per pre-classified channel. The streamed build's
+   * voxel per pre-classified channel, or 8 with LevelOfDetailHalfPrecision
+   * on the CPU (the CUDA backend holds 16). The streamed build's
    * working memory (a few slices, GetLastLevelOfDetailBuildMemory()) and the
    * acceleration grids are not counted. The CUDA device's free memory is not
    * queried (the backend API has no call for it): set the budget to what
@@ -976,6 +993,7 @@ protected:
   int LastTransferFunctionUpdates = 0;
   int LevelOfDetail = 0;
   int LevelOfDetailFilter = LOD_FILTER_BOX4;
+  bool LevelOfDetailHalfPrecision = true;
   double MemoryBudget = 0.0;
   int LastLevelOfDetail = 0;
   int LastLevelOfDetailChannels = 0;

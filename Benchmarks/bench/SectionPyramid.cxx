@@ -312,6 +312,8 @@ struct LevelRow
   double tentativePerRay = 0; ///< collision estimator, one counted frame
   double ddaPerRay = 0;       ///< macrocells visited per ray, same frame
   double deviceMiB = 0;
+  double halfRmse = -1; ///< half-precision rows: ray-march image RMSE against the float32 level's; -1: none
+  double halfMaxDiff = -1;
 };
 } // namespace
 
@@ -391,6 +393,25 @@ void runPyramid(Bench& bench)
     pyr.back().level = l;
   }
 
+  auto sourceScene = [&](const mcvol::ChannelSource& src, const int dims[3])
+  {
+    auto scene = std::make_unique<mcvol::Scene>();
+    scene->setHostAcceleration(bench.hostAccel);
+    scene->setVolume(dims, 1, &src);
+    scene->setMacrocellSize(o.macrocell);
+    scene->setBlendMode(mcvol::BlendMode::Density);
+    scene->update();
+    return scene;
+  };
+  // The ray march's image (premultiplied RGBA), for the half-precision rows.
+  auto marchImage = [&](const mcvol::Scene& scene, const mcvol::Camera& cam)
+  {
+    mcvol::Accumulator acc;
+    mcvol::MarchSettings ms;
+    ms.terminateTransmittance = 0.f; // no termination decided on a rounding
+    r.march(scene, cam, ms, nullptr, acc);
+    return std::vector<float>(acc.rgba(), acc.rgba() + size_t(cam.width) * size_t(cam.height) * 4);
+  };
   auto gridScene = [&](const mcvol::ClassifiedVolumeView& v)
   {
     auto scene = std::make_unique<mcvol::Scene>();
@@ -424,9 +445,34 @@ void runPyramid(Bench& bench)
     std::copy(L.dims, L.dims + 3, row.dims);
     row.hostMiB = double(L.bytes()) / MiB;
     row.buildMs = buildMs[size_t(l - 1)];
+    const mcvol::Camera cam = forGrid(cam0, L.spacing, L.origin);
     auto scene = gridScene(L.view());
-    timeScene(row, *scene, forGrid(cam0, L.spacing, L.origin));
+    timeScene(row, *scene, cam);
     rows.push_back(row);
+    // The same level in half precision (the mapper's default for levels,
+    // PyramidLevel::toHalfPrecision): its memory, conversion time, frames
+    // and how far its ray-march image is from the float32 level's.
+    mcvol::PyramidLevel H = L;
+    LevelRow half;
+    half.name = std::to_string(l) + " (half precision)";
+    std::copy(L.dims, L.dims + 3, half.dims);
+    const auto t0 = Clock::now();
+    H.toHalfPrecision();
+    half.buildMs = 1e3 * seconds(t0);
+    half.hostMiB = double(H.bytes()) / MiB;
+    auto halfScene = sourceScene(H.source(), H.dims);
+    timeScene(half, *halfScene, cam);
+    const std::vector<float> a = marchImage(*scene, cam), b = marchImage(*halfScene, cam);
+    double sq = 0.0, worst = 0.0;
+    for (size_t i = 0; i < a.size(); ++i)
+    {
+      const double e = double(a[i]) - double(b[i]);
+      sq += e * e;
+      worst = std::max(worst, std::fabs(e));
+    }
+    half.halfRmse = std::sqrt(sq / double(std::max<size_t>(1, a.size())));
+    half.halfMaxDiff = worst;
+    rows.push_back(half);
   }
 
   std::printf("## Levels of detail (%s, %d channels, density blend, macrocell %d, %dx%d, 1 spp, 1-DDA, %d warm-up + "
@@ -434,8 +480,8 @@ void runPyramid(Bench& bench)
     ds.c_str(), s.volume.numChannels(), o.macrocell, o.width, o.height, o.warmup, o.frames);
   std::printf(
     "| level | grid | host MiB | classify / build ms (host) | MC ms expected-value | MC ms collision | ray "
-    "march ms | tentative/ray | DDA steps/ray | renderer device MiB |\n|---|---|---|---|---|---|---|---|---|---|"
-    "\n");
+    "march ms | tentative/ray | DDA steps/ray | renderer device MiB | half vs float32 march: RMSE / max |\n"
+    "|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (const LevelRow& row : rows)
   {
     char build[32] = "-";
@@ -443,9 +489,17 @@ void runPyramid(Bench& bench)
     {
       std::snprintf(build, sizeof(build), "%.1f", row.buildMs);
     }
-    std::printf("| %s | %dx%dx%d | %.1f | %s | %.3f | %.3f | %.3f | %.2f | %.2f | %.1f |\n", row.name.c_str(),
+    char half[64] = "-";
+    if (row.halfRmse >= 0)
+    {
+      std::snprintf(half, sizeof(half), "%.2g / %.2g", row.halfRmse, row.halfMaxDiff);
+      bench.row("pyramid", ds, s.volume.numChannels(), o.macrocell, "raymarch", row.halfRmse, "half_rmse", row.name);
+      bench.row("pyramid", ds, s.volume.numChannels(), o.macrocell, "raymarch", row.halfMaxDiff, "half_max_diff",
+        row.name);
+    }
+    std::printf("| %s | %dx%dx%d | %.1f | %s | %.3f | %.3f | %.3f | %.2f | %.2f | %.1f | %s |\n", row.name.c_str(),
       row.dims[0], row.dims[1], row.dims[2], row.hostMiB, build, row.evMs, row.colMs, row.marchMs, row.tentativePerRay,
-      row.ddaPerRay, row.deviceMiB);
+      row.ddaPerRay, row.deviceMiB, half);
     bench.row("pyramid", ds, s.volume.numChannels(), o.macrocell, "expected-value", row.evMs, "ms", row.name);
     bench.row("pyramid", ds, s.volume.numChannels(), o.macrocell, "collision", row.colMs, "ms", row.name);
     bench.row("pyramid", ds, s.volume.numChannels(), o.macrocell, "raymarch", row.marchMs, "ms", row.name);
@@ -469,6 +523,17 @@ void runPyramid(Bench& bench)
     bench.row("pyramid", ds, s.volume.numChannels(), o.macrocell, "raymarch", rm, "ratio", "level0/level1");
     bench.row("pyramid", ds, s.volume.numChannels(), o.macrocell, "expected-value", ev, "ratio", "level0/level1");
     bench.row("pyramid", ds, s.volume.numChannels(), o.macrocell, "collision", col, "ratio", "level0/level1");
+    if (rows.size() > 3 && rows[3].halfRmse >= 0)
+    {
+      const double evh = rows[0].evMs / rows[3].evMs, colh = rows[0].colMs / rows[3].colMs;
+      const double rmh = rows[0].marchMs / rows[3].marchMs;
+      std::printf("Level 0 (scalar) / level 1 in half precision: Monte Carlo %.2fx expected-value, %.2fx collision; "
+                  "ray march %.2fx\n",
+        evh, colh, rmh);
+      bench.row("pyramid", ds, s.volume.numChannels(), o.macrocell, "expected-value", evh, "ratio", "level0/level1-half");
+      bench.row("pyramid", ds, s.volume.numChannels(), o.macrocell, "collision", colh, "ratio", "level0/level1-half");
+      bench.row("pyramid", ds, s.volume.numChannels(), o.macrocell, "raymarch", rmh, "ratio", "level0/level1-half");
+    }
   }
   std::printf("\n");
   std::fflush(stdout);

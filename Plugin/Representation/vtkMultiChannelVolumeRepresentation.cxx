@@ -413,6 +413,11 @@ void vtkMultiChannelVolumeRepresentation::SetLevelOfDetailFilter(int filter)
   this->GetMultiChannelMapper()->SetLevelOfDetailFilter(filter);
 }
 
+void vtkMultiChannelVolumeRepresentation::SetLevelOfDetailHalfPrecision(bool on)
+{
+  this->GetMultiChannelMapper()->SetLevelOfDetailHalfPrecision(on);
+}
+
 void vtkMultiChannelVolumeRepresentation::SetMemoryBudgetMiB(double mib)
 {
   this->GetMultiChannelMapper()->SetMemoryBudget(mib > 0.0 ? mib * 1048576.0 : 0.0);

@@ -137,6 +137,7 @@ public:
   void SetLightRayImportanceSamples(int n);
   void SetLevelOfDetail(int level);
   void SetLevelOfDetailFilter(int filter);
+  void SetLevelOfDetailHalfPrecision(bool on);
   /// Mebibytes (the mapper's SetMemoryBudget takes bytes); 0: no cap.
   void SetMemoryBudgetMiB(double mib);
   ///@}

@@ -160,11 +160,12 @@ void CUDARenderer::Internal::uploadChannels(const Scene& scene)
         // unfiltered reads).
         staging.resize(voxels * 4 * sizeof(float));
         float* out = reinterpret_cast<float*>(staging.data());
-        const float* in = static_cast<const float*>(src.data);
         bool finite = true;
         for (size_t v = 0; v < voxels && finite; ++v)
         {
-          finite = classifiedVoxel(in + v * size_t(src.stride), out + 4 * v);
+          // float16 levels are widened here: the device holds float32, the
+          // same values the CPU reads (classifiedVoxelAt).
+          finite = classifiedVoxelAt(src.data, src.type, src.scale, src.stride, int64_t(v), out + 4 * v);
         }
         if (finite)
         {
@@ -179,7 +180,24 @@ void CUDARenderer::Internal::uploadChannels(const Scene& scene)
       // Otherwise 4 floats per voxel, packed (stride 4) in linear memory,
       // sampled in software (sampleClassified).
       const void* packed = src.data;
-      if (src.stride != 4)
+      if (src.type == ScalarType::Float16)
+      {
+        // Widened to float32 (raw, unsanitised: sampleClassified sanitises
+        // each read as on the host; NaN stays NaN).
+        staging.resize(voxels * 4 * sizeof(float));
+        float* out = reinterpret_cast<float*>(staging.data());
+        const uint16_t* in = static_cast<const uint16_t*>(src.data);
+        const float s = float(src.scale);
+        for (size_t v = 0; v < voxels; ++v)
+        {
+          for (int e = 0; e < 4; ++e)
+          {
+            out[4 * v + size_t(e)] = halfToFloat(in[v * size_t(src.stride) + size_t(e)]) * s;
+          }
+        }
+        packed = staging.data();
+      }
+      else if (src.stride != 4)
       {
         staging.resize(voxels * 4 * sizeof(float));
         float* out = reinterpret_cast<float*>(staging.data());

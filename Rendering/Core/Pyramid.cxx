@@ -27,12 +27,13 @@ namespace mcvol
 namespace
 {
 /**
- * Resize v to n floats (zeros), asking the kernel to back its storage with
+ * Resize v to n values (zeros), asking the kernel to back its storage with
  * transparent huge pages where it allows them (Linux, THP mode "madvise").
  * A level is sampled at random positions by every ray: with 4 KiB pages
  * nearly every corner read of a large level also misses the TLB.
  */
-void resizeHuge(std::vector<float>& v, size_t n)
+template <typename T>
+void resizeHuge(std::vector<T>& v, size_t n)
 {
   v.clear();
   v.shrink_to_fit();
@@ -522,6 +523,10 @@ FilterTaps filterTaps(DownsampleFilter f)
 
 ClassifiedVolumeView PyramidLevel::view() const
 {
+  if (this->halfPrecision())
+  {
+    throw std::logic_error("mcvol: a half-precision pyramid level has no float32 view");
+  }
   ClassifiedVolumeView v;
   v.voxels = this->voxels.data();
   v.stride = 4;
@@ -537,11 +542,55 @@ ClassifiedVolumeView PyramidLevel::view() const
 ChannelSource PyramidLevel::source() const
 {
   ChannelSource s;
-  s.data = this->voxels.data();
-  s.type = ScalarType::Float32;
+  if (this->halfPrecision())
+  {
+    s.data = this->halfVoxels.data();
+    s.type = ScalarType::Float16;
+    s.scale = this->halfScale;
+  }
+  else
+  {
+    s.data = this->voxels.data();
+    s.type = ScalarType::Float32;
+  }
   s.stride = 4;
   s.format = ChannelFormat::Extinction;
   return s;
+}
+
+void PyramidLevel::toHalfPrecision()
+{
+  if (this->halfPrecision() || this->voxels.empty())
+  {
+    return;
+  }
+  float largest = 0.f;
+  for (const float v : this->voxels)
+  {
+    if (std::isinf(v) || v < 0.f)
+    {
+      throw std::invalid_argument("mcvol: toHalfPrecision: a pyramid level holds an infinite or negative value");
+    }
+    largest = v > largest ? v : largest; // NaN compares false
+  }
+  // halfScale = 2^(e - 14) with largest = m 2^e, m in [0.5, 1): the largest
+  // stored value is m 2^14, in [2^13, 2^14). Powers of two keep v / scale
+  // and its product back exact.
+  int e = 0;
+  (void)std::frexp(largest > 0.f ? largest : 1.f, &e);
+  const double scale = std::ldexp(1.0, e - 14);
+  const float inverse = float(1.0 / scale);
+  std::vector<uint16_t> half;
+  resizeHuge(half, this->voxels.size());
+  const int64_t n = int64_t(half.size());
+#pragma omp parallel for schedule(static)
+  for (int64_t i = 0; i < n; ++i)
+  {
+    half[size_t(i)] = floatToHalf(this->voxels[size_t(i)] * inverse);
+  }
+  this->halfScale = scale;
+  this->halfVoxels = std::move(half);
+  std::vector<float>().swap(this->voxels);
 }
 
 int maxPyramidLevels(const int dims[3])
@@ -596,11 +645,11 @@ void levelDims(const int dims[3], int level, int out[3])
   }
 }
 
-size_t levelBytes(const int dims[3], int level, int channels)
+size_t levelBytes(const int dims[3], int level, int channels, bool halfPrecision)
 {
   int d[3];
   levelDims(dims, level, d);
-  return voxelsOf(d) * 4 * sizeof(float) * size_t(std::max(channels, 0));
+  return voxelsOf(d) * 4 * (halfPrecision ? sizeof(uint16_t) : sizeof(float)) * size_t(std::max(channels, 0));
 }
 
 namespace

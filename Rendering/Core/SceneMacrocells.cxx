@@ -50,8 +50,7 @@ void rangeOf(const T* data, int64_t stride, double offset, const int dims[3], co
 }
 /// Range of a pre-classified channel's sanitised sigma (classifiedVoxel), NaN
 /// voxels skipped, as the per-ray code reads it.
-void classifiedRangeOf(const float* data, int64_t stride, const int dims[3], const int lo[3], const int hi[3],
-  float& mn, float& mx)
+void classifiedRangeOf(const ChannelSource& c, const int dims[3], const int lo[3], const int hi[3], float& mn, float& mx)
 {
   for (int k = lo[2]; k <= hi[2]; ++k)
   {
@@ -61,7 +60,7 @@ void classifiedRangeOf(const float* data, int64_t stride, const int dims[3], con
       for (int i = lo[0]; i <= hi[0]; ++i)
       {
         float x[4];
-        if (classifiedVoxel(data + (row + i) * stride, x))
+        if (classifiedVoxelAt(c.data, c.type, c.scale, c.stride, row + i, x))
         {
           mn = x[0] < mn ? x[0] : mn;
           mx = x[0] > mx ? x[0] : mx;
@@ -118,7 +117,10 @@ void Scene::layoutGrid()
   {
     v.channels[n].data = this->Channels[n].data;
     v.channels[n].stride = this->Channels[n].stride;
-    v.channels[n].offset = this->Channels[n].offset;
+    // A float16 pre-classified channel's scale travels in the view's offset
+    // (ChannelView::offset), read by fetchClassified() on the host.
+    v.channels[n].offset = this->Channels[n].type == ScalarType::Float16 ? this->Channels[n].scale
+                                                                          : this->Channels[n].offset;
     v.channels[n].type = this->Channels[n].type;
     v.channels[n].format = this->Channels[n].format;
   }
@@ -152,7 +154,7 @@ void Scene::rebuildMacrocells()
       float mx = -std::numeric_limits<float>::infinity();
       if (ch[n].format == ChannelFormat::Extinction)
       {
-        classifiedRangeOf(static_cast<const float*>(ch[n].data), ch[n].stride, D, lo, hi, mn, mx);
+        classifiedRangeOf(ch[n], D, lo, hi, mn, mx);
       }
       else
       {

@@ -51,22 +51,35 @@ void Scene::setVolume(const int dims[3], int numChannels, const ChannelSource* c
     }
     if (channels[n].format == ChannelFormat::Extinction)
     {
-      if (channels[n].type != ScalarType::Float32)
+      if (channels[n].type != ScalarType::Float32 && channels[n].type != ScalarType::Float16)
       {
         throw std::invalid_argument("mcvol: " + channelText(n) +
-          " is pre-classified (extinction format) and must be float32 (sigma, sigma r, sigma g, sigma b), not " +
+          " is pre-classified (extinction format) and must be float32 or float16 (sigma, sigma r, sigma g, sigma b), "
+          "not " +
           toString(channels[n].type));
       }
       if (channels[n].stride < 4)
       {
         throw std::invalid_argument("mcvol: " + channelText(n) +
-          " is pre-classified (extinction format): its stride must be at least 4 floats (4 values per voxel), not " +
+          " is pre-classified (extinction format): its stride must be at least 4 values (4 per voxel), not " +
           std::to_string(channels[n].stride));
       }
     }
+    else if (channels[n].type == ScalarType::Float16)
+    {
+      throw std::invalid_argument("mcvol: " + channelText(n) +
+        " is float16; only pre-classified (extinction format) channels may be float16");
+    }
+    const bool scaled = channels[n].format == ChannelFormat::Extinction && channels[n].type == ScalarType::Float16;
+    if (!(std::isfinite(channels[n].scale) && channels[n].scale > 0.0) || (!scaled && channels[n].scale != 1.0))
+    {
+      throw std::invalid_argument("mcvol: " + channelText(n) + " has a scale of " +
+        std::to_string(channels[n].scale) +
+        "; only float16 pre-classified channels are scaled, by a finite factor above 0");
+    }
     // visitScalarType() reads a value outside the enum as float32, which
     // could read past the end of a narrower array; reject it here, once.
-    if (int(channels[n].type) < int(ScalarType::UInt8) || int(channels[n].type) > int(ScalarType::Float64))
+    if (int(channels[n].type) < int(ScalarType::UInt8) || int(channels[n].type) > int(ScalarType::Float16))
     {
       throw std::invalid_argument(
         "mcvol: " + channelText(n) + " has an unknown scalar type (" + std::to_string(int(channels[n].type)) + ")");

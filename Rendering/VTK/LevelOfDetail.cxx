@@ -43,12 +43,13 @@ std::string DimsText(const int d[3])
 
 bool SameSource(const ChannelSource& a, const ChannelSource& b)
 {
-  return a.data == b.data && a.type == b.type && a.stride == b.stride && a.offset == b.offset && a.format == b.format;
+  return a.data == b.data && a.type == b.type && a.stride == b.stride && a.offset == b.offset &&
+    a.format == b.format && a.scale == b.scale;
 }
 } // namespace
 
 //------------------------------------------------------------------------------
-size_t LevelMemory(const BoundChannels& channels, int level, int outChannels, bool deviceCopy)
+size_t LevelMemory(const BoundChannels& channels, int level, int outChannels, bool deviceCopy, bool halfPrecision)
 {
   size_t bytes = 0;
   if (level == 0)
@@ -64,7 +65,7 @@ size_t LevelMemory(const BoundChannels& channels, int level, int outChannels, bo
   }
   else
   {
-    bytes = levelBytes(channels.Dims, level, outChannels);
+    bytes = levelBytes(channels.Dims, level, outChannels, halfPrecision && !deviceCopy);
   }
   return bytes;
 }
@@ -99,7 +100,7 @@ LevelChoice ChooseLevel(const LevelPolicy& policy, const BoundChannels& channels
     why << "requested";
   }
   choice.Level = choice.Wanted;
-  choice.WantedBytes = LevelMemory(channels, choice.Wanted, outChannels, policy.DeviceCopy);
+  choice.WantedBytes = LevelMemory(channels, choice.Wanted, outChannels, policy.DeviceCopy, policy.HalfPrecision);
   choice.Bytes = choice.WantedBytes;
   if (policy.MemoryBudget > 0.0 && double(choice.Bytes) > policy.MemoryBudget)
   {
@@ -108,7 +109,7 @@ LevelChoice ChooseLevel(const LevelPolicy& policy, const BoundChannels& channels
     while (choice.Level<choice.Levels&& double(choice.Bytes)> policy.MemoryBudget)
     {
       ++choice.Level;
-      choice.Bytes = LevelMemory(channels, choice.Level, outChannels, policy.DeviceCopy);
+      choice.Bytes = LevelMemory(channels, choice.Level, outChannels, policy.DeviceCopy, policy.HalfPrecision);
     }
     choice.Fallback = true;
     choice.NoneFits = double(choice.Bytes) > policy.MemoryBudget;
@@ -150,7 +151,8 @@ bool LevelOfDetailCache::Key::operator==(const Key& o) const
     }
   }
   return std::equal(this->Dims, this->Dims + 3, o.Dims) && this->DataMTime == o.DataMTime &&
-    this->TablesVersion == o.TablesVersion && this->Filter == o.Filter && this->Summed == o.Summed;
+    this->TablesVersion == o.TablesVersion && this->Filter == o.Filter && this->Summed == o.Summed &&
+    this->HalfPrecision == o.HalfPrecision;
 }
 
 //------------------------------------------------------------------------------
@@ -284,6 +286,16 @@ const LevelOfDetailCache::Level& LevelOfDetailCache::Get(const Key& key, int lev
         built.Channels.push_back(build(&inputs[size_t(c)], 1, &channelWork));
         work = std::max(work, channelWork);
       }
+    }
+  }
+  if (key.HalfPrecision)
+  {
+    // Half precision: the level's voxels as binary16 (PyramidLevel::
+    // toHalfPrecision), on the host whichever built them; a CUDA backend
+    // widens them on upload, so both backends render the same values.
+    for (PyramidLevel& channel : built.Channels)
+    {
+      channel.toHalfPrecision();
     }
   }
   built.BuildSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

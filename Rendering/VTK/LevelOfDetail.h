@@ -44,6 +44,10 @@ struct LevelPolicy
   /// once, as a texture or an array; float64 stored as float32); the CPU
   /// reads them in place.
   bool DeviceCopy = false;
+  /// LevelOfDetailHalfPrecision: levels L > 0 held in half precision (8
+  /// bytes a voxel and channel), where there is no device copy (which holds
+  /// 16 bytes: the mapper keeps float32 levels for it).
+  bool HalfPrecision = false;
 };
 
 /// The level a render uses, and why.
@@ -66,8 +70,10 @@ struct LevelChoice
 /// The memory one level of the volume takes in the backend: level 0 the
 /// channels as bound (read in place on the CPU; on a device float64 is held
 /// as float32), a level L > 0 `outChannels` pre-classified channels of 16
-/// bytes a voxel.
-size_t LevelMemory(const BoundChannels& channels, int level, int outChannels, bool deviceCopy);
+/// bytes a voxel, or 8 in half precision on the host (`halfPrecision` and
+/// not `deviceCopy`).
+size_t LevelMemory(
+  const BoundChannels& channels, int level, int outChannels, bool deviceCopy, bool halfPrecision = false);
 
 /**
  * Chooses the level: the request (clamped to [0, levels]) or, for -1, the
@@ -95,6 +101,7 @@ public:
     unsigned long long TablesVersion = 0; ///< the transfer-function tables
     int Filter = 0;
     bool Summed = false; ///< channels summed into one (density blend)
+    bool HalfPrecision = false; ///< levels converted by PyramidLevel::toHalfPrecision
     bool operator==(const Key& o) const;
   };
 

@@ -21,6 +21,7 @@
 #include <omp.h>
 #endif
 #include <cstdio>
+#include <functional>
 #include <limits>
 #include <stdexcept>
 
@@ -100,6 +101,55 @@ double maxAbsDiff(const std::vector<float>& a, const std::vector<float>& b)
     m = std::max(m, std::fabs(double(a[i]) - double(b[i])));
   }
   return m;
+}
+
+/**
+ * Channel 0's sigma at `count` random points of the scene's box is finite,
+ * not negative and at most its macrocell's majorant; `extra(p, sigma)`, if
+ * given, checks each sample further. The first failure is returned.
+ */
+::testing::AssertionResult majorantsBoundChannel0(const Scene& scene, TestRand& r, int count,
+  const std::function<::testing::AssertionResult(Vec3f, float)>& extra = nullptr)
+{
+  const SceneView& s = scene.view();
+  const GridView& g = s.grid;
+  const int N = s.volume.numChannels;
+  for (float m : scene.majorants())
+  {
+    if (!(std::isfinite(m) && m >= 0.f))
+    {
+      return ::testing::AssertionFailure() << "majorant " << m;
+    }
+  }
+  for (int i = 0; i < count; ++i)
+  {
+    Vec3f p;
+    for (int a = 0; a < 3; ++a)
+    {
+      p[a] = float(r.uniform(s.volume.boxLo[a], s.volume.boxHi[a]));
+    }
+    const float sigma = channelOptics(s, 0, p).sigma;
+    int cell[3];
+    for (int a = 0; a < 3; ++a)
+    {
+      cell[a] = clampi(int((p[a] - g.lo[a]) * g.invCellSize[a]), 0, g.dims[a] - 1);
+    }
+    const size_t c = size_t(cell[0] + g.dims[0] * (cell[1] + g.dims[1] * cell[2]));
+    if (!(std::isfinite(sigma) && sigma >= 0.f && sigma <= g.majorants[c * size_t(N)]))
+    {
+      return ::testing::AssertionFailure() << "sigma " << sigma << " against majorant " << g.majorants[c * size_t(N)]
+                                           << " at (" << p.x << ", " << p.y << ", " << p.z << ")";
+    }
+    if (extra)
+    {
+      const ::testing::AssertionResult more = extra(p, sigma);
+      if (!more)
+      {
+        return more;
+      }
+    }
+  }
+  return ::testing::AssertionSuccess();
 }
 
 /// Random transfer function: K texels, opacities in [0, 0.6], colours in [0, 1].
@@ -778,30 +828,7 @@ TEST(Classified, MajorantsBoundSampledSigma)
     const bool nearest = r.chance(0.3);
     scene.setNearestInterpolation(nearest);
     scene.update();
-    const SceneView& s = scene.view();
-    const GridView& g = s.grid;
-    for (float m : scene.majorants())
-    {
-      ASSERT_TRUE(std::isfinite(m) && m >= 0.f);
-    }
-    for (int i = 0; i < 4000; ++i)
-    {
-      Vec3f p;
-      for (int a = 0; a < 3; ++a)
-      {
-        p[a] = float(r.uniform(s.volume.boxLo[a], s.volume.boxHi[a]));
-      }
-      const float sigma = channelOptics(s, 0, p).sigma;
-      ASSERT_TRUE(std::isfinite(sigma) && sigma >= 0.f);
-      int cell[3];
-      for (int a = 0; a < 3; ++a)
-      {
-        cell[a] = clampi(int((p[a] - g.lo[a]) * g.invCellSize[a]), 0, g.dims[a] - 1);
-      }
-      const size_t c = size_t(cell[0] + g.dims[0] * (cell[1] + g.dims[1] * cell[2]));
-      ASSERT_LE(sigma, g.majorants[c * 2 + 0]) << "scene " << sc << (nearest ? " nearest" : " trilinear") << " at ("
-                                               << p.x << ", " << p.y << ", " << p.z << ")";
-    }
+    ASSERT_TRUE(majorantsBoundChannel0(scene, r, 4000)) << "scene " << sc << (nearest ? " nearest" : " trilinear");
   }
 }
 
@@ -1104,4 +1131,326 @@ TEST(LevelOfDetail, FootprintRule)
   EXPECT_THROW(chooseLevelOfDetail(1.0, spacing, -1), std::invalid_argument);
   const double zero[3] = { 1.0, 0.0, 1.0 };
   EXPECT_THROW(chooseLevelOfDetail(1.0, zero, 3), std::invalid_argument);
+}
+
+// ------------------------------------------------ half-precision levels
+
+// binary16 conversion: every one of the 65536 patterns decodes to its exact
+// value and encodes back to itself (NaN to a NaN); rounding to nearest, ties
+// to even, at normals, subnormals and the overflow threshold.
+TEST(HalfPrecision, ConversionIsExactAndRoundsToNearestEven)
+{
+  for (uint32_t h = 0; h < 0x10000u; ++h)
+  {
+    const float f = halfToFloat(uint16_t(h));
+    const bool nan = (h & 0x7c00u) == 0x7c00u && (h & 0x03ffu) != 0u;
+    if (nan)
+    {
+      ASSERT_TRUE(std::isnan(f)) << std::hex << h;
+      ASSERT_TRUE(std::isnan(halfToFloat(floatToHalf(f))));
+      continue;
+    }
+    // The value from the definition: (-1)^s 2^(e-15) (1 + m/1024), or
+    // 2^-14 m/1024 for e = 0, infinity for e = 31.
+    const int e = int((h >> 10) & 0x1fu), m = int(h & 0x3ffu);
+    double want = e == 0 ? std::ldexp(double(m), -24)
+      : e == 31          ? std::numeric_limits<double>::infinity()
+                         : std::ldexp(1.0 + m / 1024.0, e - 15);
+    if (h & 0x8000u)
+    {
+      want = -want;
+    }
+    ASSERT_EQ(double(f), want) << std::hex << h;
+    ASSERT_EQ(floatToHalf(f), uint16_t(h)) << std::hex << h;
+  }
+  // The per-ray reader of float16 voxels (classifiedVoxelAt: a fast decode
+  // for finite, non-negative values, the exact one otherwise) against the
+  // definition, every finite non-negative pattern, at two scales.
+  for (const double scale : { 1.0, 0x1p-40 })
+  {
+    for (uint32_t h = 0; h < 0x7c00u; ++h)
+    {
+      const uint16_t v[4] = { uint16_t(h), uint16_t(h >> 1), uint16_t(h >> 2), 0 };
+      float out[4];
+      ASSERT_TRUE(classifiedVoxelAt(v, ScalarType::Float16, scale, 4, 0, out));
+      ASSERT_EQ(out[0], float(double(halfToFloat(uint16_t(h))) * scale)) << std::hex << h;
+      ASSERT_EQ(out[1], std::min(out[0], float(double(halfToFloat(uint16_t(h >> 1))) * scale))) << std::hex << h;
+    }
+  }
+  {
+    float out[4];
+    const uint16_t negative[4] = { 0xbc00, 0x3c00, 0x3c00, 0x3c00 }; // sigma -1: transparent
+    ASSERT_TRUE(classifiedVoxelAt(negative, ScalarType::Float16, 1.0, 4, 0, out));
+    EXPECT_EQ(out[0], 0.f);
+    EXPECT_EQ(out[1], 0.f);
+    const uint16_t nan[4] = { 0x3c00, 0x7e00, 0x3c00, 0x3c00 }; // a NaN: the voxel blanks the channel
+    EXPECT_FALSE(classifiedVoxelAt(nan, ScalarType::Float16, 1.0, 4, 0, out));
+    const uint16_t inf[4] = { 0x7c00, 0x3c00, 0x3c00, 0x3c00 }; // infinite sigma: clamped
+    ASSERT_TRUE(classifiedVoxelAt(inf, ScalarType::Float16, 1.0, 4, 0, out));
+    EXPECT_EQ(out[0], kMaxClassifiedSigma);
+  }
+  EXPECT_EQ(halfToFloat(0x3c00), 1.f);
+  EXPECT_EQ(halfToFloat(0x7bff), 65504.f);
+  EXPECT_EQ(floatToHalf(65519.f), 0x7bff) << "below the midpoint to 2^16";
+  EXPECT_EQ(floatToHalf(65520.f), 0x7c00) << "the midpoint rounds to even: infinity";
+  EXPECT_EQ(floatToHalf(1e30f), 0x7c00);
+  EXPECT_EQ(floatToHalf(0x1p-25f), 0x0000) << "half the smallest subnormal: ties to even, 0";
+  EXPECT_EQ(floatToHalf(0x1.8p-24f), 0x0002) << "1.5 subnormal units: ties to even, 2";
+  EXPECT_EQ(floatToHalf(1.f + 0x1p-11f), 0x3c00) << "midpoint above 1 rounds to even";
+  EXPECT_EQ(floatToHalf(1.f + 0x1.8p-10f), 0x3c02) << "midpoint between 1+2^-10 and 1+2^-9: even";
+  EXPECT_EQ(floatToHalf(-2.f), 0xc000);
+  // Random floats: the result is the nearest binary16 (or one of two equally
+  // near), within 2^-11 relative for normals.
+  TestRand r(77);
+  for (int i = 0; i < 200000; ++i)
+  {
+    const float x = float(std::ldexp(r.uniform(1.0, 2.0), r.integer(-30, 14))); // below 2^15
+    const uint16_t h = floatToHalf(x);
+    const double got = halfToFloat(h);
+    const double err = std::fabs(got - double(x));
+    ASSERT_LE(err, std::fabs(double(halfToFloat(uint16_t(h + 1))) - double(x))) << x;
+    if (h > 0)
+    {
+      ASSERT_LE(err, std::fabs(double(halfToFloat(uint16_t(h - 1))) - double(x))) << x;
+    }
+    if (x >= 0x1p-14f)
+    {
+      ASSERT_LE(err, std::ldexp(double(x), -11)) << x;
+    }
+  }
+}
+
+namespace
+{
+/// A streamed, classified level 1 of two random channels summed (what the
+/// mapper builds), float32.
+PyramidLevel randomLevel(int seed, const int dims[3])
+{
+  TestRand r(seed);
+  const std::vector<float> s0 = smoothField(dims, r);
+  const std::vector<float> s1 = smoothField(dims, r);
+  const TransferFunctionDesc t0 = randomTF(r, 32, 0.5f);
+  const TransferFunctionDesc t1 = randomTF(r, 32, 0.5f);
+  ClassifyInput in[2];
+  in[0].source = scalarSource(s0);
+  in[0].tf = &t0;
+  in[1].source = scalarSource(s1);
+  in[1].tf = &t1;
+  const double sp[3] = { 1, 1, 1 };
+  const double org[3] = { 0, 0, 0 };
+  return classifyExtinctionLevel(in, 2, dims, sp, org, 1, DownsampleFilter::Box4);
+}
+} // namespace
+
+// A level converted to half precision: a power-of-two scale, half the bytes,
+// every value within binary16's rounding of the float32 one, a float16
+// channel source, no float view, idempotent; bad values throw.
+TEST(HalfPrecision, LevelConversion)
+{
+  const int dims[3] = { 30, 26, 22 };
+  const PyramidLevel f32 = randomLevel(3, dims);
+  PyramidLevel h = f32;
+  h.toHalfPrecision();
+  ASSERT_TRUE(h.halfPrecision());
+  EXPECT_TRUE(h.voxels.empty()) << "the float32 voxels are freed";
+  EXPECT_EQ(h.bytes() * 2, f32.bytes());
+  EXPECT_EQ(levelBytes(dims, 1, 1, true) * 2, levelBytes(dims, 1, 1, false));
+  EXPECT_EQ(levelBytes(dims, 1, 1, false), f32.bytes());
+  int e = 0;
+  EXPECT_EQ(std::frexp(h.halfScale, &e), 0.5) << "a power of two";
+  float largest = 0.f;
+  for (float v : f32.voxels)
+  {
+    largest = std::max(largest, v);
+  }
+  ASSERT_GT(largest, 0.f);
+  const ChannelSource s = h.source();
+  EXPECT_EQ(s.type, ScalarType::Float16);
+  EXPECT_EQ(s.stride, 4);
+  EXPECT_EQ(s.scale, h.halfScale);
+  double largestStored = 0.0;
+  for (size_t i = 0; i < f32.voxels.size(); ++i)
+  {
+    const double stored = halfToFloat(h.halfVoxels[i]);
+    largestStored = std::max(largestStored, stored);
+    const double back = stored * h.halfScale;
+    const double want = f32.voxels[i];
+    ASSERT_LE(std::fabs(back - want), std::max(std::ldexp(want, -11), std::ldexp(double(largest), -38)))
+      << "value " << i;
+  }
+  EXPECT_GE(largestStored, 8192.0);
+  EXPECT_LT(largestStored, 16384.0 + 8.0);
+  EXPECT_THROW(h.view(), std::logic_error);
+  const std::vector<uint16_t> once = h.halfVoxels;
+  h.toHalfPrecision();
+  EXPECT_EQ(h.halfVoxels, once) << "idempotent";
+  PyramidLevel bad = f32;
+  bad.voxels[5] = -1.f;
+  EXPECT_THROW(bad.toHalfPrecision(), std::invalid_argument);
+  bad.voxels[5] = std::numeric_limits<float>::infinity();
+  EXPECT_THROW(bad.toHalfPrecision(), std::invalid_argument);
+  PyramidLevel withNaN = f32;
+  withNaN.voxels[8] = std::numeric_limits<float>::quiet_NaN();
+  withNaN.toHalfPrecision();
+  EXPECT_TRUE(std::isnan(halfToFloat(withNaN.halfVoxels[8]))) << "NaN stays NaN (the channel's NaN rule)";
+  PyramidLevel zero = f32;
+  std::fill(zero.voxels.begin(), zero.voxels.end(), 0.f);
+  zero.toHalfPrecision();
+  EXPECT_EQ(zero.halfScale, std::ldexp(1.0, -13)) << "an empty level: scale of largest 1";
+  for (uint16_t v : zero.halfVoxels)
+  {
+    ASSERT_EQ(v, 0u);
+  }
+  // Tiny units (extreme spacing): the scale follows the values, no overflow
+  // or flush to zero.
+  for (double unit : { 1e-30, 1e25 })
+  {
+    PyramidLevel scaled = f32;
+    for (float& v : scaled.voxels)
+    {
+      v = float(double(v) * unit);
+    }
+    const PyramidLevel ref = scaled;
+    scaled.toHalfPrecision();
+    for (size_t i = 0; i < ref.voxels.size(); i += 7)
+    {
+      const double back = halfToFloat(scaled.halfVoxels[i]) * scaled.halfScale;
+      ASSERT_LE(std::fabs(back - ref.voxels[i]), std::max(std::ldexp(double(ref.voxels[i]), -11), 1e-38))
+        << "unit " << unit << " value " << i;
+    }
+  }
+}
+
+// Rendering a half-precision level: the exact ray march differs from the
+// float32 level's by far less than an 8-bit step; majorants still bound
+// every sampled sigma (trilinear, nearest, cubic); Monte Carlo on it
+// converges to its own ray march (z-test, kAlpha / 8 per component and mode
+// pair, 8 checks); the nearest sample decodes the voxel exactly.
+TEST(HalfPrecision, RendersLikeFloat32)
+{
+  const int dims[3] = { 36, 30, 26 };
+  const PyramidLevel f32 = randomLevel(11, dims);
+  PyramidLevel h = f32;
+  h.toHalfPrecision();
+  const ChannelSource sf = f32.source(), sh = h.source();
+  const double sp[3] = { 1, 1, 1 };
+  const Camera cam = orbitCamera(f32.dims, sp, 40, 40, 30, 20);
+  MarchSettings ms;
+  ms.step = 0.25;
+  ms.terminateTransmittance = 0.f;
+  for (Interpolation interp : { Interpolation::Linear, Interpolation::Nearest, Interpolation::Cubic })
+  {
+    Scene a, b;
+    setClassified(a, f32.dims, { sf });
+    setClassified(b, f32.dims, { sh });
+    a.setInterpolation(interp);
+    b.setInterpolation(interp);
+    a.update();
+    b.update();
+    const std::vector<float> ia = march(a, cam, ms), ib = march(b, cam, ms);
+    double sum = 0.0;
+    for (float v : ia)
+    {
+      sum += v;
+    }
+    EXPECT_GT(sum, 50.0) << "the image must show something";
+    EXPECT_LT(maxAbsDiff(ia, ib), 2e-3) << toString(interp) << ": far below an 8-bit step (3.9e-3)";
+    // Majorants from the decoded voxels bound the decoded samples; the
+    // nearest sample is the voxel's decoded value exactly.
+    TestRand r(5);
+    const VolumeView& vol = b.view().volume;
+    EXPECT_TRUE(majorantsBoundChannel0(b, r, 5000,
+      [&](Vec3f p, float sigma)
+      {
+        if (interp != Interpolation::Nearest)
+        {
+          return ::testing::AssertionSuccess();
+        }
+        const float want = halfToFloat(h.halfVoxels[size_t(nearestVoxel(vol, p)) * 4]) * float(h.halfScale);
+        return sigma == want ? ::testing::AssertionSuccess()
+                             : ::testing::AssertionFailure() << "nearest: " << sigma << " against " << want;
+      }))
+      << toString(interp);
+  }
+  // Monte Carlo on the half level against its ray march.
+  Scene b;
+  setClassified(b, f32.dims, { sh });
+  MarchSettings fine;
+  fine.step = 1.0 / 16.0;
+  fine.terminateTransmittance = 0.f;
+  const std::vector<float> ref = march(b, cam, fine);
+  CPURenderer mc;
+  Accumulator acc;
+  RenderSettings rs;
+  rs.jitterPixels = false;
+  rs.samplesPerPixel = 256;
+  rs.seed = 17;
+  mc.render(b, cam, rs, nullptr, acc);
+  // Per component, the pooled difference over all pixels against the
+  // sample variance of the image: the expected-value estimator's variance is
+  // unknown, so the check uses the pixels' spread from a second seed.
+  Accumulator acc2;
+  rs.seed = 18;
+  mc.render(b, cam, rs, nullptr, acc2);
+  for (int c = 0; c < 4; ++c)
+  {
+    double d = 0.0, v = 0.0;
+    size_t n = 0;
+    for (size_t i = size_t(c); i < ref.size(); i += 4)
+    {
+      const double x1 = acc.rgba()[i], x2 = acc2.rgba()[i];
+      d += 0.5 * (x1 + x2) - ref[i];
+      v += 0.25 * (x1 - x2) * (x1 - x2); // unbiased variance of the mean of two
+      ++n;
+    }
+    ASSERT_GT(n, 0u);
+    const double z = d / std::sqrt(std::max(v, 1e-30));
+    EXPECT_GT(normalTwoSided(z), kAlpha / 4) << "component " << c << ": z = " << z;
+  }
+}
+
+namespace
+{
+/// f() throws std::invalid_argument whose message contains `words`.
+template <typename F>
+void expectInvalidArgument(F f, const std::string& words)
+{
+  try
+  {
+    f();
+    ADD_FAILURE() << "no exception; expected one saying \"" << words << "\"";
+  }
+  catch (const std::invalid_argument& e)
+  {
+    EXPECT_NE(std::string(e.what()).find(words), std::string::npos) << e.what();
+  }
+}
+} // namespace
+
+// Float16 is for pre-classified channels only, and only they are scaled.
+TEST(HalfPrecision, BadInputErrors)
+{
+  const int dims[3] = { 4, 4, 4 };
+  std::vector<uint16_t> halves(64 * 4, 0);
+  ChannelSource s;
+  s.data = halves.data();
+  s.type = ScalarType::Float16;
+  s.stride = 1;
+  Scene scene;
+  expectInvalidArgument([&] { scene.setVolume(dims, 1, &s); }, "only pre-classified");
+  s.format = ChannelFormat::Extinction;
+  s.stride = 4;
+  s.scale = 0.0;
+  expectInvalidArgument([&] { scene.setVolume(dims, 1, &s); }, "scale");
+  s.scale = std::numeric_limits<double>::infinity();
+  expectInvalidArgument([&] { scene.setVolume(dims, 1, &s); }, "scale");
+  s.scale = 0.5;
+  EXPECT_NO_THROW(scene.setVolume(dims, 1, &s));
+  std::vector<float> floats(64 * 4, 0.f);
+  ChannelSource f;
+  f.data = floats.data();
+  f.stride = 4;
+  f.format = ChannelFormat::Extinction;
+  f.scale = 2.0;
+  expectInvalidArgument([&] { scene.setVolume(dims, 1, &f); }, "only float16 pre-classified channels are scaled");
 }

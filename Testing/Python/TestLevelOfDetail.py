@@ -206,9 +206,29 @@ for level in (1, 2):
 t.check(not ref.errors.errors and not ref.errors.warnings,
         "levels 1-2: unexpected messages %s %s" % (ref.errors.errors, ref.errors.warnings))
 t.check(rmse(images[1], img0) > 1e-4, "level 1 is a different image (a level was really rendered)")
-# Level 1 keeps 1/8 of the voxels: 24x20x18 summed channel of 16 bytes.
-t.check(m.GetLevelOfDetailMemory() == 16 * (24 * 20 * 18 + 12 * 10 * 9),
+# Level 1 keeps 1/8 of the voxels: 24x20x18 summed channel of 8 bytes (half
+# precision, the default) on the CPU; the CUDA backend keeps float32 levels.
+on_cuda = m.GetActiveBackendName() == "cuda"
+t.check(m.GetLevelOfDetailHalfPrecision(), "levels in half precision by default")
+t.check(m.GetLevelOfDetailMemory() == (16 if on_cuda else 8) * (24 * 20 * 18 + 12 * 10 * 9),
         "levels 1 and 2 kept: %g bytes" % m.GetLevelOfDetailMemory())
+# float32 levels: twice the bytes, a rebuild, and an image that differs from
+# the half-precision one by far less than an 8-bit step (on the CUDA
+# backend: nothing changes).
+builds = m.GetNumberOfLevelOfDetailBuilds()
+m.SetLevelOfDetailHalfPrecision(False)
+img_float = ref.render()
+t.check(m.GetNumberOfLevelOfDetailBuilds() == builds + (0 if on_cuda else 1),
+        "a precision change rebuilds the level on the CPU only")
+t.check(m.GetLevelOfDetailMemory() == (16 * (24 * 20 * 18 + 12 * 10 * 9) if on_cuda else 16 * 12 * 10 * 9),
+        "float32 level 2 only (the half levels dropped): %g bytes" % m.GetLevelOfDetailMemory())
+half_err = rmse(images[2], img_float)
+diff = np.abs(images[2] - img_float).max()
+print("level 2: half against float32 levels: RMSE %.2g, largest difference %.2g" % (half_err, diff))
+t.check(diff == 0 if on_cuda else 0 < diff < 1e-3,
+        "half-precision level 2 against float32: largest difference %.2g" % diff)
+m.SetLevelOfDetailHalfPrecision(True)
+ref.render()
 # Each build thread streams its own chunk of slices, so the peak grows with
 # the thread count: CMake runs this test with OMP_NUM_THREADS=2 (on 16
 # threads the 18 level-1 slices of this small volume are all in flight).
@@ -346,7 +366,9 @@ t.check(not mc.errors.errors and not mc.errors.warnings, "automatic: unexpected 
 mm.SetLevelOfDetail(0)
 mc.parallel(14.0)
 level0_bytes = 3 * 4 * NX * NY * NZ  # three float channels, read in place
-level1_bytes = 3 * 16 * 24 * 20 * 18  # composite blend: three classified channels
+# composite blend: three classified channels, 8 bytes a voxel in half
+# precision on the host (the CUDA backend holds them as float32: 16)
+level1_bytes = 3 * (16 if mm.GetActiveBackendName() == "cuda" else 8) * 24 * 20 * 18
 mm.SetMemoryBudget(level0_bytes - 1)
 mc.errors.clear()
 mc.render(3)
@@ -359,7 +381,7 @@ mc.errors.clear()
 mc.render(2)
 t.check(mm.GetLastLevelOfDetail() == 2, "budget below level 1: level %d" % mm.GetLastLevelOfDetail())
 t.check(len(mc.errors.warnings) == 1, "a new case warns once more: %s" % mc.errors.warnings)
-mm.SetMemoryBudget(10)  # the 1x1x1 level of 3 channels takes 48 bytes
+mm.SetMemoryBudget(10)  # the 1x1x1 level of 3 channels takes 24 (or 48) bytes
 mc.errors.clear()
 mc.render()
 t.check(mm.GetLastLevelOfDetail() == levels, "no level fits: the coarsest (%d)" % mm.GetLastLevelOfDetail())

@@ -67,22 +67,41 @@ struct ClassifiedVolumeView
   double origin[3] = { 0, 0, 0 };  ///< world position of voxel 0
 };
 
-/// One level of a pyramid: its own packed voxels (stride 4).
+/// One level of a pyramid: its own packed voxels (stride 4), float32 or,
+/// after toHalfPrecision(), binary16.
 struct PyramidLevel
 {
   int level = 0; ///< 0 = full resolution
   int dims[3] = { 0, 0, 0 };
   double spacing[3] = { 1, 1, 1 };
   double origin[3] = { 0, 0, 0 };
-  std::vector<float> voxels; ///< 4 floats per voxel
+  std::vector<float> voxels; ///< 4 floats per voxel (empty once half precision)
+  /// After toHalfPrecision(): 4 binary16 values per voxel, each times halfScale.
+  std::vector<uint16_t> halfVoxels;
+  double halfScale = 1.0;
 
   size_t numVoxels() const { return size_t(this->dims[0]) * size_t(this->dims[1]) * size_t(this->dims[2]); }
-  size_t bytes() const { return this->voxels.size() * sizeof(float); }
+  size_t bytes() const { return this->voxels.size() * sizeof(float) + this->halfVoxels.size() * sizeof(uint16_t); }
+  bool halfPrecision() const { return !this->halfVoxels.empty(); }
+  /// The float32 voxels; std::logic_error for a half-precision level.
   ClassifiedVolumeView view() const;
-  /// A channel for Scene::setVolume (format Extinction, stride 4); the level
-  /// must outlive the Scene. The caller's camera maps world to index with
-  /// this level's spacing and origin.
+  /// A channel for Scene::setVolume (format Extinction, stride 4; float32,
+  /// or float16 with `scale` = halfScale); the level must outlive the Scene.
+  /// The caller's camera maps world to index with this level's spacing and
+  /// origin.
   ChannelSource source() const;
+  /**
+   * Converts the level to half precision (8 bytes a voxel instead of 16;
+   * issue 13's memory budget) and frees the float32 voxels. Every value v is
+   * stored as binary16(v / halfScale), rounded to nearest, with halfScale
+   * the power of two that puts the level's largest value between 2^13 and
+   * 2^14 (binary16's largest finite value is 65504): each value keeps a
+   * relative error of at most 2^-11 down to 2^-28 of the largest, and
+   * smaller ones an absolute error of at most 2^-39 of it (subnormals). A
+   * NaN stays NaN; an infinite or negative value (which no build produces)
+   * throws std::invalid_argument. Idempotent; an empty level stays empty.
+   */
+  void toHalfPrecision();
 };
 
 /// The number of halvings after which every axis of `dims` is 1 (the most
@@ -147,8 +166,9 @@ void classifyScalars(const ChannelSource& src, const int dims[3], const Transfer
 void levelDims(const int dims[3], int level, int out[3]);
 
 /// Bytes of level `level` held as `channels` pre-classified channels of 4
-/// floats per voxel (16 bytes a voxel and channel).
-size_t levelBytes(const int dims[3], int level, int channels);
+/// floats per voxel (16 bytes a voxel and channel), or of 4 halves
+/// (`halfPrecision`: 8 bytes, PyramidLevel::toHalfPrecision).
+size_t levelBytes(const int dims[3], int level, int channels, bool halfPrecision = false);
 
 /**
  * Streamed construction of one level (memory-aware): level `level` (1 ..

@@ -18,7 +18,10 @@ namespace mcvol
  * values data[v * stride + 0..3] = (sigma, sigma r, sigma g, sigma b), sigma
  * the extinction per world unit (as a transfer-function table holds it) and
  * (r, g, b) linear RGB in [0, 1]. type must be Float32, stride (in floats) at
- * least 4 (4: packed RGBA-like quadruples), offset 0. Such a channel needs no
+ * least 4 (4: packed RGBA-like quadruples), offset 0; or type Float16: 4
+ * binary16 values per voxel (stride in halves, at least 4), each multiplied
+ * by `scale` when read (the pyramid levels' half-precision layout,
+ * PyramidLevel::toHalfPrecision). Such a channel needs no
  * transfer function (one set anyway is kept but never read) and carries no
  * importance. Values are sanitised per voxel when read, never rejected
  * (the data are not scanned at setVolume): a negative sigma is clamped to 0
@@ -38,6 +41,10 @@ struct ChannelSource
   double offset = 0.0;
   /// Last, so that aggregate initialisers { data, type, stride, offset } keep working.
   ChannelFormat format = ChannelFormat::Scalar;
+  /// Float16 Extinction channels only (finite, > 0): the factor every
+  /// stored value is multiplied by, so that a level's extinctions use
+  /// binary16's range whatever their units. 1 for every other channel.
+  double scale = 1.0;
 };
 
 /**

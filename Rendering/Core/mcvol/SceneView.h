@@ -19,7 +19,10 @@ struct ChannelView
   const void* data = nullptr;
   int64_t stride = 1; ///< elements between consecutive voxels
   ScalarType type = ScalarType::Float32;
-  double offset = 0.0; ///< Float64 only: subtracted before conversion to float
+  /// Float64 scalars: subtracted before conversion to float. Float16
+  /// pre-classified channels (host only; the CUDA backend widens them to
+  /// float32): the factor their values are multiplied by (ChannelSource::scale).
+  double offset = 0.0;
   /// CUDA backend only: a 3D texture object (cudaTextureObject_t) holding the
   /// same voxels, sampled with hardware filtering instead of `data`; 0 = none.
   unsigned long long texture = 0;

@@ -4,6 +4,7 @@
 #include "mcvol/Macros.h"
 
 #include <cstdint>
+#include <cstring>
 
 namespace mcvol
 {
@@ -14,7 +15,11 @@ enum class ScalarType : int
   Int16 = 1,
   UInt16 = 2,
   Float32 = 3,
-  Float64 = 4
+  Float64 = 4,
+  /// IEEE binary16, for pre-classified (Extinction) channels only: the
+  /// pyramid levels' half-precision layout (8 bytes a voxel instead of 16;
+  /// issue 13). Scene::setVolume rejects it for scalar channels.
+  Float16 = 5
 };
 
 /**
@@ -22,7 +27,8 @@ enum class ScalarType : int
  * - Scalar: one value per voxel, classified after interpolation through the
  *   channel's transfer-function table (post-classification).
  * - Extinction: pre-classified voxels of 4 float32 values (sigma, sigma r,
- *   sigma g, sigma b): extinction per world unit (as the transfer-function
+ *   sigma g, sigma b), or 4 binary16 values times a per-channel scale
+ *   (ScalarType::Float16, ChannelSource::scale): extinction per world unit (as the transfer-function
  *   tables hold it) and extinction-weighted linear RGB. Extinction and
  *   extinction-weighted colour are interpolated; the colour at a point is
  *   their ratio (Eq. 18-21). No transfer function is read.
@@ -161,6 +167,11 @@ MCVOL_HOT decltype(auto) visitScalarType(ScalarType t, F&& f)
       return f(TypeTag<int16_t>{});
     case ScalarType::UInt16:
       return f(TypeTag<uint16_t>{});
+    case ScalarType::Float16:
+      // Never a scalar channel (setVolume rejects it): pre-classified voxels
+      // are read by fetchClassified(). The 2-byte storage type, so that the
+      // switch stays complete.
+      return f(TypeTag<uint16_t>{});
     case ScalarType::Float32:
       return f(TypeTag<float>{});
     case ScalarType::Float64:
@@ -180,4 +191,40 @@ const char* toString(Estimator e);
 const char* toString(Interpolation i);
 const char* toString(Backend b);
 int scalarTypeSize(ScalarType t);
+
+/**
+ * IEEE binary16 bits to float, exactly: normals, subnormals, signed zeros,
+ * infinities and NaN (quiet, its payload kept in the high mantissa bits).
+ * Host code (the CPU's reads of half-precision pre-classified voxels; the
+ * CUDA backend widens them to float32 on upload). The exponent is rebiased
+ * by a multiplication: bits << 13 read as a float is the value times
+ * 2^-112, subnormals included.
+ */
+inline float halfToFloat(uint16_t h)
+{
+  const uint32_t sign = uint32_t(h & 0x8000u) << 16;
+  const uint32_t magnitude = uint32_t(h & 0x7fffu);
+  uint32_t bits = magnitude << 13;
+  if (magnitude >= 0x7c00u)
+  {
+    bits |= 0x7f800000u; // Inf or NaN: the float's exponent all ones
+  }
+  else
+  {
+    float f;
+    std::memcpy(&f, &bits, sizeof f);
+    f *= 0x1p112f;
+    std::memcpy(&bits, &f, sizeof f);
+  }
+  bits |= sign;
+  float out;
+  std::memcpy(&out, &bits, sizeof out);
+  return out;
+}
+
+/// float to IEEE binary16, rounded to nearest (ties to even); magnitudes of
+/// 65520 and above become infinity, NaN stays NaN. halfToFloat(floatToHalf(x))
+/// is the binary16 value nearest x (relative error at most 2^-11 for normals,
+/// |x| from 2^-14 to 65504).
+uint16_t floatToHalf(float x);
 } // namespace mcvol

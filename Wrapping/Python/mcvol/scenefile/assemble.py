@@ -468,6 +468,7 @@ def setup_mapper(mapper, prop, scene, channels, tfs, render_image, reference):
     mapper.SetLevelOfDetail(scene.get("level_of_detail", 0))
     {"box2": mapper.SetLevelOfDetailFilterToBox2, "box4": mapper.SetLevelOfDetailFilterToBox4,
      "bspline": mapper.SetLevelOfDetailFilterToBSpline}[scene.get("level_of_detail_filter", "box4")]()
+    mapper.SetLevelOfDetailHalfPrecision(scene.get("level_of_detail_half_precision", True))
     mapper.SetMemoryBudget(scene.get("memory_budget", 0.0) * 1048576.0)  # MiB -> bytes
     total = scene["samples_per_pixel"]
     per_render = samples_per_render(total, scene["samples_per_render"])

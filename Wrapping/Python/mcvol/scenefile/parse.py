@@ -427,6 +427,11 @@ def parse_scene(data, scene_dir, presets):
         if "level_of_detail_filter" in data
         else LOD_FILTERS[0]
     )
+    s["level_of_detail_half_precision"] = (
+        get_bool(data["level_of_detail_half_precision"], "level_of_detail_half_precision")
+        if "level_of_detail_half_precision" in data
+        else True
+    )
     s["memory_budget"] = (
         get_number(data["memory_budget"], "memory_budget", lo=0.0, hi=1e12) if "memory_budget" in data else 0.0
     )

@@ -73,6 +73,7 @@ TOP_KEYS = {
     "pixel_jitter",
     "level_of_detail",
     "level_of_detail_filter",
+    "level_of_detail_half_precision",
     "memory_budget",
     "lighting",
     "visibility",
