@@ -110,6 +110,8 @@ BAD_SCENES = [
     ("bad-level-of-detail-filter", {"input": {"demo": "figure3"}, "level_of_detail_filter": "gauss"},
      "level_of_detail_filter:"),
     ("bad-memory-budget", {"input": {"demo": "figure3"}, "memory_budget": -1}, "memory_budget:"),
+    ("bad-half-precision", {"input": {"demo": "figure3"}, "level_of_detail_half_precision": "yes"},
+     "level_of_detail_half_precision:"),
     ("file-needs-opacity", {"input": "../../Data/figure3.vti", "channels": [{"component": 0, "color": [[0, 1, 0, 0]]}]},
      "channels[0]: missing key 'opacity'"),
 ]
@@ -210,6 +212,12 @@ def main():
     r = run(program, [fn, "-o", os.path.join(work, "lod1.png"), "--spp", "2", "--size", "32x32", "--backend", "cpu",
                       "--level-of-detail", "1"])
     t.check(r.returncode == 0 and "level 1 of 5" in r.stderr, "--level-of-detail 1: %d %r" % (r.returncode, r.stderr))
+    with open(fn, "w") as f:
+        json.dump({"input": {"demo": "figure3", "dimensions": [32, 32, 32]}, "level_of_detail": 2,
+                   "level_of_detail_half_precision": False, "seed": 3}, f)
+    r = run(program, [fn, "-o", os.path.join(work, "lodf.png"), "--spp", "2", "--size", "32x32", "--backend", "cpu"])
+    t.check(r.returncode == 0 and "level 2 of 5 (8x8x8" in r.stderr,
+            "level_of_detail_half_precision false: %d %r" % (r.returncode, r.stderr))
     with open(fn, "w") as f:
         json.dump({"input": {"demo": "figure3", "dimensions": [32, 32, 32]}, "memory_budget": 0.1, "seed": 3}, f)
     r = run(program, [fn, "-o", os.path.join(work, "lodmem.png"), "--spp", "2", "--size", "32x32", "--backend", "cpu"])
