@@ -579,14 +579,16 @@ void PyramidLevel::toHalfPrecision()
   int e = 0;
   (void)std::frexp(largest > 0.f ? largest : 1.f, &e);
   const double scale = std::ldexp(1.0, e - 14);
-  const float inverse = float(1.0 / scale);
+  // In double: for a level of float subnormals 1 / scale exceeds float's
+  // range (the scaled values never do: they are below 2^14).
+  const double inverse = 1.0 / scale;
   std::vector<uint16_t> half;
   resizeHuge(half, this->voxels.size());
   const int64_t n = int64_t(half.size());
 #pragma omp parallel for schedule(static)
   for (int64_t i = 0; i < n; ++i)
   {
-    half[size_t(i)] = floatToHalf(this->voxels[size_t(i)] * inverse);
+    half[size_t(i)] = floatToHalf(float(double(this->voxels[size_t(i)]) * inverse));
   }
   this->halfScale = scale;
   this->halfVoxels = std::move(half);
