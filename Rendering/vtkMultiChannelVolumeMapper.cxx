@@ -1178,8 +1178,8 @@ bool vtkMultiChannelVolumeMapper::ChooseLevelOfDetail(RenderPass& pass)
   policy.MemoryBudget = this->MemoryBudget;
   // The CUDA backend copies the channels (float64 as float32).
   policy.DeviceCopy = in.Backend.ActiveName(this->UsesRenderBackend(), this->Backend) == "cuda";
-  policy.HalfPrecision = this->LevelOfDetailHalfPrecision;
   pass.HalfLevels = this->LevelOfDetailHalfPrecision && !policy.DeviceCopy;
+  policy.HalfPrecision = pass.HalfLevels;
 
   // Level 0's voxel size in world units per axis: spacing, direction and
   // the volume's matrix.

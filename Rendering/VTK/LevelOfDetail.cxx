@@ -65,7 +65,7 @@ size_t LevelMemory(const BoundChannels& channels, int level, int outChannels, bo
   }
   else
   {
-    bytes = levelBytes(channels.Dims, level, outChannels, halfPrecision && !deviceCopy);
+    bytes = levelBytes(channels.Dims, level, outChannels, halfPrecision);
   }
   return bytes;
 }
@@ -291,8 +291,8 @@ const LevelOfDetailCache::Level& LevelOfDetailCache::Get(const Key& key, int lev
   if (key.HalfPrecision)
   {
     // Half precision: the level's voxels as binary16 (PyramidLevel::
-    // toHalfPrecision), on the host whichever built them; a CUDA backend
-    // widens them on upload, so both backends render the same values.
+    // toHalfPrecision). The mapper asks for it only where the backend reads
+    // the levels in place (the CPU).
     for (PyramidLevel& channel : built.Channels)
     {
       channel.toHalfPrecision();

@@ -44,9 +44,9 @@ struct LevelPolicy
   /// once, as a texture or an array; float64 stored as float32); the CPU
   /// reads them in place.
   bool DeviceCopy = false;
-  /// LevelOfDetailHalfPrecision: levels L > 0 held in half precision (8
-  /// bytes a voxel and channel), where there is no device copy (which holds
-  /// 16 bytes: the mapper keeps float32 levels for it).
+  /// Levels L > 0 held in half precision (8 bytes a voxel and channel): the
+  /// mapper's LevelOfDetailHalfPrecision where there is no device copy (it
+  /// keeps float32 levels for a device, which holds 16 bytes).
   bool HalfPrecision = false;
 };
 
@@ -70,8 +70,7 @@ struct LevelChoice
 /// The memory one level of the volume takes in the backend: level 0 the
 /// channels as bound (read in place on the CPU; on a device float64 is held
 /// as float32), a level L > 0 `outChannels` pre-classified channels of 16
-/// bytes a voxel, or 8 in half precision on the host (`halfPrecision` and
-/// not `deviceCopy`).
+/// bytes a voxel, or 8 in half precision (`halfPrecision`).
 size_t LevelMemory(
   const BoundChannels& channels, int level, int outChannels, bool deviceCopy, bool halfPrecision = false);
 
