@@ -61,6 +61,7 @@ void runConverge(Bench& bench)
     float marchSamplesPerVoxel = 2.f;
     bool automatic = false;
     bool controlVariates = true; ///< RenderSettings::marchControlVariates
+    bool controlAtAnyRate = false; ///< RenderSettings::marchControlVariatesFrom = 0
   };
   std::vector<Config> configs = {
     { "expected-value, sobol (default)", mcvol::Estimator::ExpectedValue, mcvol::Tracker::OneDDA,
@@ -120,6 +121,14 @@ void runConverge(Bench& bench)
         c.controlVariates = false;
         configs.push_back(c);
       }
+      else if (c.estimator == mcvol::Estimator::UnbiasedMarch && !c.automatic)
+      {
+        // Below the rule's rate: the same strata with control variates (the
+        // automatic choice offers both at pixel centres).
+        c.name += ", control variates";
+        c.controlAtAnyRate = true;
+        configs.push_back(c);
+      }
     }
   }
   if (o.centresOnly)
@@ -141,6 +150,7 @@ void runConverge(Bench& bench)
     st.marchSamplesPerVoxel = config.marchSamplesPerVoxel;
     st.jitterPixels = !config.centres;
     st.marchControlVariates = config.controlVariates;
+    st.marchControlVariatesFrom = config.controlAtAnyRate ? 0.f : mcvol::kMarchControlVariateRate;
     st.seed = 7;
     st.readBack = false;
     double pilotMs = 0;

@@ -31,6 +31,11 @@
 #   automatic the automatic choice alone at 1024^2: its time to 35 dB with the
 #             default rate search (automatic-*.md), then every candidate's
 #             prediction (--choice-all, automatic-all-*.md)
+#   centres   the automatic choice at pixel centres (every rate offered with
+#             and without control variates, and a rate between two): its
+#             time to 35 dB (centres-*.md), and the measured rows of the
+#             plain strata and the control variates at 0.5-2 per voxel
+#             (centres-rates-*.md)
 #   big       a volume of FRACTION (default 0.6) of the device's memory
 #             (figure3, 3 x float32, generated cheaply) renders: device bytes
 #             and frame time (issue 14, item 5)
@@ -109,6 +114,20 @@ for stage in "$@"; do
           --label "$label" --size 1024 1024 --reference-spp 4096 --sections converge --no-collision --only-automatic \
           --choice-all --march-samples-per-voxel 0.0625,0.125,0.25,0.5,1,2
         grep -E "^[* ] (ExpectedValue|UnbiasedMarch)" "$out/automatic-all-$key.md" | sed "s/^/$label /"
+      done
+      ;;
+    centres)
+      for s in "${sets[@]}"; do
+        read -r key ds x y z ch label <<< "$s"
+        run "centres-$key" --backend cuda --dataset "$ds" --dims "$x" "$y" "$z" --channels "$ch" \
+          --label "$label" --size 1024 1024 --reference-spp 4096 --sections converge --no-collision --only-automatic \
+          --centres-only
+        grep -E "^\| automatic" "$out/centres-$key.md" | head -1 | sed "s/^/$label centres /"
+        grep -E "^[* ] (ExpectedValue|UnbiasedMarch)" "$out/centres-$key.md" | sed "s/^/$label /"
+        run "centres-rates-$key" --backend cuda --dataset "$ds" --dims "$x" "$y" "$z" --channels "$ch" \
+          --label "$label" --size 1024 1024 --reference-spp 4096 --sections converge --no-collision \
+          --centres-only --march-samples-per-voxel 0.5,1,1.25,2
+        grep -E "^\| unbiased-march" "$out/centres-rates-$key.md" | sed "s/^/$label /"
       done
       ;;
     dense)

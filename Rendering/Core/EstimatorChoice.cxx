@@ -55,12 +55,13 @@ Estimator effectiveEstimator(const Scene& scene, const RenderSettings& settings)
   }
 }
 
-std::string estimatorName(Estimator estimator, float marchSamplesPerVoxel)
+std::string estimatorName(Estimator estimator, float marchSamplesPerVoxel, bool controlVariates)
 {
   if (estimator == Estimator::UnbiasedMarch)
   {
     char buf[64];
-    std::snprintf(buf, sizeof(buf), "UnbiasedMarch(%g)", double(marchSamplesPerVoxel));
+    std::snprintf(buf, sizeof(buf), "UnbiasedMarch(%g%s)", double(marchSamplesPerVoxel),
+      controlVariates ? ", control variates" : "");
     return buf;
   }
   return estimator == Estimator::ExpectedValue ? "ExpectedValue" : "Collision";
@@ -70,7 +71,7 @@ namespace
 {
 std::string candidateName(const EstimatorCandidate& c)
 {
-  return estimatorName(c.estimator, c.marchSamplesPerVoxel);
+  return estimatorName(c.estimator, c.marchSamplesPerVoxel, c.controlVariates);
 }
 } // namespace
 
@@ -81,6 +82,7 @@ std::string EstimatorChoice::chosenName() const
     EstimatorCandidate c;
     c.estimator = this->settings.estimator;
     c.marchSamplesPerVoxel = this->settings.marchSamplesPerVoxel;
+    c.controlVariates = false;
     return candidateName(c);
   }
   return candidateName(this->trials[size_t(this->chosen)].candidate);
@@ -97,15 +99,29 @@ std::string EstimatorChoice::report() const
   for (size_t i = 0; i < this->trials.size(); ++i)
   {
     const EstimatorTrial& t = this->trials[i];
-    std::snprintf(line, sizeof(line), "%s %-20s MSE(1) %.4g  MSE(%d) %.4g  decay %.2f  frames %g  cost/sample %.4g  predicted %.4g\n",
+    std::snprintf(line, sizeof(line), "%s %-38s MSE(1) %.4g  MSE(%d) %.4g  decay %.2f  frames %g  cost/sample %.4g  predicted %.4g%s\n",
       int(i) == this->chosen ? "*" : " ", candidateName(t.candidate).c_str(), t.firstFrameMSE, t.pilotSamples,
       t.pilotSamples > 0 ? t.variance / double(t.pilotSamples) : 0.0, t.decay, t.frames,
-      t.costPerSample, t.score);
+      t.costPerSample, t.score, t.refined ? "  (between listed rates)" : "");
     out += line;
   }
   std::snprintf(line, sizeof(line), "pilots took %.1f ms\n", 1e3 * this->seconds);
   out += line;
   return out;
+}
+
+RenderSettings candidateSettings(const RenderSettings& base, const Camera& camera, const EstimatorCandidate& c)
+{
+  RenderSettings st = base;
+  st.estimator = c.estimator;
+  st.marchSamplesPerVoxel = c.marchSamplesPerVoxel;
+  const bool centres = !(base.jitterPixels && camera.jitterScale > 0.f);
+  if (c.estimator == Estimator::UnbiasedMarch && centres)
+  {
+    st.marchControlVariates = c.controlVariates;
+    st.marchControlVariatesFrom = c.controlVariates ? 0.f : base.marchControlVariatesFrom;
+  }
+  return st;
 }
 
 namespace
@@ -137,6 +153,10 @@ EstimatorChoice chooseEstimator(Renderer& renderer, const Scene& scene, const Ca
   if (!(choice.targetMSE > 0) || !std::isfinite(choice.targetMSE))
   {
     throw std::invalid_argument("mcvol: chooseEstimator's target MSE must be positive and finite");
+  }
+  if (!(choice.refineMargin > 0 && choice.refineMargin <= 1))
+  {
+    throw std::invalid_argument("mcvol: chooseEstimator's refine margin must be in (0, 1]");
   }
   for (float r : choice.marchRates)
   {
@@ -173,6 +193,15 @@ EstimatorChoice chooseEstimator(Renderer& renderer, const Scene& scene, const Ca
   }
   const double pixels = double(pilot.width) * double(pilot.height);
 
+  // At pixel centres the march is offered with and without its control
+  // variates at every rate (the plain strata may reach a loose target in one
+  // cheaper frame, the control variates a tight one, or a dense set's target
+  // in fewer samples even below kMarchControlVariateRate), unless the
+  // settings fix the variant: marchControlVariates off keeps the plain
+  // strata, marchControlVariatesFrom 0 the control variates.
+  const bool centres = !(base.jitterPixels && camera.jitterScale > 0.f);
+  const bool offerPlain = !centres || !base.marchControlVariates || base.marchControlVariatesFrom > 0.f;
+  const bool offerControl = centres && base.marchControlVariates;
   std::vector<EstimatorCandidate> candidates;
   {
     EstimatorCandidate ev;
@@ -184,38 +213,27 @@ EstimatorChoice chooseEstimator(Renderer& renderer, const Scene& scene, const Ca
   std::sort(rates.begin(), rates.end());
   for (float r : rates)
   {
-    EstimatorCandidate m;
-    m.estimator = Estimator::UnbiasedMarch;
-    m.marchSamplesPerVoxel = r;
-    candidates.push_back(m);
+    for (int variant = 0; variant < 2; ++variant)
+    {
+      if (variant == 0 ? !offerPlain : !offerControl)
+      {
+        continue;
+      }
+      EstimatorCandidate m;
+      m.estimator = Estimator::UnbiasedMarch;
+      m.marchSamplesPerVoxel = r;
+      m.controlVariates = variant == 1;
+      candidates.push_back(m);
+    }
   }
 
   const CostModel model = choice.customModel ? choice.model : defaultCostModel(renderer.name());
   // Replicate seeds: fixed functions of the image's seed (any two distinct
   // seeds scramble independently).
   const uint32_t seeds[2] = { base.seed * 2654435761u + 0x2545F491u, base.seed * 2654435761u + 0x9E3779B9u };
-  double best = 0;
-  for (const EstimatorCandidate& c : candidates)
-  {
-    const size_t n = out.trials.size();
-    if (!choice.tryAllRates && c.estimator == Estimator::UnbiasedMarch && n >= 1 &&
-      out.trials[n - 1].candidate.estimator == Estimator::UnbiasedMarch)
-    {
-      const EstimatorTrial& last = out.trials[n - 1];
-      // A higher rate costs at least as much per sample and takes at least
-      // one: no better than `best` once the last rate's sample cost that.
-      // (No stop where a prediction merely rose: at the lowest rates the
-      // majorant's strata floor keeps the noise nearly flat, and the
-      // prediction's own noise made one rise there on the Zebrafish-like
-      // set, stopping the search before the rate that won 4x.)
-      if (last.costPerSample >= best)
-      {
-        break;
-      }
-    }
-    RenderSettings st = base;
-    st.estimator = c.estimator;
-    st.marchSamplesPerVoxel = c.marchSamplesPerVoxel;
+  const auto settingsFor = [&](const EstimatorCandidate& c) { return candidateSettings(base, camera, c); };
+  const auto pilotTrial = [&](const EstimatorCandidate& c) {
+    RenderSettings st = settingsFor(c);
     st.readBack = true;
     // Each replicate is rendered in doublings (1, 2, 4, ... samples per
     // pixel, up to the candidate's pilot samples), and the replicates' mean
@@ -300,9 +318,100 @@ EstimatorChoice chooseEstimator(Renderer& renderer, const Scene& scene, const Ca
     }
     t.costPerSample = model.cost(counters) / (pixels * double(samples));
     t.score = t.frames * t.costPerSample;
-    out.trials.push_back(t);
-    best = out.trials.size() == 1 ? t.score : std::min(best, t.score);
+    return t;
+  };
+
+  double best = 0;
+  // The last trial of each march variant (plain, control variates), for the
+  // stop rule; -1: none yet.
+  int lastOf[2] = { -1, -1 };
+  for (const EstimatorCandidate& c : candidates)
+  {
+    const int variant = c.controlVariates ? 1 : 0;
+    if (!choice.tryAllRates && c.estimator == Estimator::UnbiasedMarch && lastOf[variant] >= 0)
+    {
+      // A higher rate of the same variant costs at least as much per sample
+      // and takes at least one: no better than `best` once the variant's
+      // last rate's sample cost that. (No stop where a prediction merely
+      // rose: at the lowest rates the majorant's strata floor keeps the
+      // noise nearly flat, and the prediction's own noise made one rise there
+      // on the Zebrafish-like set, stopping the search before the rate that
+      // won 4x.)
+      if (out.trials[size_t(lastOf[variant])].costPerSample >= best)
+      {
+        continue;
+      }
+    }
+    out.trials.push_back(pilotTrial(c));
+    if (c.estimator == Estimator::UnbiasedMarch)
+    {
+      lastOf[variant] = int(out.trials.size()) - 1;
+    }
+    best = out.trials.size() == 1 ? out.trials.back().score : std::min(best, out.trials.back().score);
   }
+
+  // Between two rates of a variant, the lower needing more than one frame and
+  // the next one, it: a rate in between may reach the target in one frame for
+  // less. Where the interpolation's cost is predicted below the best, the
+  // rate where the one-frame MSE is predicted to meet refineMargin x the
+  // target (log-log interpolation of MSE(1) in the rate, rounded up to
+  // kChoiceRateStep) gets a pilot of its own, and competes like the others
+  // (one frame only if its pilot is within the margin too). Whole frames make the
+  // choice jump at such a boundary: on the CPU target's scene the pilots put
+  // 1 per voxel's MSE(1) 1% over RMSE 0.01's, predicted 2 frames and took
+  // 1.25 per voxel, 19% dearer (Benchmarks/RESULTS.md, "Fourteenth session").
+  if (choice.refineRates)
+  {
+    const size_t scanned = out.trials.size();
+    for (int variant = 0; variant < 2; ++variant)
+    {
+      int lo = -1;
+      for (size_t i = 0; i < scanned; ++i)
+      {
+        const EstimatorTrial& t = out.trials[i];
+        if (t.candidate.estimator != Estimator::UnbiasedMarch || int(t.candidate.controlVariates) != variant)
+        {
+          continue;
+        }
+        if (t.frames > 1.0)
+        {
+          lo = int(i);
+          continue;
+        }
+        if (lo < 0)
+        {
+          break; // the lowest rate already takes one frame
+        }
+        const EstimatorTrial& a = out.trials[size_t(lo)];
+        const double r0 = a.candidate.marchSamplesPerVoxel, r1 = t.candidate.marchSamplesPerVoxel;
+        if (!(a.firstFrameMSE > choice.targetMSE && t.firstFrameMSE > 0 && t.firstFrameMSE < a.firstFrameMSE))
+        {
+          break;
+        }
+        const double slope = std::log(a.firstFrameMSE / t.firstFrameMSE) / std::log(r1 / r0);
+        const double aim = choice.refineMargin * choice.targetMSE;
+        double r = r0 * std::pow(a.firstFrameMSE / aim, 1.0 / slope);
+        r = std::ceil(r / kChoiceRateStep - 1e-9) * kChoiceRateStep;
+        const double cost = a.costPerSample + (r - r0) / (r1 - r0) * (t.costPerSample - a.costPerSample);
+        if (r > r0 && r < r1 && cost < best)
+        {
+          EstimatorCandidate c = t.candidate;
+          c.marchSamplesPerVoxel = float(r);
+          EstimatorTrial between = pilotTrial(c);
+          between.refined = true;
+          if (between.firstFrameMSE > aim)
+          {
+            between.frames = std::max(between.frames, 2.0);
+            between.score = between.frames * between.costPerSample;
+          }
+          out.trials.push_back(between);
+          best = std::min(best, between.score);
+        }
+        break;
+      }
+    }
+  }
+
   // The lowest prediction; ties (e.g. nothing visible: one frame each) go to
   // the earlier candidate, the expected-value estimator first.
   out.chosen = 0;
@@ -313,9 +422,7 @@ EstimatorChoice chooseEstimator(Renderer& renderer, const Scene& scene, const Ca
       out.chosen = int(i);
     }
   }
-  const EstimatorCandidate& chosen = out.trials[size_t(out.chosen)].candidate;
-  out.settings.estimator = chosen.estimator;
-  out.settings.marchSamplesPerVoxel = chosen.marchSamplesPerVoxel;
+  out.settings = settingsFor(out.trials[size_t(out.chosen)].candidate);
   out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return out;
 }

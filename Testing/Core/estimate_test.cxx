@@ -7,6 +7,7 @@
 #include "TestUtil.h"
 
 #include "mcvol/EstimatorChoice.h"
+#include "mcvol/RenderSetup.h"
 
 #include <cstdio>
 
@@ -316,14 +317,12 @@ private:
 /// 1-spp frames of candidate `c` until the image's MSE over premultiplied
 /// RGB against `ref` (less the reference's own estimated MSE) is at most
 /// `target`; `cap` if it never is.
-int framesToTarget(Renderer& r, const Scene& scene, const Camera& cam, const EstimatorCandidate& c, double target,
-  const std::vector<float>& ref, double refMSE, int cap)
+int framesToTarget(Renderer& r, const Scene& scene, const Camera& cam, const RenderSettings& base,
+  const EstimatorCandidate& c, double target, const std::vector<float>& ref, double refMSE, int cap)
 {
   Accumulator acc;
-  RenderSettings rs;
+  RenderSettings rs = candidateSettings(base, cam, c);
   rs.seed = 7;
-  rs.estimator = c.estimator;
-  rs.marchSamplesPerVoxel = c.marchSamplesPerVoxel;
   for (int f = 1; f <= cap; ++f)
   {
     r.render(scene, cam, rs, nullptr, acc);
@@ -338,16 +337,18 @@ int framesToTarget(Renderer& r, const Scene& scene, const Camera& cam, const Est
 /// A renderer whose image after N samples per pixel is 0.5 + e(N) z, z =
 /// +-1/sqrt(2) by the seed: two replicates (different seeds)
 /// differ by sqrt(2) e(N), so the choice measures MSE(N) = e(N)^2 exactly.
-/// MSE(N) = V(N) for expected value and W(N) for the march, both given.
+/// MSE(N) is given per settings (estimator, march rate and variant), and so
+/// is the work of one sample of one pixel (DDA steps; 1 if not given).
 class SyntheticNoiseRenderer : public Renderer
 {
 public:
-  std::function<double(Estimator, double)> Mse;
+  std::function<double(const RenderSettings&, double)> Mse;
+  std::function<double(const RenderSettings&)> Work;
   void render(const Scene&, const Camera& camera, const RenderSettings& settings, const float*, Accumulator& accum,
     RenderCounters* counters) override
   {
     accum.addSamples(uint32_t(settings.samplesPerPixel));
-    const double e = std::sqrt(this->Mse(settings.estimator, double(accum.samples())));
+    const double e = std::sqrt(this->Mse(settings, double(accum.samples())));
     // The first seed seen gets +, the next one -, and so on.
     const auto it = this->Signs.emplace(settings.seed, this->Signs.size() % 2 == 0 ? 1.0 : -1.0).first;
     const float v = float(0.5 + it->second * e / std::sqrt(2.0));
@@ -359,9 +360,10 @@ public:
     }
     if (counters)
     {
-      // Equal work per sample for every candidate: the frames decide.
+      // Equal work per sample for every candidate unless given: the frames decide.
+      const double work = this->Work ? this->Work(settings) : 1.0;
       counters->rays += uint64_t(n) * uint64_t(settings.samplesPerPixel);
-      counters->ddaSteps += uint64_t(n) * uint64_t(settings.samplesPerPixel);
+      counters->ddaSteps += uint64_t(std::llround(work * double(n) * double(settings.samplesPerPixel)));
     }
   }
   void march(const Scene&, const Camera&, const MarchSettings&, const float*, Accumulator&, MarchCounters*) override
@@ -438,7 +440,7 @@ TEST(EstimatorChoice, FramesFromTheLastDoubling)
   const auto ev = [](double n) { return n <= 1 ? 0.01 : 0.01 * std::pow(2.0, -1.6) * 2.0 / n; };
   // The march: W(N) = W1 / N, W1 set per case.
   double w1 = 1.0;
-  r.Mse = [&](Estimator e, double n) { return e == Estimator::ExpectedValue ? ev(n) : w1 / n; };
+  r.Mse = [&](const RenderSettings& st, double n) { return st.estimator == Estimator::ExpectedValue ? ev(n) : w1 / n; };
   EstimatorChoiceSettings cs;
   cs.targetMSE = target;
   cs.marchRates = { 1.f };
@@ -523,6 +525,12 @@ TEST(EstimatorChoice, NothingVisibleAndBadSettings)
   bad = EstimatorChoiceSettings();
   bad.targetMSE = 0.0;
   EXPECT_THROW(chooseEstimator(*r, scene, cam, RenderSettings(), bad), std::invalid_argument);
+  for (double margin : { 0.0, 1.5, double(std::nanf("")) })
+  {
+    bad = EstimatorChoiceSettings();
+    bad.refineMargin = margin;
+    EXPECT_THROW(chooseEstimator(*r, scene, cam, RenderSettings(), bad), std::invalid_argument) << margin;
+  }
 }
 
 // A fixed seed gives the same choice, to the bit, whatever the thread count
@@ -559,11 +567,14 @@ TEST(EstimatorChoice, Reproducible)
 // chosen candidate's is within 2x of the best. The pilot predicts from two
 // 2-spp replicates of a smaller image at pixel centres, so near-equal
 // candidates (and frame counts of 1 against 2) may swap; a candidate
-// several times slower must not win. Two scenes where the winner differs
+// several times slower must not win. Three scenes where the winner differs
 // (the thin cosmology phantom: expected value; the dense microscopy one at
-// a target it reaches late with expected value: the march). The rate
-// search goes on while the last rate's cost per sample is below the best
-// prediction so far, and stops there (a higher rate cannot win).
+// a target it reaches late with expected value: the march; the same at
+// pixel centres, where every rate is offered with and without control
+// variates). The rate search goes on, per variant, while the variant's last
+// rate's cost per sample is below the best prediction so far, and stops
+// there (a higher rate cannot win); a rate between two listed ones
+// (refineRates) comes last.
 TEST(EstimatorChoice, NearTheFastestToTheTarget)
 {
   std::unique_ptr<Renderer> r = testRenderer();
@@ -572,45 +583,232 @@ TEST(EstimatorChoice, NearTheFastestToTheTarget)
     const char* demo;
     std::array<int, 3> dims;
     double targetMSE;
+    bool centres;
   };
-  for (const Case& cs : { Case{ "cosmology", { 32, 32, 32 }, 3.1622776601683794e-4 },
-         Case{ "microscopy", { 64, 56, 32 }, 1e-4 } })
+  for (const Case& cs : { Case{ "cosmology", { 32, 32, 32 }, 3.1622776601683794e-4, false },
+         Case{ "microscopy", { 64, 56, 32 }, 1e-4, false }, Case{ "microscopy", { 64, 56, 32 }, 1e-4, true } })
   {
     const DemoVolume v = makeDemo(cs.demo, cs.dims);
     Scene scene;
     configureDemo(scene, v, 4);
-    const Camera cam = demoCam(v, 64, 64);
+    Camera cam = demoCam(v, 64, 64);
+    if (cs.centres)
+    {
+      cam.jitterScale = 0.f;
+    }
     EstimatorChoiceSettings settings;
     settings.targetMSE = cs.targetMSE;
     const EstimatorChoice c = chooseEstimator(*r, scene, cam, RenderSettings(), settings);
     ASSERT_TRUE(c.applies);
-    std::printf("%s:\n%s", cs.demo, c.report().c_str());
+    std::printf("%s%s:\n%s", cs.demo, cs.centres ? " (pixel centres)" : "", c.report().c_str());
     Accumulator ref;
     renderBatches(*r, scene, cam, ref, 1024, 256, 999, Sampler::Independent, Estimator::ExpectedValue);
     const std::vector<float> refImg = image(ref);
     const double refMSE = ref.estimatedMSE();
     std::vector<double> truth;
+    bool sawControl = false;
     for (const EstimatorTrial& t : c.trials)
     {
-      const int frames = framesToTarget(*r, scene, cam, t.candidate, cs.targetMSE, refImg, refMSE, 128);
+      const int frames =
+        framesToTarget(*r, scene, cam, RenderSettings(), t.candidate, cs.targetMSE, refImg, refMSE, 128);
       truth.push_back(double(frames) * t.costPerSample);
+      sawControl = sawControl || t.candidate.controlVariates;
       std::printf("  true frames %d, time %.4g\n", frames, truth.back());
     }
+    EXPECT_EQ(sawControl, cs.centres) << "control variates are offered at pixel centres only";
     const double best = *std::min_element(truth.begin(), truth.end());
     EXPECT_LE(truth[size_t(c.chosen)], 2.0 * best) << cs.demo;
+    // The stop rule, per variant, over the listed rates (the refined rate,
+    // if any, comes after them).
     double bestSoFar = c.trials[0].score;
+    int lastOf[2] = { -1, -1 };
+    int listed[2] = { 0, 0 };
     for (size_t i = 1; i < c.trials.size(); ++i)
     {
-      if (i >= 2)
+      const EstimatorTrial& t = c.trials[i];
+      const int variant = t.candidate.controlVariates ? 1 : 0;
+      if (t.refined)
       {
-        EXPECT_LT(c.trials[i - 1].costPerSample, bestSoFar) << cs.demo << " trial " << i << " was not worth trying";
+        EXPECT_TRUE(i + 1 == c.trials.size() || c.trials[i + 1].refined) << "refined rates come last";
+        continue;
       }
-      bestSoFar = std::min(bestSoFar, c.trials[i].score);
+      if (lastOf[variant] >= 0)
+      {
+        EXPECT_LT(c.trials[size_t(lastOf[variant])].costPerSample, bestSoFar)
+          << cs.demo << " trial " << i << " was not worth trying";
+        EXPECT_GT(t.candidate.marchSamplesPerVoxel, c.trials[size_t(lastOf[variant])].candidate.marchSamplesPerVoxel);
+      }
+      lastOf[variant] = int(i);
+      ++listed[variant];
+      bestSoFar = std::min(bestSoFar, t.score);
     }
-    const size_t rates = settings.marchRates.size();
-    if (c.trials.size() < 1 + rates)
+    const int rates = int(settings.marchRates.size());
+    for (int variant = 0; variant < (cs.centres ? 2 : 1); ++variant)
     {
-      EXPECT_GE(c.trials.back().costPerSample, bestSoFar) << cs.demo << ": the search stopped early";
+      ASSERT_GE(lastOf[variant], 0);
+      if (listed[variant] < rates)
+      {
+        EXPECT_GE(c.trials[size_t(lastOf[variant])].costPerSample, bestSoFar)
+          << cs.demo << ": the search stopped early (variant " << variant << ")";
+      }
     }
+  }
+}
+
+// At pixel centres every march rate is offered twice, with the plain strata
+// and with control variates (below kMarchControlVariateRate too), and each
+// pilot renders what its name says: the control variates read each stratum's
+// two ends besides its point, so their channel samples per stratum are
+// higher (RayMarch.ControlVariatesFollowTheRule: 3.4 against 2.3). Jittered
+// pixels get the plain strata only; the settings can fix the variant. The
+// chosen settings are the chosen candidate's.
+TEST(EstimatorChoice, BothVariantsAtPixelCentres)
+{
+  std::unique_ptr<Renderer> r = testRenderer();
+  const DemoVolume v = makeDemo("microscopy", { 32, 28, 16 });
+  Scene scene;
+  configureDemo(scene, v, 4);
+  Camera centres = demoCam(v, 48, 40);
+  centres.jitterScale = 0.f;
+  EstimatorChoiceSettings cs;
+  cs.marchRates = { 2.f, 0.5f };
+  cs.tryAllRates = true;
+  cs.refineRates = false;
+  const EstimatorChoice c = chooseEstimator(*r, scene, centres, RenderSettings(), cs);
+  ASSERT_EQ(c.trials.size(), 5u);
+  const char* names[] = { "ExpectedValue", "UnbiasedMarch(0.5)", "UnbiasedMarch(0.5, control variates)",
+    "UnbiasedMarch(2)", "UnbiasedMarch(2, control variates)" };
+  for (size_t i = 0; i < 5; ++i)
+  {
+    const EstimatorCandidate& k = c.trials[i].candidate;
+    EXPECT_EQ(estimatorName(k.estimator, k.marchSamplesPerVoxel, k.controlVariates), names[i]);
+    const RenderSettings st = candidateSettings(RenderSettings(), centres, k);
+    if (i > 0)
+    {
+      EXPECT_EQ(marchControlVariates(st, centres), k.controlVariates) << names[i];
+    }
+  }
+  const auto perStratum = [](const EstimatorTrial& t) {
+    return double(t.counters.channelSamples) / double(t.counters.tentativeCollisions);
+  };
+  for (size_t i : { 1u, 3u })
+  {
+    EXPECT_GT(perStratum(c.trials[i + 1]), 1.2 * perStratum(c.trials[i])) << names[i + 1];
+    // Less noise for the same strata.
+    EXPECT_LT(c.trials[i + 1].firstFrameMSE, c.trials[i].firstFrameMSE) << names[i + 1];
+  }
+  const RenderSettings chosen = candidateSettings(RenderSettings(), centres, c.trials[size_t(c.chosen)].candidate);
+  EXPECT_EQ(c.settings.estimator, chosen.estimator);
+  EXPECT_EQ(c.settings.marchSamplesPerVoxel, chosen.marchSamplesPerVoxel);
+  EXPECT_EQ(c.settings.marchControlVariates, chosen.marchControlVariates);
+  EXPECT_EQ(c.settings.marchControlVariatesFrom, chosen.marchControlVariatesFrom);
+
+  // Jittered: the plain strata only (what the march renders there).
+  const Camera jittered = demoCam(v, 48, 40);
+  const EstimatorChoice j = chooseEstimator(*r, scene, jittered, RenderSettings(), cs);
+  ASSERT_EQ(j.trials.size(), 3u);
+  EXPECT_FALSE(j.trials[1].candidate.controlVariates || j.trials[2].candidate.controlVariates);
+  RenderSettings noJitter;
+  noJitter.jitterPixels = false;
+  EXPECT_EQ(chooseEstimator(*r, scene, jittered, noJitter, cs).trials.size(), 5u)
+    << "jitterPixels off is pixel centres too";
+  // The variant fixed by the settings.
+  RenderSettings plainOnly;
+  plainOnly.marchControlVariates = false;
+  const EstimatorChoice p = chooseEstimator(*r, scene, centres, plainOnly, cs);
+  ASSERT_EQ(p.trials.size(), 3u);
+  EXPECT_FALSE(p.trials[1].candidate.controlVariates || p.trials[2].candidate.controlVariates);
+  RenderSettings controlOnly;
+  controlOnly.marchControlVariatesFrom = 0.f;
+  const EstimatorChoice q = chooseEstimator(*r, scene, centres, controlOnly, cs);
+  ASSERT_EQ(q.trials.size(), 3u);
+  EXPECT_TRUE(q.trials[1].candidate.controlVariates && q.trials[2].candidate.controlVariates);
+  // A bad threshold is refused by the render.
+  RenderSettings bad;
+  bad.marchControlVariatesFrom = std::nanf("");
+  Accumulator acc;
+  EXPECT_THROW(r->render(scene, centres, bad, nullptr, acc), std::invalid_argument);
+  bad.marchControlVariatesFrom = -1.f;
+  EXPECT_THROW(r->render(scene, centres, bad, nullptr, acc), std::invalid_argument);
+}
+
+// Between a rate that needs two frames and the next, which needs one, the
+// choice tries the rate where the one-frame MSE, interpolated log-log, meets
+// refineMargin (0.75) x the target, rounded up to a multiple of
+// kChoiceRateStep; it wins where its pilot takes one frame within the margin
+// for less. A renderer with exactly known noise, MSE(1) = 1.01e-4
+// (1/rate)^3.4 for the march (the control variates' fall on the CPU target's
+// scene between 1 and 1.25 per voxel), work per sample proportional to the
+// rate, target 1e-4: 1 per voxel needs 2 frames (1% over), 1.25 one, and
+// 1.125 one for less (MSE(1) 0.68e-4; 1.0915 aimed at).
+TEST(EstimatorChoice, RefinesBetweenRates)
+{
+  const DemoVolume v = makeDemo("cosmology", { 16, 16, 16 });
+  Scene scene;
+  configureDemo(scene, v, 4);
+  const Camera cam = demoCam(v, 32, 32);
+  SyntheticNoiseRenderer r;
+  double w1 = 1.01e-4;
+  r.Mse = [&](const RenderSettings& st, double n) {
+    return st.estimator == Estimator::ExpectedValue ? 1.0 / n
+                                                    : w1 * std::pow(1.0 / st.marchSamplesPerVoxel, 3.4) / n;
+  };
+  r.Work = [](const RenderSettings& st) { return st.estimator == Estimator::ExpectedValue ? 1.0 : 16.0 * st.marchSamplesPerVoxel; };
+  EstimatorChoiceSettings cs;
+  cs.targetMSE = 1e-4;
+  cs.marchRates = { 1.f, 1.25f };
+  {
+    const EstimatorChoice c = chooseEstimator(r, scene, cam, RenderSettings(), cs);
+    std::printf("%s", c.report().c_str());
+    ASSERT_EQ(c.trials.size(), 4u);
+    EXPECT_EQ(c.trials[1].frames, 2.0);
+    EXPECT_EQ(c.trials[2].frames, 1.0);
+    const EstimatorTrial& between = c.trials[3];
+    EXPECT_TRUE(between.refined);
+    EXPECT_FLOAT_EQ(between.candidate.marchSamplesPerVoxel, 1.125f);
+    EXPECT_EQ(between.frames, 1.0);
+    EXPECT_EQ(c.chosen, 3);
+    EXPECT_FLOAT_EQ(c.settings.marchSamplesPerVoxel, 1.125f);
+    EXPECT_NE(c.report().find("between listed rates"), std::string::npos);
+  }
+  {
+    // The rate between is tried, but its pilot is not within the margin (its
+    // MSE(1) 1.01e-4 too: flat up to 1.2 per voxel): two frames, 1.25 stays.
+    const auto smooth = r.Mse;
+    r.Mse = [&](const RenderSettings& st, double n) {
+      return st.estimator == Estimator::ExpectedValue ? 1.0 / n
+                                                      : (st.marchSamplesPerVoxel < 1.2f ? 1.01e-4 : 0.47e-4) / n;
+    };
+    const EstimatorChoice c = chooseEstimator(r, scene, cam, RenderSettings(), cs);
+    ASSERT_EQ(c.trials.size(), 4u);
+    EXPECT_TRUE(c.trials[3].refined);
+    EXPECT_EQ(c.trials[3].frames, 2.0);
+    EXPECT_EQ(c.chosen, 2);
+    r.Mse = smooth;
+  }
+  {
+    // Off: the listed rates only, 1.25 chosen.
+    EstimatorChoiceSettings off = cs;
+    off.refineRates = false;
+    const EstimatorChoice c = chooseEstimator(r, scene, cam, RenderSettings(), off);
+    ASSERT_EQ(c.trials.size(), 3u);
+    EXPECT_EQ(c.chosen, 2);
+  }
+  {
+    // The lowest rate already takes one frame: nothing to refine (and the
+    // stop rule skips 1.25, which costs more per sample).
+    w1 = 0.9e-4;
+    const EstimatorChoice c = chooseEstimator(r, scene, cam, RenderSettings(), cs);
+    ASSERT_EQ(c.trials.size(), 2u);
+    EXPECT_EQ(c.chosen, 1);
+  }
+  {
+    // Far from the boundary: 1 per voxel 1.9x over, the interpolated rate
+    // ((1.9 / 0.75)^(1/3.4) = 1.314) is above 1.25: nothing between to try.
+    w1 = 1.9e-4;
+    const EstimatorChoice c = chooseEstimator(r, scene, cam, RenderSettings(), cs);
+    ASSERT_EQ(c.trials.size(), 3u);
+    EXPECT_EQ(c.trials[1].frames, 2.0);
+    EXPECT_EQ(c.chosen, 2);
   }
 }

@@ -52,6 +52,10 @@ struct EstimatorCandidate
   Estimator estimator = Estimator::ExpectedValue;
   /// RenderSettings::marchSamplesPerVoxel for the unbiased march.
   float marchSamplesPerVoxel = 2.f;
+  /// The unbiased march with control variates (trackControlMarch()) at this
+  /// rate, whatever kMarchControlVariateRate says; false: the plain strata.
+  /// Only at pixel centres, where the control variates apply.
+  bool controlVariates = false;
 };
 
 /// Cost of one sample as a weighted sum of the work counters (nanoseconds
@@ -68,6 +72,10 @@ struct CostModel
 /// The model fitted for the backend of that name (Renderer::name(): "cpu",
 /// "cuda"); the CPU's for any other.
 CostModel defaultCostModel(const std::string& backendName);
+
+/// The rates chooseEstimator() tries between the listed ones (refineRates)
+/// are multiples of this.
+constexpr double kChoiceRateStep = 1.0 / 16.0;
 
 struct EstimatorChoiceSettings
 {
@@ -103,11 +111,17 @@ struct EstimatorChoiceSettings
   double targetMSE = 3.1622776601683794e-4;
   /// The unbiased march's candidate rates (strata per voxel). The expected
   /// value estimator (with the settings' minSamplesPerVoxel) is always a
-  /// candidate, and goes first.
-  /// They are tried in ascending order; the search stops before a rate when
-  /// the one before it cost as much per sample as the best prediction so far
-  /// (a higher rate costs more per sample, and takes at least one). A
-  /// prediction that rose does not stop it (see chooseEstimator()).
+  /// candidate, and goes first. At pixel centres each rate is offered twice,
+  /// with the plain strata and with control variates (trackControlMarch(),
+  /// also below kMarchControlVariateRate), unless the base settings fix the
+  /// variant (RenderSettings::marchControlVariates off: plain only;
+  /// marchControlVariatesFrom 0: control variates only); with jittered
+  /// pixels only the plain strata, which is what the march renders there.
+  /// They are tried in ascending order; the search skips a variant's rate
+  /// when the variant's rate before it cost as much per sample as the best
+  /// prediction so far (a higher rate costs more per sample, and takes at
+  /// least one). A prediction that rose does not stop it (see
+  /// chooseEstimator()).
   /// Rates 3 and 4 serve tight targets on dense data with the plain strata:
   /// on the microscopy scene of the CPU target (256^2, pixel centres) one
   /// sample at 2 per voxel reached 38.0 dB and at 3 per voxel 41.2 dB
@@ -123,6 +137,21 @@ struct EstimatorChoiceSettings
   /// Try every rate (no early stop): the benchmark's --choice-all, to
   /// compare each prediction with the measured time.
   bool tryAllRates = false;
+  /// After the rates above, try one rate between the highest rate of a
+  /// variant that needs more than one frame and the next, which needs one:
+  /// where MSE(1), interpolated log-log in the rate, is predicted to meet
+  /// the target (rounded up to a multiple of kChoiceRateStep), if its
+  /// interpolated cost is below the best prediction. Whole frames make the
+  /// choice jump at such a boundary (see chooseEstimator()).
+  bool refineRates = true;
+  /// The rate between aims at MSE(1) = refineMargin x the target, and counts
+  /// as one frame only where its own pilot says so too (else two, so the
+  /// listed rate above it, which takes one, stays ahead). The pilots are a
+  /// small image: on the H100 at pixel centres (Zebrafish-like, 35 dB) a
+  /// rate aimed at the target itself had pilot MSE(1) 6% under it and its
+  /// full image needed two frames (Benchmarks/RESULTS.md, "Fourteenth
+  /// session").
+  double refineMargin = 0.75;
   /// Use `model` instead of defaultCostModel(renderer.name()) (the
   /// benchmark's --cost-model, to try a fit without rebuilding).
   bool customModel = false;
@@ -136,9 +165,16 @@ struct EstimatorChoiceSettings
  * unlitEstimator() in Integrator.h, the kernels' own rule).
  */
 Estimator effectiveEstimator(const Scene& scene, const RenderSettings& settings);
-/// "Collision", "ExpectedValue", or "UnbiasedMarch(R)" with R strata per
-/// voxel: the names the choice's report and the mapper use.
-std::string estimatorName(Estimator estimator, float marchSamplesPerVoxel);
+/// "Collision", "ExpectedValue", "UnbiasedMarch(R)" with R strata per
+/// voxel (the plain strata), or "UnbiasedMarch(R, control variates)": the
+/// names the choice's report and the mapper use.
+std::string estimatorName(Estimator estimator, float marchSamplesPerVoxel, bool controlVariates = false);
+
+/// `base` with candidate `c`'s estimator, rate and (at pixel centres, i.e.
+/// unless base.jitterPixels and camera.jitterScale > 0) march variant: what
+/// chooseEstimator() renders the candidate with, and the image's settings
+/// when it is chosen.
+RenderSettings candidateSettings(const RenderSettings& base, const Camera& camera, const EstimatorCandidate& c);
 
 /// One candidate's pilot.
 struct EstimatorTrial
@@ -151,6 +187,8 @@ struct EstimatorTrial
   double frames = 0;        ///< predicted samples per pixel to the target (see chooseEstimator)
   double costPerSample = 0; ///< the model's cost of one sample of one pixel
   double score = 0;         ///< frames x cost: the predicted time to the target (model units)
+  /// A rate between two listed ones (EstimatorChoiceSettings::refineRates).
+  bool refined = false;
   RenderCounters counters;
 };
 
@@ -160,7 +198,9 @@ struct EstimatorChoice
   /// optimization and composite blending always take the collision
   /// estimator): then no pilot ran and `settings` is the input.
   bool applies = false;
-  /// The input settings with the chosen estimator (and march rate).
+  /// The input settings with the chosen estimator (and march rate; at pixel
+  /// centres also the march's variant: marchControlVariates, and
+  /// marchControlVariatesFrom 0 for control variates).
   RenderSettings settings;
   std::vector<EstimatorTrial> trials;
   int chosen = -1; ///< index into trials

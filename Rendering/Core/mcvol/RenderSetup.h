@@ -96,7 +96,7 @@ inline void setImportanceFrame(SceneView& s, const Camera& camera)
 /// backends' rule.
 inline bool marchControlVariates(const RenderSettings& s, const Camera& camera)
 {
-  return s.marchControlVariates && s.marchSamplesPerVoxel >= kMarchControlVariateRate &&
+  return s.marchControlVariates && s.marchSamplesPerVoxel >= s.marchControlVariatesFrom &&
     !(s.jitterPixels && camera.jitterScale > 0.f);
 }
 
@@ -133,6 +133,10 @@ inline void checkRenderArguments(const Camera& camera, const RenderSettings& set
   if (!(settings.marchSamplesPerVoxel >= 0.01f && settings.marchSamplesPerVoxel <= 1024.f))
   {
     throw std::invalid_argument("mcvol: the unbiased march's samples per voxel must be between 0.01 and 1024");
+  }
+  if (!(settings.marchControlVariatesFrom >= 0.f) || !std::isfinite(settings.marchControlVariatesFrom))
+  {
+    throw std::invalid_argument("mcvol: the rate from which the march takes control variates must be at least 0 and finite");
   }
   if (accum.width() != camera.width || accum.height() != camera.height)
   {

@@ -68,6 +68,15 @@ struct RenderSettings
   /// Off keeps the plain strata there, for comparison (mcvol-bench
   /// --pixel-centres measures both). Both backends follow it.
   bool marchControlVariates = true;
+  /// The strata per voxel from which marchControlVariates applies:
+  /// kMarchControlVariateRate by default, the rule both backends follow
+  /// when the estimator is set by hand. The automatic choice
+  /// (chooseEstimator()) offers each march rate at pixel centres both with
+  /// and without control variates, and sets 0 here (with
+  /// marchControlVariates on) for a chosen control-variate rate below 1, or
+  /// marchControlVariates off for chosen plain strata at 1 or more. Must be
+  /// at least 0 and finite.
+  float marchControlVariatesFrom = kMarchControlVariateRate;
   /// Device backends: copy the accumulated image into the Accumulator at the
   /// end of render(). false leaves it on the device (the frame may still be
   /// running when render() returns) until readBack() or the next render with
