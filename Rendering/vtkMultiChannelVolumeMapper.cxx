@@ -12,6 +12,7 @@
 #include "vtkObjectFactory.h"
 #include "vtkOpenGLRenderWindow.h"
 #include "vtkPiecewiseFunction.h"
+#include "vtkRenderWindow.h"
 #include "vtkRenderer.h"
 #include "vtkSmartPointer.h"
 #include "vtkVolume.h"
@@ -27,6 +28,7 @@
 #include "VTK/TransferFunctionTables.h"
 #include "VTK/View.h"
 
+#include "mcvol/RenderSetup.h"
 #include "mcvol/Renderer.h"
 #include "mcvol/Scene.h"
 
@@ -103,7 +105,11 @@ struct vtkMultiChannelVolumeMapper::vtkInternals
   // for after a trace or restart (EstimateCurrent false).
   double EstimatedMSE = -1.0;
   bool EstimateCurrent = false;
-  mcvol::adapter::SampleCost Cost; // seconds per sample, for InteractiveFrameTime
+  // Seconds per sample, for InteractiveFrameTime: [1] for AUTOMATIC_ESTIMATOR's
+  // interactive renders (expected value where the choice costs more), [0]
+  // for the others, so that a switch does not budget one estimator's frame
+  // with the other's cost.
+  mcvol::adapter::SampleCost Cost[2];
 
   // AUTOMATIC_ESTIMATOR: the choice and what it was made for (the camera,
   // the window size and the level of detail are left out: the choice is
@@ -119,12 +125,15 @@ struct vtkMultiChannelVolumeMapper::vtkInternals
     unsigned int Seed = 0;
     double MinimumSamplesPerVoxel = 0.0;
     double TargetError = 0.0;
+    bool PixelJitter = true;
+    int MarchControlVariates = -1;
     bool operator==(const ChoiceKey& o) const
     {
       return this->TablesVersion == o.TablesVersion && this->DataMTime == o.DataMTime &&
         this->Backend == o.Backend && this->Blend == o.Blend && this->Lit == o.Lit &&
         this->Optimized == o.Optimized && this->Seed == o.Seed &&
-        this->MinimumSamplesPerVoxel == o.MinimumSamplesPerVoxel && this->TargetError == o.TargetError;
+        this->MinimumSamplesPerVoxel == o.MinimumSamplesPerVoxel && this->TargetError == o.TargetError &&
+        this->PixelJitter == o.PixelJitter && this->MarchControlVariates == o.MarchControlVariates;
     }
   };
   bool ChoiceValid = false;
@@ -133,6 +142,7 @@ struct vtkMultiChannelVolumeMapper::vtkInternals
   std::string ChoiceReport = "no automatic choice made yet";
   std::string ChosenEstimator = "none"; // backing store of GetChosenEstimatorAsString
   int Choices = 0;                      // choices that rendered pilots
+  bool InteractiveNow = false;          // this render is interactive (SetInteractiveRendering)
 
   // Backing store for GetActiveBackendName and GetBackendReport.
   std::string BackendName = "none";
@@ -279,6 +289,9 @@ mcvol::RenderSettings vtkMultiChannelVolumeMapper::MakeRenderSettings(const mcvo
                                                               : mcvol::Estimator::ExpectedValue;
   settings.minSamplesPerVoxel = float(this->MinimumSamplesPerVoxel);
   settings.marchSamplesPerVoxel = float(this->MarchSamplesPerVoxel);
+  settings.marchControlVariates = this->MarchControlVariates != MARCH_CONTROL_VARIATES_NEVER;
+  settings.marchControlVariatesFrom =
+    this->MarchControlVariates == MARCH_CONTROL_VARIATES_ALWAYS ? 0.f : mcvol::kMarchControlVariateRate;
   return settings;
 }
 
@@ -293,12 +306,20 @@ bool vtkMultiChannelVolumeMapper::TraceImage(const mcvol::Scene& scene, const mc
   }
   mcvol::RenderSettings settings = this->MakeRenderSettings(*renderer);
   vtkInternals& in = *this->Internals;
-  if (this->Estimator == AUTOMATIC_ESTIMATOR && in.ChoiceValid)
+  // Interactive renders keep expected value (MakeRenderSettings' estimator
+  // under AUTOMATIC_ESTIMATOR) where the choice's sample costs more.
+  const bool keepExpectedValue = in.InteractiveNow && in.Choice.applies && in.Choice.chosen > 0 &&
+    in.Choice.trials[size_t(in.Choice.chosen)].costPerSample > in.Choice.trials[0].costPerSample;
+  if (this->Estimator == AUTOMATIC_ESTIMATOR && in.ChoiceValid && !keepExpectedValue)
   {
     settings.estimator = in.Choice.settings.estimator;
     settings.marchSamplesPerVoxel = in.Choice.settings.marchSamplesPerVoxel;
+    settings.marchControlVariates = in.Choice.settings.marchControlVariates;
+    settings.marchControlVariatesFrom = in.Choice.settings.marchControlVariatesFrom;
   }
-  in.ChosenEstimator = mcvol::estimatorName(mcvol::effectiveEstimator(scene, settings), settings.marchSamplesPerVoxel);
+  const mcvol::Estimator used = mcvol::effectiveEstimator(scene, settings);
+  in.ChosenEstimator = mcvol::estimatorName(used, settings.marchSamplesPerVoxel,
+    used == mcvol::Estimator::UnbiasedMarch && mcvol::marchControlVariates(settings, camera));
   try
   {
     renderer->render(scene, camera, settings, depth, accum);
@@ -886,6 +907,8 @@ struct vtkMultiChannelVolumeMapper::RenderPass
   mcvol::adapter::Viewport Viewport;
   vtkOpenGLRenderWindow* Window = nullptr;
   mcvol::Camera Camera;
+  /// An interactive render (SetInteractiveRendering).
+  bool Interactive = false;
 };
 
 //------------------------------------------------------------------------------
@@ -901,6 +924,14 @@ void vtkMultiChannelVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
   RenderPass pass;
   pass.Renderer = ren;
   pass.Volume = vol;
+  {
+    vtkRenderWindow* window = ren->GetRenderWindow();
+    pass.Interactive = this->InteractiveRendering == 1 ||
+      (this->InteractiveRendering == -1 && window &&
+        window->GetDesiredUpdateRate() >= this->InteractiveUpdateRate);
+    this->LastRenderInteractive = pass.Interactive;
+    this->Internals->InteractiveNow = pass.Interactive;
+  }
   if (!this->BindChannels(pass) ||              // input image -> channels read in place
     !this->ClassifyDependentComponents(pass) || // IndependentComponentsOff: RGBA -> one classified channel
     !this->ResolveTransferFunctions(pass) ||    // VTK functions of each channel
@@ -1362,6 +1393,7 @@ void vtkMultiChannelVolumeMapper::UpdateAccumulation(RenderPass& pass)
   key.Backend = in.Backend.Get();
   key.Level = pass.Level;
   key.LevelVersion = pass.LevelData ? pass.LevelData->Version : 0;
+  key.InteractiveEstimator = this->Estimator == AUTOMATIC_ESTIMATOR && pass.Interactive;
   if (in.Accumulation.Update(key, in.Depth, in.Accum))
   {
     in.EstimateCurrent = false;
@@ -1387,6 +1419,8 @@ bool vtkMultiChannelVolumeMapper::ChooseEstimator(RenderPass& pass)
   key.Seed = this->Seed;
   key.MinimumSamplesPerVoxel = this->MinimumSamplesPerVoxel;
   key.TargetError = this->TargetError;
+  key.PixelJitter = this->PixelJitter;
+  key.MarchControlVariates = this->MarchControlVariates;
   if (in.ChoiceValid && in.ChoiceMadeFor == key)
   {
     return true;
@@ -1424,8 +1458,9 @@ bool vtkMultiChannelVolumeMapper::TraceBatch(RenderPass& pass)
   // for itself (it traces once per change).
   vtkInternals& in = *this->Internals;
   const bool budgeted = this->InteractiveFrameTime > 0.0 && this->AddsSamples();
+  mcvol::adapter::SampleCost& cost = in.Cost[this->Estimator == AUTOMATIC_ESTIMATOR && pass.Interactive ? 1 : 0];
   const int wanted =
-    budgeted ? in.Cost.Budget(this->InteractiveFrameTime, this->SamplesPerPixel, 4096) : this->SamplesPerPixel;
+    budgeted ? cost.Budget(this->InteractiveFrameTime, this->SamplesPerPixel, 4096) : this->SamplesPerPixel;
   int batch = mcvol::adapter::SamplesThisRender(this->AddsSamples(), this->Progressive, wanted,
     this->MaximumTotalSamples, static_cast<long long>(in.Accum.samples()));
   // Adaptive stopping: once the estimate reached TargetError, redraw only.
@@ -1455,7 +1490,7 @@ bool vtkMultiChannelVolumeMapper::TraceBatch(RenderPass& pass)
   in.EstimateCurrent = false;
   if (ok && this->AddsSamples())
   {
-    in.Cost.Record(batch, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+    cost.Record(batch, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
   }
   in.BatchSamples = 0;
   this->LastSamplesPerRender = ok ? batch : 0;
@@ -1535,6 +1570,10 @@ void vtkMultiChannelVolumeMapper::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "Estimator: " << this->GetEstimatorAsString() << " (last used: " << in.ChosenEstimator << ")\n";
   os << indent << "MinimumSamplesPerVoxel: " << this->MinimumSamplesPerVoxel << "\n";
   os << indent << "MarchSamplesPerVoxel: " << this->MarchSamplesPerVoxel << "\n";
+  os << indent << "MarchControlVariates: " << this->MarchControlVariates << "\n";
+  os << indent << "InteractiveRendering: " << this->InteractiveRendering
+     << " (update rate " << this->InteractiveUpdateRate << "; last render "
+     << (this->LastRenderInteractive ? "interactive" : "still") << ")\n";
   os << indent << "SamplesPerPixel: " << this->SamplesPerPixel << "\n";
   os << indent << "InteractiveFrameTime: " << this->InteractiveFrameTime << "\n";
   os << indent << "Progressive: " << this->Progressive << "\n";

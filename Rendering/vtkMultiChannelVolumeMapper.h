@@ -199,8 +199,11 @@ public:
    * collision estimator. A change restarts the progressive image.
    *
    * AUTOMATIC_ESTIMATOR picks, per scene, the one of expected value and the
-   * unbiased march at 1/16 to 2 strata per voxel (MarchSamplesPerVoxel
-   * is then not used) whose noise times cost per sample is lowest, from a
+   * unbiased march at 1/16 to 4 strata per voxel (MarchSamplesPerVoxel
+   * is then not used; with PixelJitter off, each rate with and without
+   * control variates, see MarchControlVariates, and a rate between two
+   * where the lower needs two samples and the higher one) whose predicted
+   * time to the target is lowest, from a
    * small pilot image of each at the first render of the data and transfer
    * functions (mcvol::chooseEstimator, Rendering/Core/mcvol/
    * EstimatorChoice.h), aiming at TargetError where one is set, else at
@@ -209,8 +212,8 @@ public:
    * the same choice and image on a backend whatever the load. The choice is
    * kept while the camera, the window size and the level of detail change,
    * and made again when the data, a transfer function, the blend mode, the
-   * lighting, the backend, the seed, MinimumSamplesPerVoxel or TargetError
-   * changes. The pilots cost about a
+   * lighting, the backend, the seed, MinimumSamplesPerVoxel, TargetError,
+   * PixelJitter or MarchControlVariates changes. The pilots cost about a
    * frame or two once per choice (Benchmarks/RESULTS.md, "The automatic
    * estimator"). GetChosenEstimatorAsString() says what was chosen and
    * GetEstimatorReport() why.
@@ -224,12 +227,40 @@ public:
   const char* GetEstimatorAsString();
   /**
    * The estimator the last render's unlit camera rays used: "Collision",
-   * "ExpectedValue" or "UnbiasedMarch(R)" with R strata per voxel; under
+   * "ExpectedValue", "UnbiasedMarch(R)" with R strata per voxel (the plain
+   * strata) or "UnbiasedMarch(R, control variates)"; under
    * AUTOMATIC_ESTIMATOR the choice made. Lit volumes, composite blending and
    * the visibility optimization report "Collision" whatever is set. "none"
    * before the first render.
    */
   const char* GetChosenEstimatorAsString();
+  ///@{
+  /**
+   * Interactive renders (the user moving the camera). VTK's interactors raise
+   * the render window's DesiredUpdateRate while the user drags and set it
+   * back to the still rate when the drag ends, which renders once more; a
+   * render whose window's DesiredUpdateRate is at least InteractiveUpdateRate
+   * (default 1, vtkSmartVolumeMapper's rule and default) is interactive.
+   * SetInteractiveRendering(1) makes every render interactive and 0 none;
+   * -1 (default) asks the window. The ParaView representation sets 1 for
+   * the renders ParaView makes with its level of detail, -1 otherwise.
+   *
+   * What changes: under AUTOMATIC_ESTIMATOR, an interactive render takes the
+   * expected-value estimator where the choice's sample is predicted to cost
+   * more than expected value's (the unbiased march: one sample of it may
+   * cost 5-10 expected-value frames), so the camera moves at expected
+   * value's frame rate; the first still render restarts the image with the
+   * choice, which then converges at its own speed (Benchmarks/RESULTS.md,
+   * "Fourteenth session"). Nothing changes for an estimator set by hand.
+   * Setting InteractiveRendering does not restart the image by itself.
+   */
+  void SetInteractiveRendering(int mode) { this->InteractiveRendering = mode < -1 ? -1 : (mode > 1 ? 1 : mode); }
+  vtkGetMacro(InteractiveRendering, int);
+  vtkSetClampMacro(InteractiveUpdateRate, double, 0.0, VTK_DOUBLE_MAX);
+  vtkGetMacro(InteractiveUpdateRate, double);
+  /// Whether the last render was interactive (see SetInteractiveRendering).
+  vtkGetMacro(LastRenderInteractive, bool);
+  ///@}
   /// The automatic choice's pilots, one line per candidate (estimated
   /// variance, modelled cost per sample, their product; the chosen one
   /// marked) and their time; a sentence when no choice was made.
@@ -264,6 +295,35 @@ public:
    */
   vtkSetClampMacro(MarchSamplesPerVoxel, double, 0.01, 1024.0);
   vtkGetMacro(MarchSamplesPerVoxel, double);
+  ///@}
+
+  enum MarchControlVariatesModes
+  {
+    MARCH_CONTROL_VARIATES_NEVER = 0,
+    MARCH_CONTROL_VARIATES_BY_RATE = 1,
+    MARCH_CONTROL_VARIATES_ALWAYS = 2
+  };
+
+  ///@{
+  /**
+   * Unbiased-march estimator with PixelJitter off (rays through the pixel
+   * centres): whether it takes control variates (a trapezoid march through
+   * every stratum's ends composited exactly, chance left only the residual;
+   * about 1.4x the time per sample for 4-21 dB less noise after one sample
+   * on the sets measured; Benchmarks/RESULTS.md, "Eleventh session" and
+   * "Twelfth session"). BY_RATE (default): from 1 stratum per voxel
+   * (mcvol::kMarchControlVariateRate), the plain strata below. NEVER: the
+   * plain strata at every rate. ALWAYS: control variates at every rate.
+   * With jittered pixels the march always takes the plain strata.
+   * Under AUTOMATIC_ESTIMATOR, BY_RATE offers every candidate rate both ways
+   * and the choice decides; NEVER and ALWAYS fix the variant. A change
+   * restarts the progressive image.
+   */
+  vtkSetClampMacro(MarchControlVariates, int, MARCH_CONTROL_VARIATES_NEVER, MARCH_CONTROL_VARIATES_ALWAYS);
+  vtkGetMacro(MarchControlVariates, int);
+  void SetMarchControlVariatesToNever() { this->SetMarchControlVariates(MARCH_CONTROL_VARIATES_NEVER); }
+  void SetMarchControlVariatesToByRate() { this->SetMarchControlVariates(MARCH_CONTROL_VARIATES_BY_RATE); }
+  void SetMarchControlVariatesToAlways() { this->SetMarchControlVariates(MARCH_CONTROL_VARIATES_ALWAYS); }
   ///@}
 
   enum SampleSequences
@@ -961,6 +1021,10 @@ protected:
   int Estimator = EXPECTED_VALUE_ESTIMATOR;
   double MinimumSamplesPerVoxel = 0.0;
   double MarchSamplesPerVoxel = 2.0;
+  int MarchControlVariates = MARCH_CONTROL_VARIATES_BY_RATE;
+  int InteractiveRendering = -1;
+  double InteractiveUpdateRate = 1.0;
+  bool LastRenderInteractive = false;
   int SamplesPerPixel = 1;
   double InteractiveFrameTime = 0.0;
   int LastSamplesPerRender = 0;

@@ -227,6 +227,11 @@ void vtkMultiChannelVolumeRepresentation::SetMarchSamplesPerVoxel(double samples
   this->GetMultiChannelMapper()->SetMarchSamplesPerVoxel(samples);
 }
 
+void vtkMultiChannelVolumeRepresentation::SetMarchControlVariates(int mode)
+{
+  this->GetMultiChannelMapper()->SetMarchControlVariates(mode);
+}
+
 void vtkMultiChannelVolumeRepresentation::SetMultiChannelInterpolation(int type)
 {
   this->GetMultiChannelMapper()->SetInterpolationType(type);
@@ -575,6 +580,10 @@ void vtkMultiChannelVolumeRepresentation::UpdateMapperParameters()
   // still render goes back (and refines from there).
   const bool interactiveLevel = this->RenderingWithLOD && this->InteractiveLevelOfDetail != 0;
   mapper->SetLevelOfDetail(interactiveLevel ? this->InteractiveLevelOfDetail : this->LevelOfDetail);
+  // ParaView's LOD renders are its interactive ones: there the automatic
+  // estimator keeps expected value's frame rate (the render window's update
+  // rate decides the others).
+  mapper->SetInteractiveRendering(this->RenderingWithLOD ? 1 : -1);
 
   // ---- Channels -------------------------------------------------------------
   int numChannels = 0;

@@ -105,6 +105,8 @@ public:
   void SetMinimumSamplesPerVoxel(double samples);
   /// vtkMultiChannelVolumeMapper::SetMarchSamplesPerVoxel.
   void SetMarchSamplesPerVoxel(double samples);
+  /// vtkMultiChannelVolumeMapper::SetMarchControlVariates.
+  void SetMarchControlVariates(int mode);
   /// vtkMultiChannelVolumeMapper::SetInterpolationType (-1: the volume property's).
   void SetMultiChannelInterpolation(int type);
   void SetSamplesPerRender(int spp);

@@ -18,7 +18,8 @@ bool AccumulationKey::operator==(const AccumulationKey& o) const
     this->Width == o.Width && this->Height == o.Height &&
     std::equal(std::begin(this->InvViewProj), std::end(this->InvViewProj), std::begin(o.InvViewProj)) &&
     std::equal(std::begin(this->WorldToIndex), std::end(this->WorldToIndex), std::begin(o.WorldToIndex)) &&
-    this->Backend == o.Backend && this->Level == o.Level && this->LevelVersion == o.LevelVersion;
+    this->Backend == o.Backend && this->Level == o.Level && this->LevelVersion == o.LevelVersion &&
+    this->InteractiveEstimator == o.InteractiveEstimator;
 }
 
 //------------------------------------------------------------------------------

@@ -34,6 +34,10 @@ struct AccumulationKey
   /// that level's data (a rebuilt level is new data).
   int Level = 0;
   unsigned long long LevelVersion = 0;
+  /// AUTOMATIC_ESTIMATOR's interactive renders, which may take another
+  /// estimator than the still ones (vtkMultiChannelVolumeMapper::
+  /// SetInteractiveRendering); false otherwise.
+  bool InteractiveEstimator = false;
 
   bool operator==(const AccumulationKey& o) const;
 };

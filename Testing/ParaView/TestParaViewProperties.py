@@ -105,6 +105,16 @@ expect("Estimator = Automatic", setter("Estimator", "Automatic"), True)
 chosen = T.info(rep, "ChosenEstimator")
 checks.check(chosen == "ExpectedValue" or chosen.startswith("UnbiasedMarch("),
              "ChosenEstimator with Estimator = Automatic (%s)" % chosen)
+# March Control Variates: nothing with jittered pixels (the march takes the
+# plain strata there), a new image at pixel centres (2 strata per voxel: the
+# control variates by default, the plain strata with Never).
+rep.Estimator = "Unbiased March"
+reference = image()
+expect_property("MarchControlVariates", "Never", False, "MarchControlVariates = Never, jittered pixels")
+rep.PixelJitter = 0
+reference = image()
+expect_property("MarchControlVariates", "Never", True, "MarchControlVariates = Never, pixel centres")
+rep.PixelJitter = 1
 rep.Estimator = "Collision"
 reference = image()
 expect_property("MultiChannelInterpolation", "Cubic B-Spline", True)

@@ -76,6 +76,8 @@ BAD_SCENES = [
     ("bad-estimator", {"input": {"demo": "figure3"}, "estimator": "track-length"}, "estimator:"),
     ("bad-min-samples", {"input": {"demo": "figure3"}, "min_samples_per_voxel": -1}, "min_samples_per_voxel"),
     ("bad-march-samples", {"input": {"demo": "figure3"}, "march_samples_per_voxel": 0}, "march_samples_per_voxel"),
+    ("bad-march-control-variates", {"input": {"demo": "figure3"}, "march_control_variates": "sometimes"},
+     "march_control_variates:"),
     ("bad-mix-color", {"input": {"demo": "figure3"}, "blend": "mix", "mix_color": "sum"}, "mix_color:"),
     ("bad-interpolation", {"input": {"demo": "figure3"}, "interpolation": "tricubic"}, "interpolation:"),
     ("cubic-opacity-model",
@@ -258,6 +260,28 @@ def main():
         t.check(not np.array_equal(imgs["ev"], imgs["um4"]), "unbiased-march gives other samples")
         diff = float(np.mean(np.abs(imgs["um2"] - imgs["march"])))
         t.check(diff < 2.0, "unbiased-march at 256 spp against the ray march: mean |difference| %.3f" % diff)
+
+    # march_control_variates reaches the mapper: at pixel centres and 2 strata
+    # per voxel the march takes control variates by rate, so "never" gives
+    # other samples and "always" the same ones; with jittered pixels "never"
+    # changes nothing (the plain strata either way).
+    fn = os.path.join(work, "cv.json")
+    imgs = {}
+    for key, extra in (("by-rate", {}), ("never", {"march_control_variates": "never"}),
+                       ("always", {"march_control_variates": "always"}),
+                       ("jitter", {"pixel_jitter": True}),
+                       ("jitter-never", {"pixel_jitter": True, "march_control_variates": "never"})):
+        with open(fn, "w") as f:
+            json.dump(dict({"input": {"demo": "figure3", "dimensions": [32, 32, 32]}, "seed": 3,
+                            "estimator": "unbiased-march", "pixel_jitter": False}, **extra), f)
+        out = os.path.join(work, "cv-%s.png" % key)
+        r = run(program, [fn, "-o", out, "--spp", "1", "--size", "32x32", "--backend", "cpu", "--quiet"])
+        t.check(r.returncode == 0, "march_control_variates %s: %d %r" % (key, r.returncode, r.stderr))
+        imgs[key] = read_png(out) if r.returncode == 0 else None
+    if all(v is not None for v in imgs.values()):
+        t.check(not np.array_equal(imgs["by-rate"], imgs["never"]), "march_control_variates never: other samples")
+        t.check(np.array_equal(imgs["by-rate"], imgs["always"]), "march_control_variates always at 2 per voxel: the same")
+        t.check(np.array_equal(imgs["jitter"], imgs["jitter-never"]), "jittered pixels: the plain strata either way")
 
     # mix_color: a channel alone is dimmed by Eq. 10 (3 equal weights: 1/3 of
     # its colour) and not by the default weighted average.

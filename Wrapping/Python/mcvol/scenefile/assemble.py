@@ -452,6 +452,11 @@ def setup_mapper(mapper, prop, scene, channels, tfs, render_image, reference):
         mapper.SetEstimatorToExpectedValue()
     mapper.SetMinimumSamplesPerVoxel(scene["min_samples_per_voxel"])
     mapper.SetMarchSamplesPerVoxel(scene["march_samples_per_voxel"])
+    {
+        "never": mapper.SetMarchControlVariatesToNever,
+        "by-rate": mapper.SetMarchControlVariatesToByRate,
+        "always": mapper.SetMarchControlVariatesToAlways,
+    }[scene["march_control_variates"]]()
     if scene["sample_sequence"] == "independent":
         mapper.SetSampleSequenceToIndependent()
     else:

@@ -33,6 +33,7 @@ from .schema import (
     RESAMPLING,
     SAMPLE_SEQUENCES,
     ESTIMATORS,
+    MARCH_CONTROL_VARIATES,
     SHADOWS,
     TOP_KEYS,
     TRACKING,
@@ -375,6 +376,11 @@ def parse_scene(data, scene_dir, presets):
         get_number(data["march_samples_per_voxel"], "march_samples_per_voxel", lo=0.01, hi=1024.0)
         if "march_samples_per_voxel" in data
         else 2.0
+    )
+    s["march_control_variates"] = (
+        get_string(data["march_control_variates"], "march_control_variates", MARCH_CONTROL_VARIATES)
+        if "march_control_variates" in data
+        else "by-rate"
     )
     s["backend"] = get_string(data["backend"], "backend", BACKENDS) if "backend" in data else "auto"
     s["samples_per_pixel"] = (

@@ -20,6 +20,7 @@ RANGE_MODES = ("auto", "data")  # a channel's "range" as a word
 TRACKING = ("1-dda", "n-dda")
 SAMPLE_SEQUENCES = ("sobol", "independent")
 ESTIMATORS = ("expected-value", "collision", "unbiased-march", "automatic")
+MARCH_CONTROL_VARIATES = ("by-rate", "never", "always")
 BACKENDS = ("auto", "cpu", "cuda")
 RENDERERS = ("montecarlo", "raymarch")
 COMPOSITING = ("extinction", "opacity")
@@ -58,6 +59,7 @@ TOP_KEYS = {
     "estimator",
     "min_samples_per_voxel",
     "march_samples_per_voxel",
+    "march_control_variates",
     "backend",
     "samples_per_pixel",
     "samples_per_render",
