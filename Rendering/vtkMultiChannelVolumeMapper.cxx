@@ -105,8 +105,8 @@ struct vtkMultiChannelVolumeMapper::vtkInternals
   // for after a trace or restart (EstimateCurrent false).
   double EstimatedMSE = -1.0;
   bool EstimateCurrent = false;
-  // Seconds per sample, for InteractiveFrameTime: [1] for AUTOMATIC_ESTIMATOR's
-  // interactive renders (expected value where the choice costs more), [0]
+  // Seconds per sample, for InteractiveFrameTime: [1] for the interactive
+  // renders that keep expected value (InteractiveKeepsExpectedValue), [0]
   // for the others, so that a switch does not budget one estimator's frame
   // with the other's cost.
   mcvol::adapter::SampleCost Cost[2];
@@ -308,9 +308,7 @@ bool vtkMultiChannelVolumeMapper::TraceImage(const mcvol::Scene& scene, const mc
   vtkInternals& in = *this->Internals;
   // Interactive renders keep expected value (MakeRenderSettings' estimator
   // under AUTOMATIC_ESTIMATOR) where the choice's sample costs more.
-  const bool keepExpectedValue = in.InteractiveNow && in.Choice.applies && in.Choice.chosen > 0 &&
-    in.Choice.trials[size_t(in.Choice.chosen)].costPerSample > in.Choice.trials[0].costPerSample;
-  if (this->Estimator == AUTOMATIC_ESTIMATOR && in.ChoiceValid && !keepExpectedValue)
+  if (this->Estimator == AUTOMATIC_ESTIMATOR && in.ChoiceValid && !this->InteractiveKeepsExpectedValue())
   {
     settings.estimator = in.Choice.settings.estimator;
     settings.marchSamplesPerVoxel = in.Choice.settings.marchSamplesPerVoxel;
@@ -1393,11 +1391,23 @@ void vtkMultiChannelVolumeMapper::UpdateAccumulation(RenderPass& pass)
   key.Backend = in.Backend.Get();
   key.Level = pass.Level;
   key.LevelVersion = pass.LevelData ? pass.LevelData->Version : 0;
-  key.InteractiveEstimator = this->Estimator == AUTOMATIC_ESTIMATOR && pass.Interactive;
+  // An interactive render that takes another estimator than the still ones
+  // (under the choice made so far; a new choice comes with new data or
+  // settings, which restart the image anyway).
+  key.InteractiveEstimator = this->InteractiveKeepsExpectedValue();
   if (in.Accumulation.Update(key, in.Depth, in.Accum))
   {
     in.EstimateCurrent = false;
   }
+}
+
+//------------------------------------------------------------------------------
+bool vtkMultiChannelVolumeMapper::InteractiveKeepsExpectedValue()
+{
+  const vtkInternals& in = *this->Internals;
+  return this->Estimator == AUTOMATIC_ESTIMATOR && in.InteractiveNow && in.ChoiceValid && in.Choice.applies &&
+    in.Choice.chosen > 0 &&
+    in.Choice.trials[size_t(in.Choice.chosen)].costPerSample > in.Choice.trials[0].costPerSample;
 }
 
 //------------------------------------------------------------------------------
@@ -1458,7 +1468,7 @@ bool vtkMultiChannelVolumeMapper::TraceBatch(RenderPass& pass)
   // for itself (it traces once per change).
   vtkInternals& in = *this->Internals;
   const bool budgeted = this->InteractiveFrameTime > 0.0 && this->AddsSamples();
-  mcvol::adapter::SampleCost& cost = in.Cost[this->Estimator == AUTOMATIC_ESTIMATOR && pass.Interactive ? 1 : 0];
+  mcvol::adapter::SampleCost& cost = in.Cost[this->InteractiveKeepsExpectedValue() ? 1 : 0];
   const int wanted =
     budgeted ? cost.Budget(this->InteractiveFrameTime, this->SamplesPerPixel, 4096) : this->SamplesPerPixel;
   int batch = mcvol::adapter::SamplesThisRender(this->AddsSamples(), this->Progressive, wanted,

@@ -1087,6 +1087,9 @@ private:
   /// AUTOMATIC_ESTIMATOR: the pilots, when the data, tables or settings the
   /// choice was made for changed.
   bool ChooseEstimator(RenderPass& pass);
+  /// This render is interactive and AUTOMATIC_ESTIMATOR's choice costs more
+  /// per sample than expected value: the render keeps expected value.
+  bool InteractiveKeepsExpectedValue();
   bool TraceBatch(RenderPass& pass);
   /// Whether TargetError stops the current image (estimate at most the target).
   bool ReachedTargetError();

@@ -176,6 +176,12 @@ if mapper.GetActiveBackendName() == "cpu":
     plain.SetEstimatorToAutomatic()
     render(pwindow, 1)
     expect_equal(plain.GetChosenEstimatorAsString(), "ExpectedValue", "nearest, jittered, 35 dB: expected value")
+    # Where the choice is expected value, an interactive render changes
+    # nothing: the image goes on accumulating.
+    pwindow.SetDesiredUpdateRate(15.0)
+    render(pwindow, 1)
+    expect(plain.GetLastRenderInteractive(), "DesiredUpdateRate 15: interactive")
+    expect_equal(plain.GetTotalSamples(), 2, "an interactive render with expected value chosen keeps the image")
     centres, cwindow, _, _ = make_view(prop=make_property(linear=True))
     centres.SetPixelJitter(False)
     centres.SetEstimatorToAutomatic()
