@@ -12,7 +12,9 @@
 - a memory budget below level 0's size renders a coarser level and the
   report says so;
 - without LOD (a threshold above the data size) interactive renders keep
-  the still level.
+  the still level;
+- renders with ParaView's LOD are interactive renders for the mapper
+  (SetInteractiveRendering), still renders are not.
 """
 from paraview import simple
 
@@ -80,6 +82,13 @@ view.SMProxy.InteractiveRender()
 checks.check("automatic" in T.info(rep, "LevelOfDetailReport"),
              "InteractiveLevelOfDetail -1 is automatic: %s" % T.info(rep, "LevelOfDetailReport"))
 rep.InteractiveLevelOfDetail = 1
+
+# ParaView's LOD renders are the mapper's interactive renders (where the
+# automatic estimator keeps expected value); still renders are not.
+view.SMProxy.InteractiveRender()
+checks.check(mapper.GetLastRenderInteractive(), "a render with ParaView's LOD is interactive for the mapper")
+simple.Render(view)
+checks.check(not mapper.GetLastRenderInteractive(), "a still render is not")
 
 view.LODThreshold = 1e6  # far above the data: no LOD
 view.SMProxy.InteractiveRender()
