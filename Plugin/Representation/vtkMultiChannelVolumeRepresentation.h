@@ -216,7 +216,9 @@ public:
   int GetLastLevelOfDetail();
   const char* GetLevelOfDetailReport();
   /// The estimator the last render used (the Automatic choice, e.g.
-  /// "UnbiasedMarch(1)"; "Collision" for lit volumes).
+  /// "UnbiasedMarch(1)" or "UnbiasedMarch(0.75, control variates)";
+  /// "ExpectedValue" in LOD renders where the choice costs more per sample;
+  /// "Collision" for lit volumes).
   const char* GetChosenEstimator();
   const char* GetChannelStatus() { return this->ChannelStatus.c_str(); }
   double GetImportanceMemory();
