@@ -168,9 +168,10 @@ def main():
         used = T.info(rep, "LastLevelOfDetail")
         width = mapper.GetAccumulatedImageWidth()
         trace_ms = 1e3 * mapper.GetLastTraceTime()
+        draw_ms = 1e3 * mapper.GetLastDrawTime()
         rows.append(dict(level=used, precision="half" if half and used > 0 else "float", frame_ms=1e3 * statistics.median(times), cpu_ms=1e3 * statistics.median(cpu),
                          min_ms=1e3 * min(times),
-                         max_ms=1e3 * max(times), trace_ms=trace_ms, first_ms=1e3 * first, build_ms=build_ms,
+                         max_ms=1e3 * max(times), trace_ms=trace_ms, draw_ms=draw_ms, first_ms=1e3 * first, build_ms=build_ms,
                          level_mib=level_mib, work_mib=work_mib, rss_growth=rss_growth, width=width))
         print(rows[-1], T.info(rep, "LevelOfDetailReport"))
         sys.stdout.flush()
@@ -189,15 +190,16 @@ def main():
     rebuild_ms = 1e3 * mapper.GetLastLevelOfDetailBuildTime()
 
     lines = []
-    lines.append("| level | precision | grid | frame ms, moving camera (median; min-max) | CPU ms a frame, all threads | trace ms | "
+    lines.append("| level | precision | grid | frame ms, moving camera (median; min-max) | CPU ms a frame, all threads | trace ms | draw ms | "
                  "build ms of the level | levels kept MiB (level 0: the data) | build work MiB | RSS growth MiB |")
-    lines.append("|---|---|---|---|---|---|---|---|---|---|")
+    lines.append("|---|---|---|---|---|---|---|---|---|---|---|")
     for r in rows:
         n = -(-args.dims // (1 << r["level"]))
         grid = "%d^3 x %s" % (n, "4 float" if r["level"] == 0 else
                               "1 half4 (summed)" if r["precision"] == "half" else "1 float4 (summed)")
-        lines.append("| %d | %s | %s | %.0f (%.0f-%.0f) | %.0f | %.0f | %s | %.0f | %s | %.0f |" % (
+        lines.append("| %d | %s | %s | %.0f (%.0f-%.0f) | %.0f | %.0f | %.1f | %s | %.0f | %s | %.0f |" % (
             r["level"], r["precision"], grid, r["frame_ms"], r["min_ms"], r["max_ms"], r["cpu_ms"], r["trace_ms"],
+            r["draw_ms"],
             "%.0f" % r["build_ms"] if r["level"] > 0 else "-", r["level_mib"],
             "%.1f" % r["work_mib"] if r["level"] > 0 else "-", r["rss_growth"]))
     table = "\n".join(lines)
