@@ -247,8 +247,8 @@ public:
    *
    * What changes: under AUTOMATIC_ESTIMATOR, an interactive render takes the
    * expected-value estimator where the choice's sample is predicted to cost
-   * more than expected value's (the unbiased march: one sample of it may
-   * cost 5-10 expected-value frames), so the camera moves at expected
+   * more than expected value's (the unbiased march: one sample of it cost
+   * 3 to 9 expected-value samples on the H100 sets), so the camera moves at expected
    * value's frame rate; the first still render restarts the image with the
    * choice, which then converges at its own speed (Benchmarks/RESULTS.md,
    * "Fourteenth session"). Nothing changes for an estimator set by hand.
