@@ -142,7 +142,6 @@ struct vtkMultiChannelVolumeMapper::vtkInternals
   std::string ChoiceReport = "no automatic choice made yet";
   std::string ChosenEstimator = "none"; // backing store of GetChosenEstimatorAsString
   int Choices = 0;                      // choices that rendered pilots
-  bool InteractiveNow = false;          // this render is interactive (SetInteractiveRendering)
 
   // Backing store for GetActiveBackendName and GetBackendReport.
   std::string BackendName = "none";
@@ -905,8 +904,6 @@ struct vtkMultiChannelVolumeMapper::RenderPass
   mcvol::adapter::Viewport Viewport;
   vtkOpenGLRenderWindow* Window = nullptr;
   mcvol::Camera Camera;
-  /// An interactive render (SetInteractiveRendering).
-  bool Interactive = false;
 };
 
 //------------------------------------------------------------------------------
@@ -923,12 +920,11 @@ void vtkMultiChannelVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
   pass.Renderer = ren;
   pass.Volume = vol;
   {
+    // This render's kind (SetInteractiveRendering), read by the stages.
     vtkRenderWindow* window = ren->GetRenderWindow();
-    pass.Interactive = this->InteractiveRendering == 1 ||
+    this->LastRenderInteractive = this->InteractiveRendering == 1 ||
       (this->InteractiveRendering == -1 && window &&
         window->GetDesiredUpdateRate() >= this->InteractiveUpdateRate);
-    this->LastRenderInteractive = pass.Interactive;
-    this->Internals->InteractiveNow = pass.Interactive;
   }
   if (!this->BindChannels(pass) ||              // input image -> channels read in place
     !this->ClassifyDependentComponents(pass) || // IndependentComponentsOff: RGBA -> one classified channel
@@ -1405,7 +1401,7 @@ void vtkMultiChannelVolumeMapper::UpdateAccumulation(RenderPass& pass)
 bool vtkMultiChannelVolumeMapper::InteractiveKeepsExpectedValue()
 {
   const vtkInternals& in = *this->Internals;
-  return this->Estimator == AUTOMATIC_ESTIMATOR && in.InteractiveNow && in.ChoiceValid && in.Choice.applies &&
+  return this->Estimator == AUTOMATIC_ESTIMATOR && this->LastRenderInteractive && in.ChoiceValid && in.Choice.applies &&
     in.Choice.chosen > 0 &&
     in.Choice.trials[size_t(in.Choice.chosen)].costPerSample > in.Choice.trials[0].costPerSample;
 }

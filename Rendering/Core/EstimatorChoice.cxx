@@ -2,6 +2,7 @@
 #include "mcvol/EstimatorChoice.h"
 
 #include "mcvol/Integrator.h"
+#include "mcvol/RenderSetup.h"
 
 #include <algorithm>
 #include <chrono>
@@ -82,7 +83,6 @@ std::string EstimatorChoice::chosenName() const
     EstimatorCandidate c;
     c.estimator = this->settings.estimator;
     c.marchSamplesPerVoxel = this->settings.marchSamplesPerVoxel;
-    c.controlVariates = false;
     return candidateName(c);
   }
   return candidateName(this->trials[size_t(this->chosen)].candidate);
@@ -115,8 +115,7 @@ RenderSettings candidateSettings(const RenderSettings& base, const Camera& camer
   RenderSettings st = base;
   st.estimator = c.estimator;
   st.marchSamplesPerVoxel = c.marchSamplesPerVoxel;
-  const bool centres = !(base.jitterPixels && camera.jitterScale > 0.f);
-  if (c.estimator == Estimator::UnbiasedMarch && centres)
+  if (c.estimator == Estimator::UnbiasedMarch && pixelCentres(base, camera))
   {
     st.marchControlVariates = c.controlVariates;
     st.marchControlVariatesFrom = c.controlVariates ? 0.f : base.marchControlVariatesFrom;
@@ -199,7 +198,7 @@ EstimatorChoice chooseEstimator(Renderer& renderer, const Scene& scene, const Ca
   // in fewer samples even below kMarchControlVariateRate), unless the
   // settings fix the variant: marchControlVariates off keeps the plain
   // strata, marchControlVariatesFrom 0 the control variates.
-  const bool centres = !(base.jitterPixels && camera.jitterScale > 0.f);
+  const bool centres = pixelCentres(base, camera);
   const bool offerPlain = !centres || !base.marchControlVariates || base.marchControlVariatesFrom > 0.f;
   const bool offerControl = centres && base.marchControlVariates;
   std::vector<EstimatorCandidate> candidates;
@@ -231,9 +230,8 @@ EstimatorChoice chooseEstimator(Renderer& renderer, const Scene& scene, const Ca
   // Replicate seeds: fixed functions of the image's seed (any two distinct
   // seeds scramble independently).
   const uint32_t seeds[2] = { base.seed * 2654435761u + 0x2545F491u, base.seed * 2654435761u + 0x9E3779B9u };
-  const auto settingsFor = [&](const EstimatorCandidate& c) { return candidateSettings(base, camera, c); };
   const auto pilotTrial = [&](const EstimatorCandidate& c) {
-    RenderSettings st = settingsFor(c);
+    RenderSettings st = candidateSettings(base, camera, c);
     st.readBack = true;
     // Each replicate is rendered in doublings (1, 2, 4, ... samples per
     // pixel, up to the candidate's pilot samples), and the replicates' mean
@@ -422,7 +420,7 @@ EstimatorChoice chooseEstimator(Renderer& renderer, const Scene& scene, const Ca
       out.chosen = int(i);
     }
   }
-  out.settings = settingsFor(out.trials[size_t(out.chosen)].candidate);
+  out.settings = candidateSettings(base, camera, out.trials[size_t(out.chosen)].candidate);
   out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return out;
 }

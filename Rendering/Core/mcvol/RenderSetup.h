@@ -91,13 +91,19 @@ inline void setImportanceFrame(SceneView& s, const Camera& camera)
   s.importance.invLengthUnit = unit > 0.0 && std::isfinite(unit) ? float(1.0 / unit) : 1.f;
 }
 
+/// Whether the camera rays go through the pixel centres: no jitter asked
+/// for, or none to spread (Camera::jitterScale 0).
+inline bool pixelCentres(const RenderSettings& s, const Camera& camera)
+{
+  return !(s.jitterPixels && camera.jitterScale > 0.f);
+}
+
 /// Whether the unbiased march takes its control variates (SceneView::
 /// marchControlVariates; kMarchControlVariateRate says when and why). Both
 /// backends' rule.
 inline bool marchControlVariates(const RenderSettings& s, const Camera& camera)
 {
-  return s.marchControlVariates && s.marchSamplesPerVoxel >= s.marchControlVariatesFrom &&
-    !(s.jitterPixels && camera.jitterScale > 0.f);
+  return s.marchControlVariates && s.marchSamplesPerVoxel >= s.marchControlVariatesFrom && pixelCentres(s, camera);
 }
 
 /// What a render asks of every pixel, continuing after `firstSample` samples.
