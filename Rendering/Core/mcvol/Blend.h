@@ -83,8 +83,11 @@ struct PointOptics
   Vec3f emission;
 };
 
+/// `present`: bit n set for each listed channel n to evaluate; the others
+/// are taken as sigma 0 (the unlit estimators pass the channels present in
+/// the macrocell, blendMajorant()).
 template <BlendMode Mode>
-MCVOL_HOT PointOptics blendedOptics(const SceneView& s, const int* channels, int count, Vec3f p)
+MCVOL_HOT PointOptics blendedOptics(const SceneView& s, const int* channels, int count, Vec3f p, uint32_t present = ~0u)
 {
   PointOptics out;
   Vec3f weighted;           // sum of (weight) sigma_n c_n
@@ -95,6 +98,10 @@ MCVOL_HOT PointOptics blendedOptics(const SceneView& s, const int* channels, int
   for (int i = 0; i < count; ++i)
   {
     const int n = channels[i];
+    if (((present >> n) & 1u) == 0u)
+    {
+      continue;
+    }
     const TFSample t = channelOptics(s, n, p);
     if (Mode == BlendMode::Density || Mode == BlendMode::Composite)
     {

@@ -318,6 +318,40 @@ MCVOL_HOT float blendMajorant(const SceneView& s, int64_t cell)
   return M;
 }
 
+/// The active channels present in a macrocell: bit n of `mask` for channel n
+/// (kMaxChannels is 32), and how many.
+struct CellChannels
+{
+  uint32_t mask = 0;
+  int count = 0;
+};
+
+/// blendMajorant(), and in `present` the active channels whose majorant in
+/// the cell is not 0. The others have sigma 0 at every point the cell's
+/// samples read (the majorants cover the cell's voxels and an apron,
+/// cellVoxelBounds()), so the unlit estimators, which evaluate every active
+/// channel at a point, skip them there (blendedOptics()'s mask): the same
+/// optics, without the work for channels absent from the cell.
+template <BlendMode Mode>
+MCVOL_HOT float blendMajorant(const SceneView& s, int64_t cell, CellChannels& present)
+{
+  const float* maj = s.grid.majorants + cell * s.grid.numChannels;
+  float M = 0.f;
+  present = CellChannels();
+  for (int i = 0; i < s.numActive; ++i)
+  {
+    const int n = s.active[i];
+    const float m = minf(maj[n], s.sigmaLimit);
+    M = Mode == BlendMode::Density ? M + m : maxf(M, m);
+    if (m > 0.f)
+    {
+      present.mask |= 1u << n;
+      ++present.count;
+    }
+  }
+  return M;
+}
+
 /// Transmittance below which the expected-value estimator plays Russian
 /// roulette: it goes on with probability T / kRouletteThreshold (T raised to
 /// the threshold) or stops (T = 0), which keeps it unbiased.
@@ -352,7 +386,8 @@ MCVOL_HOT Vec4f trackExpected(const SceneView& s, Vec3f o, Vec3f d, float tmin, 
   while (!dda.done && T > 0.f)
   {
     ++c.ddaSteps;
-    float M = blendMajorant<Mode>(s, dda.cellIndex());
+    CellChannels present;
+    float M = blendMajorant<Mode>(s, dda.cellIndex(), present);
     if (M > 0.f)
     {
       M = maxf(M, s.minRate); // a denser tentative process stays unbiased
@@ -372,11 +407,12 @@ MCVOL_HOT Vec4f trackExpected(const SceneView& s, Vec3f o, Vec3f d, float tmin, 
       tau = opticalDepthOf(uFlight);
       ++c.tentative;
       const Vec3f p = o + d * t;
-      // Every active channel is sampled: the blend's extinction and emission
-      // at p (choosing one channel per collision with probability m_n / M
-      // instead cost 2-3x more time to the same error on the CPU).
-      const PointOptics po = blendedOptics<Mode>(s, s.active, s.numActive, p);
-      c.samples += uint32_t(s.numActive);
+      // Every channel present in the cell is sampled: the blend's extinction
+      // and emission at p (choosing one channel per collision with
+      // probability m_n / M instead cost 2-3x more time to the same error on
+      // the CPU).
+      const PointOptics po = blendedOptics<Mode>(s, s.active, s.numActive, p, present.mask);
+      c.samples += uint32_t(present.count);
       const float w = minf(po.sigma / M, 1.f);
       const Vec3f colour = po.emission;
       L += colour * (T * w);
@@ -485,8 +521,9 @@ constexpr float kControlRouletteThreshold = 0.005f;
 
 /// Walks the unbiased march's macrocells along the ray (one DDA): for every
 /// non-empty one [a, b] (blend majorant M > 0; empty cells have sigma = 0
-/// and no strata), `cell(a, b, n, h)` with its n strata of length h
-/// (marchStrata()). Stops where `cell` returns true.
+/// and no strata), `cell(a, b, n, h, present)` with its n strata of length h
+/// (marchStrata()) and the channels present in it (blendMajorant()). Stops
+/// where `cell` returns true.
 template <BlendMode Mode, typename Cell>
 MCVOL_HOT void forEachMarchCell(const SceneView& s, Vec3f o, Vec3f d, float tmin, float tmax, RayCounters& c, Cell&& cell)
 {
@@ -495,11 +532,12 @@ MCVOL_HOT void forEachMarchCell(const SceneView& s, Vec3f o, Vec3f d, float tmin
   while (!dda.done)
   {
     ++c.ddaSteps;
-    const float M = blendMajorant<Mode>(s, dda.cellIndex());
+    CellChannels present;
+    const float M = blendMajorant<Mode>(s, dda.cellIndex(), present);
     if (M > 0.f)
     {
       const int n = marchStrata(dda.t1 - dda.t0, M, s.marchRate);
-      if (cell(dda.t0, dda.t1, n, (dda.t1 - dda.t0) / float(n)))
+      if (cell(dda.t0, dda.t1, n, (dda.t1 - dda.t0) / float(n), present))
       {
         return;
       }
@@ -546,28 +584,30 @@ MCVOL_HOT Vec4f trackControlMarch(const SceneView& s, Vec3f o, Vec3f d, float tm
   Vec3f L;
   float tEnd = -1.f; // where the last non-empty cell ended, and its optics there
   PointOptics pEnd;
-  forEachMarchCell<Mode>(s, o, d, tmin, tmax, c, [&](float a, float b, int n, float h) {
+  forEachMarchCell<Mode>(s, o, d, tmin, tmax, c, [&](float a, float b, int n, float h, const CellChannels& present) {
+    const uint32_t mask = present.mask;
+    const uint32_t count = uint32_t(present.count);
     PointOptics e0 = pEnd;
     if (tEnd != a)
     {
-      e0 = blendedOptics<Mode>(s, s.active, s.numActive, o + d * a);
-      c.samples += uint32_t(s.numActive);
+      e0 = blendedOptics<Mode>(s, s.active, s.numActive, o + d * a, mask);
+      c.samples += count;
     }
     for (int j = 0; j < n; ++j)
     {
       const float s0 = a + float(j) * h;
       ++c.tentative;
-      const PointOptics e1 = blendedOptics<Mode>(s, s.active, s.numActive, o + d * (j + 1 == n ? b : s0 + h));
-      const PointOptics po = blendedOptics<Mode>(s, s.active, s.numActive, o + d * (s0 + u0 * h));
-      c.samples += 2u * uint32_t(s.numActive);
+      const PointOptics e1 = blendedOptics<Mode>(s, s.active, s.numActive, o + d * (j + 1 == n ? b : s0 + h), mask);
+      const PointOptics po = blendedOptics<Mode>(s, s.active, s.numActive, o + d * (s0 + u0 * h), mask);
+      c.samples += 2u * count;
       const float sA = minf(e0.sigma, s.sigmaLimit);
       const float dS = minf(e1.sigma, s.sigmaLimit) - sA;
       float series = 1.f;
       float term = 1.f;
       for (int l = 0; l < K; ++l)
       {
-        const PointOptics pl = blendedOptics<Mode>(s, s.active, s.numActive, o + d * (s0 + v[l] * h));
-        c.samples += uint32_t(s.numActive);
+        const PointOptics pl = blendedOptics<Mode>(s, s.active, s.numActive, o + d * (s0 + v[l] * h), mask);
+        c.samples += count;
         // The residual against the linear sigma~: the series of
         // (tau~ - (tau~ + R_l)) = -R_l, i.e. pivot 0 over the sums R.
         const float r = h * (minf(pl.sigma, s.sigmaLimit) - (sA + dS * v[l]));
@@ -656,21 +696,23 @@ MCVOL_HOT Vec4f trackUnbiasedMarch(
   float logW = 0.f; // roulette weight, as a logarithm
   bool stopped = false;
   Vec3f L;
-  forEachMarchCell<Mode>(s, o, d, tmin, tmax, c, [&](float a, float, int n, float h) {
+  forEachMarchCell<Mode>(s, o, d, tmin, tmax, c, [&](float a, float, int n, float h, const CellChannels& present) {
+    const uint32_t mask = present.mask;
+    const uint32_t count = uint32_t(present.count);
     for (int j = 0; j < n; ++j)
     {
       const float s0 = a + float(j) * h;
       ++c.tentative;
-      const PointOptics po = blendedOptics<Mode>(s, s.active, s.numActive, o + d * (s0 + u0 * h));
+      const PointOptics po = blendedOptics<Mode>(s, s.active, s.numActive, o + d * (s0 + u0 * h), mask);
       const float sig0 = minf(po.sigma, s.sigmaLimit);
-      c.samples += uint32_t(s.numActive);
+      c.samples += count;
       const float pivot = X0 + u0 * h * sig0;
       float series = 1.f;
       float term = 1.f;
       for (int l = 0; l < K; ++l)
       {
-        const PointOptics pl = blendedOptics<Mode>(s, s.active, s.numActive, o + d * (s0 + v[l] * h));
-        c.samples += uint32_t(s.numActive);
+        const PointOptics pl = blendedOptics<Mode>(s, s.active, s.numActive, o + d * (s0 + v[l] * h), mask);
+        c.samples += count;
         term = marchSeriesStep(term, pivot, X[l], h * minf(pl.sigma, s.sigmaLimit), v[l] < u0, l);
         series += term;
       }
