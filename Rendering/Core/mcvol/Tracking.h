@@ -302,22 +302,6 @@ MCVOL_HOT Vec4f trackComposite(const SceneView& s, Vec3f o, Vec3f d, float tmin,
   return out;
 }
 
-/// The blend's majorant in macrocell `cell`: the sum of the active channels'
-/// majorants (density) or their maximum (max and mix, whose extinction is the
-/// largest channel's), each at most sigmaLimit.
-template <BlendMode Mode>
-MCVOL_HOT float blendMajorant(const SceneView& s, int64_t cell)
-{
-  const float* maj = s.grid.majorants + cell * s.grid.numChannels;
-  float M = 0.f;
-  for (int i = 0; i < s.numActive; ++i)
-  {
-    const float m = minf(maj[s.active[i]], s.sigmaLimit);
-    M = Mode == BlendMode::Density ? M + m : maxf(M, m);
-  }
-  return M;
-}
-
 /// The active channels present in a macrocell: bit n of `mask` for channel n
 /// (kMaxChannels is 32), and how many.
 struct CellChannels
@@ -326,12 +310,15 @@ struct CellChannels
   int count = 0;
 };
 
-/// blendMajorant(), and in `present` the active channels whose majorant in
-/// the cell is not 0. The others have sigma 0 at every point the cell's
-/// samples read (the majorants cover the cell's voxels and an apron,
-/// cellVoxelBounds()), so the unlit estimators, which evaluate every active
-/// channel at a point, skip them there (blendedOptics()'s mask): the same
-/// optics, without the work for channels absent from the cell.
+/// The blend's majorant in macrocell `cell`: the sum of the active channels'
+/// majorants (density) or their maximum (max and mix, whose extinction is the
+/// largest channel's), each at most sigmaLimit. In `present`: the active
+/// channels whose majorant in the cell is not 0. The others have sigma 0 at
+/// every point the cell's samples read (the majorants cover the cell's
+/// voxels and an apron, cellVoxelBounds()), so the unlit estimators, which
+/// evaluate every active channel at a point, skip them there
+/// (blendedOptics()'s mask): the same optics, without the work for channels
+/// absent from the cell.
 template <BlendMode Mode>
 MCVOL_HOT float blendMajorant(const SceneView& s, int64_t cell, CellChannels& present)
 {
