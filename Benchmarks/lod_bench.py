@@ -8,7 +8,9 @@ resident memory around the builds, and the time to rebuild level 1 after a
 transfer-function edit.
 
 Each frame moves the camera (Azimuth 1 degree) and renders once with
-SamplesPerRender 1 (no frame-time budget), as dragging does: the frame time
+SamplesPerRender 1 (no frame-time budget), as dragging does, reading the
+nearest voxel (the representation's InteractiveInterpolation default;
+--interpolation as-still or both for linear): the frame time
 is the wall time of the interactive render, the first frame at a level
 (which builds it) left out of the median.
 
@@ -108,6 +110,9 @@ def main():
     p.add_argument("--precision", default="half", choices=["half", "float", "both"],
                    help="levels above 0 in half precision (the default, LevelOfDetailHalfPrecision) or float32; "
                         "both: each level in float32, then in half precision (an A/B in one run)")
+    p.add_argument("--interpolation", default="nearest", choices=["nearest", "as-still", "both"],
+                   help="the representation's InteractiveInterpolation: the nearest voxel while interacting (the "
+                        "default), the still renders' (linear), or both: each level as still, then nearest")
     p.add_argument("--repeat", type=int, default=1, help="run the list of levels this many times (A/B on a noisy machine)")
     p.add_argument("--out", help="folder for README.md and lod.csv")
     args = p.parse_args()
@@ -143,15 +148,18 @@ def main():
     mapper = T.local_mapper(rep)
     rows = []
     configs = []
+    interps = ["as-still", "nearest"] if args.interpolation == "both" else [args.interpolation]
     for level in args.levels:
-        if level == 0:
-            configs.append((0, args.precision != "float"))
-        elif args.precision == "both":
-            configs += [(level, False), (level, True)]
-        else:
-            configs.append((level, args.precision == "half"))
-    for level, half in configs * max(1, args.repeat):
+        for interp in interps:
+            if level == 0:
+                configs.append((0, args.precision != "float", interp))
+            elif args.precision == "both":
+                configs += [(level, False, interp), (level, True, interp)]
+            else:
+                configs.append((level, args.precision == "half", interp))
+    for level, half, interp in configs * max(1, args.repeat):
         rep.LevelOfDetailHalfPrecision = int(half)
+        rep.InteractiveInterpolation = "Nearest" if interp == "nearest" else "As Still Renders"
         rep.InteractiveLevelOfDetail = level  # 0: the still level (0) while interacting
         builds = mapper.GetNumberOfLevelOfDetailBuilds()
         rss_before = rss_mib()
@@ -169,7 +177,7 @@ def main():
         width = mapper.GetAccumulatedImageWidth()
         trace_ms = 1e3 * mapper.GetLastTraceTime()
         draw_ms = 1e3 * mapper.GetLastDrawTime()
-        rows.append(dict(level=used, precision="half" if half and used > 0 else "float", frame_ms=1e3 * statistics.median(times), cpu_ms=1e3 * statistics.median(cpu),
+        rows.append(dict(level=used, precision="half" if half and used > 0 else "float", interpolation=interp, frame_ms=1e3 * statistics.median(times), cpu_ms=1e3 * statistics.median(cpu),
                          min_ms=1e3 * min(times),
                          max_ms=1e3 * max(times), trace_ms=trace_ms, draw_ms=draw_ms, first_ms=1e3 * first, build_ms=build_ms,
                          level_mib=level_mib, work_mib=work_mib, rss_growth=rss_growth, width=width))
@@ -179,6 +187,7 @@ def main():
     # Rebuild after a transfer-function edit while interacting at level 1.
     rep.LevelOfDetailHalfPrecision = int(args.precision != "float")
     rep.InteractiveLevelOfDetail = 1
+    rep.InteractiveInterpolation = "As Still Renders" if args.interpolation == "as-still" else "Nearest"
     frames(view, 2)
     builds = mapper.GetNumberOfLevelOfDetailBuilds()
     pwf = simple.GetOpacityTransferFunction(NAMES[0])
@@ -190,15 +199,15 @@ def main():
     rebuild_ms = 1e3 * mapper.GetLastLevelOfDetailBuildTime()
 
     lines = []
-    lines.append("| level | precision | grid | frame ms, moving camera (median; min-max) | CPU ms a frame, all threads | trace ms | draw ms | "
+    lines.append("| level | precision | interactive interpolation | grid | frame ms, moving camera (median; min-max) | CPU ms a frame, all threads | trace ms | draw ms | "
                  "build ms of the level | levels kept MiB (level 0: the data) | build work MiB | RSS growth MiB |")
-    lines.append("|---|---|---|---|---|---|---|---|---|---|---|")
+    lines.append("|---|---|---|---|---|---|---|---|---|---|---|---|")
     for r in rows:
         n = -(-args.dims // (1 << r["level"]))
         grid = "%d^3 x %s" % (n, "4 float" if r["level"] == 0 else
                               "1 half4 (summed)" if r["precision"] == "half" else "1 float4 (summed)")
-        lines.append("| %d | %s | %s | %.0f (%.0f-%.0f) | %.0f | %.0f | %.1f | %s | %.0f | %s | %.0f |" % (
-            r["level"], r["precision"], grid, r["frame_ms"], r["min_ms"], r["max_ms"], r["cpu_ms"], r["trace_ms"],
+        lines.append("| %d | %s | %s | %s | %.0f (%.0f-%.0f) | %.0f | %.0f | %.1f | %s | %.0f | %s | %.0f |" % (
+            r["level"], r["precision"], "nearest" if r["interpolation"] == "nearest" else "linear (as still)", grid, r["frame_ms"], r["min_ms"], r["max_ms"], r["cpu_ms"], r["trace_ms"],
             r["draw_ms"],
             "%.0f" % r["build_ms"] if r["level"] > 0 else "-", r["level_mib"],
             "%.1f" % r["work_mib"] if r["level"] > 0 else "-", r["rss_growth"]))

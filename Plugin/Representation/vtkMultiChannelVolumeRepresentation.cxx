@@ -234,7 +234,29 @@ void vtkMultiChannelVolumeRepresentation::SetMarchControlVariates(int mode)
 
 void vtkMultiChannelVolumeRepresentation::SetMultiChannelInterpolation(int type)
 {
-  this->GetMultiChannelMapper()->SetInterpolationType(type);
+  // The mapper checks the value; UpdateMapperParameters applies it to still
+  // renders.
+  vtkMultiChannelVolumeMapper* mapper = this->GetMultiChannelMapper();
+  mapper->SetInterpolationType(type);
+  if (this->StillInterpolation != mapper->GetInterpolationType())
+  {
+    this->StillInterpolation = mapper->GetInterpolationType();
+    this->Modified();
+  }
+}
+
+void vtkMultiChannelVolumeRepresentation::SetInteractiveInterpolation(int mode)
+{
+  if (mode != INTERACTIVE_NEAREST && mode != INTERACTIVE_AS_STILL)
+  {
+    vtkErrorMacro("InteractiveInterpolation " << mode << " is not a mode: 0 nearest, 1 as still renders.");
+    return;
+  }
+  if (this->InteractiveInterpolation != mode)
+  {
+    this->InteractiveInterpolation = mode;
+    this->Modified();
+  }
 }
 
 void vtkMultiChannelVolumeRepresentation::SetSampleSequence(int sequence)
@@ -580,6 +602,12 @@ void vtkMultiChannelVolumeRepresentation::UpdateMapperParameters()
   // still render goes back (and refines from there).
   const bool interactiveLevel = this->RenderingWithLOD && this->InteractiveLevelOfDetail != 0;
   mapper->SetLevelOfDetail(interactiveLevel ? this->InteractiveLevelOfDetail : this->LevelOfDetail);
+  // The nearest voxel while dragging: on the CPU a trilinear sample of a
+  // large level spends most of its time waiting for its 8 corners, and the
+  // interaction's frames are coarse anyway. A change of interpolation
+  // restarts the image, as the change of level does.
+  const bool interactiveNearest = this->RenderingWithLOD && this->InteractiveInterpolation == INTERACTIVE_NEAREST;
+  mapper->SetInterpolationType(interactiveNearest ? VTK_NEAREST_INTERPOLATION : this->StillInterpolation);
   // ParaView's LOD renders are its interactive ones: there the automatic
   // estimator keeps expected value's frame rate (the render window's update
   // rate decides the others).
@@ -750,5 +778,8 @@ void vtkMultiChannelVolumeRepresentation::PrintSelf(ostream& os, vtkIndent inden
   os << indent << "ChannelStatus: " << this->ChannelStatus << "\n";
   os << indent << "LevelOfDetail: " << this->LevelOfDetail << "\n";
   os << indent << "InteractiveLevelOfDetail: " << this->InteractiveLevelOfDetail << "\n";
+  os << indent << "InteractiveInterpolation: "
+     << (this->InteractiveInterpolation == INTERACTIVE_NEAREST ? "Nearest" : "AsStill") << "\n";
+  os << indent << "StillInterpolation: " << this->StillInterpolation << "\n";
   os << indent << "RenderingWithLOD: " << this->RenderingWithLOD << "\n";
 }

@@ -14,7 +14,10 @@
 - without LOD (a threshold above the data size) interactive renders keep
   the still level;
 - renders with ParaView's LOD are interactive renders for the mapper
-  (SetInteractiveRendering), still renders are not.
+  (SetInteractiveRendering), still renders are not;
+- renders with ParaView's LOD read the nearest voxel (InteractiveInterpolation):
+  the image of a still render of the same level with nearest voxels, bit for
+  bit; "As Still Renders" keeps the still interpolation.
 """
 from paraview import simple
 
@@ -89,6 +92,34 @@ view.SMProxy.InteractiveRender()
 checks.check(mapper.GetLastRenderInteractive(), "a render with ParaView's LOD is interactive for the mapper")
 simple.Render(view)
 checks.check(not mapper.GetLastRenderInteractive(), "a still render is not")
+
+# Renders with ParaView's LOD read the nearest voxel (InteractiveInterpolation,
+# default Nearest): the image of a still render of the same level with the
+# interpolation set to Nearest by hand, bit for bit. Still renders keep the
+# still interpolation; "As Still Renders" keeps it while interacting too.
+checks.check(rep.InteractiveInterpolation == "Nearest", "InteractiveInterpolation defaults to Nearest (%s)"
+             % rep.InteractiveInterpolation)
+view.SMProxy.InteractiveRender()
+checks.check(mapper.GetInterpolationType() == 0, "an interactive render with LOD reads the nearest voxel")
+lod_image = T.accumulated(mapper)
+lod_samples = T.info(rep, "TotalSamples")
+simple.Render(view)
+checks.check(mapper.GetInterpolationType() == -1, "a still render goes back to the volume property's interpolation")
+rep.LevelOfDetail = 1
+rep.MultiChannelInterpolation = "Nearest"
+view.LODThreshold = 1e6  # no LOD: a still render of level 1 with nearest voxels
+simple.Render(view)
+checks.check(T.info(rep, "TotalSamples") == lod_samples, "the same samples (%d, %d)"
+             % (T.info(rep, "TotalSamples"), lod_samples))
+checks.check(T.accumulated(mapper) == lod_image,
+             "the interactive image is level 1 with nearest voxels, bit for bit")
+rep.MultiChannelInterpolation = "Volume Property"
+rep.LevelOfDetail = 0
+view.LODThreshold = 0.0
+rep.InteractiveInterpolation = "As Still Renders"
+view.SMProxy.InteractiveRender()
+checks.check(mapper.GetInterpolationType() == -1, "As Still Renders keeps the still interpolation while interacting")
+rep.InteractiveInterpolation = "Nearest"
 
 view.LODThreshold = 1e6  # far above the data: no LOD
 view.SMProxy.InteractiveRender()

@@ -47,6 +47,14 @@ def local_mapper(rep):
     return rep.GetClientSideObject().GetActiveRepresentation().GetActor().GetMapper()
 
 
+def accumulated(mapper):
+    """The mapper's accumulated image (premultiplied RGBA floats) as a list."""
+    from vtkmodules.vtkCommonCore import vtkFloatArray
+    out = vtkFloatArray()
+    mapper.GetAccumulatedImage(out)
+    return [out.GetValue(i) for i in range(out.GetNumberOfValues())]
+
+
 def info(rep, name):
     """Value of an information property (read from the server)."""
     rep.SMProxy.UpdatePropertyInformation()
