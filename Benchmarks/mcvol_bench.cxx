@@ -71,6 +71,7 @@ const Section sections[] = {
   { "estimate", runEstimate },
   { "sequences", runSequences },
   { "pyramid", runPyramid },
+  { "pilots", runPilots },
 };
 } // namespace
 

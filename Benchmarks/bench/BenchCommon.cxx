@@ -54,7 +54,7 @@ void usage()
             "                   [--pixel-centres] [--centres-only] [--steady-frames N] [--only-automatic] [--choice-all]\n"
             "                   [--cost-model RAY,DDA,TENTATIVE,SAMPLE]\n"
             "sections: trackers channels macrocell rebuild memory paper converge sampling effects visibility estimate\n"
-            "          sequences pyramid");
+            "          sequences pyramid pilots");
 }
 
 Options parse(int argc, char** argv)

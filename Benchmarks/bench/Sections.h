@@ -22,4 +22,5 @@ void runVisibility(Bench& bench);
 void runEstimate(Bench& bench);
 void runSequences(Bench& bench);
 void runPyramid(Bench& bench);
+void runPilots(Bench& bench);
 } // namespace mcvolbench

@@ -31,6 +31,10 @@
 #   automatic the automatic choice alone at 1024^2: its time to 35 dB with the
 #             default rate search (automatic-*.md), then every candidate's
 #             prediction (--choice-all, automatic-all-*.md)
+#   pilots    the automatic choice's pilots (sixteenth session): time to 35 dB
+#             with the pilots included (pilots-*.md, converge rows) and the
+#             pilots' cost rendered all at once and one after the other
+#             (section pilots), jittered and at pixel centres
 #   centres   the automatic choice at pixel centres (every rate offered with
 #             and without control variates, and a rate between two): its
 #             time to 35 dB (centres-*.md), and the measured rows of the
@@ -99,6 +103,19 @@ for stage in "$@"; do
           --label "$label" --size 1024 1024 --reference-spp 4096 --sections converge --no-collision \
           --only-automatic --choice-all --march-samples-per-voxel 0.0625,0.125,0.25,0.5,1,2 --cost-model "$model"
         grep -E "^\| automatic" "$out/estimator-fit-$key.md" | head -1 | sed "s/^/$label fitted /"
+      done
+      ;;
+    pilots)
+      # The automatic choice with its pilots all at once (the default since
+      # the sixteenth session) and one after the other: time to 35 dB with
+      # the pilots included, and the pilots' cost both ways.
+      for s in "${sets[@]}"; do
+        read -r key ds x y z ch label <<< "$s"
+        run "pilots-$key" --backend cuda --dataset "$ds" --dims "$x" "$y" "$z" --channels "$ch" \
+          --label "$label" --size 1024 1024 --reference-spp 4096 --sections converge,pilots --no-collision \
+          --only-automatic
+        grep -E "^\| (expected-value, sobol|automatic)" "$out/pilots-$key.md" | head -2 | sed "s/^/$label /"
+        grep -E "^\| (jittered|centres) \|" "$out/pilots-$key.md" | sed "s/^/$label /"
       done
       ;;
     automatic)

@@ -198,6 +198,12 @@ struct CUDARenderer::Internal
   uint64_t PoolId = 0;
   cudaEvent_t Start = nullptr;
   cudaEvent_t Stop = nullptr;
+  /// renderPilots(): the one-sample images, the counters (a block of 9 per
+  /// job for replicate 0, one more for the rest) and the streams.
+  DeviceBuffer<float4> PilotImages;
+  DeviceBuffer<unsigned long long> PilotCounters;
+  std::vector<cudaStream_t> PilotStreams;
+  bool ConcurrentPilots = true;
   /// classifyLevel()'s kept inputs (CUDAPyramid.cu).
   std::vector<std::unique_ptr<LevelInput>> LevelInputs;
 
@@ -220,6 +226,10 @@ struct CUDARenderer::Internal
     if (this->Stop)
     {
       cudaEventDestroy(this->Stop);
+    }
+    for (cudaStream_t st : this->PilotStreams)
+    {
+      cudaStreamDestroy(st);
     }
   }
 

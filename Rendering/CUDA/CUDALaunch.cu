@@ -8,6 +8,7 @@
 // MCVOL_HOST_DEVICE.
 #include "CUDARenderKernels.h"
 
+#include <algorithm>
 #include <cstring>
 #include <stdexcept>
 
@@ -113,7 +114,7 @@ void launchOptimized(bool lit, dim3 grid, dim3 block, const SceneView& s, const 
 template <BlendMode Mode>
 void launchRender(bool count, bool lit, bool plain, dim3 grid, dim3 block, const SceneView& s, const CameraView& cam,
   const FrameParams& fp, const float* depth, float4* accum, float4* even, uint32_t previous,
-  unsigned long long* counters)
+  unsigned long long* counters, cudaStream_t stream = 0)
 {
   // The unlit kernels contain none of the lighting code, the collision
   // kernels none of the expected-value estimator's (registers: ptxas); for
@@ -122,23 +123,32 @@ void launchRender(bool count, bool lit, bool plain, dim3 grid, dim3 block, const
   const int unlit = unlitEstimator(fp.estimator, Mode, lit, false, s.marchControlVariates);
   if (plain && !lit)
   {
-    launchPlainUnlit(Mode, count, unlit, grid, block, s, cam, fp, depth, accum, even, previous, counters);
+    launchPlainUnlit(Mode, count, unlit, grid, block, s, cam, fp, depth, accum, even, previous, counters, stream);
   }
   else if (lit)
   {
     if (count)
     {
-      renderKernel<Mode, true, true><<<grid, block>>>(s, cam, fp, depth, accum, even, previous, counters);
+      renderKernel<Mode, true, true><<<grid, block, 0, stream>>>(s, cam, fp, depth, accum, even, previous, counters);
     }
     else
     {
-      renderKernel<Mode, false, true><<<grid, block>>>(s, cam, fp, depth, accum, even, previous, counters);
+      renderKernel<Mode, false, true><<<grid, block, 0, stream>>>(s, cam, fp, depth, accum, even, previous, counters);
     }
   }
   else
   {
-    launchUnlit<Mode>(unlit, count, grid, block, s, cam, fp, depth, accum, even, previous, counters);
+    launchUnlit<Mode>(unlit, count, grid, block, s, cam, fp, depth, accum, even, previous, counters, stream);
   }
+}
+/// The per-render rates of the view: the extinction limit, the
+/// expected-value and march rates, the march's variant.
+void setRenderRates(SceneView& s, const RenderSettings& settings, const Camera& camera, const CameraView& cam)
+{
+  s.sigmaLimit = extinctionLimit(cam);
+  s.minRate = settings.minSamplesPerVoxel > 0.f ? settings.minSamplesPerVoxel * voxelRate(cam) : 0.f;
+  s.marchRate = settings.marchSamplesPerVoxel * voxelRate(cam);
+  s.marchControlVariates = marchControlVariates(settings, camera);
 }
 } // namespace
 
@@ -219,10 +229,7 @@ void CUDARenderer::render(const Scene& scene, const Camera& camera, const Render
   SceneView s = in.renderView(scene, in.Sampling == CudaSampling::Texture);
   const SceneView& hv = scene.view();
   const CameraView cam = toView(camera);
-  s.sigmaLimit = extinctionLimit(cam);
-  s.minRate = settings.minSamplesPerVoxel > 0.f ? settings.minSamplesPerVoxel * voxelRate(cam) : 0.f;
-  s.marchRate = settings.marchSamplesPerVoxel * voxelRate(cam);
-  s.marchControlVariates = marchControlVariates(settings, camera);
+  setRenderRates(s, settings, camera, cam);
   const bool lit = s.lighting.enabled;
   if (lit)
   {
@@ -411,6 +418,164 @@ void CUDARenderer::render(const Scene& scene, const Camera& camera, const Render
     in.SkipEvenReadBack = !settings.readBackEven;
     this->readBack(accum);
     in.SkipEvenReadBack = false;
+  }
+}
+
+void CUDARenderer::setConcurrentPilots(bool on)
+{
+  this->In->ConcurrentPilots = on;
+}
+
+bool CUDARenderer::concurrentPilots() const
+{
+  return this->In->ConcurrentPilots;
+}
+
+void CUDARenderer::renderPilots(const Scene& scene, const Camera& camera, std::vector<PilotJob>& jobs)
+{
+  Internal& in = *this->In;
+  const SceneView& hv = scene.view();
+  if (!in.ConcurrentPilots || hv.lighting.enabled || hv.importance.enabled || hv.blend.mode == BlendMode::Composite)
+  {
+    Renderer::renderPilots(scene, camera, jobs); // not what chooseEstimator() pilots: one after the other
+    return;
+  }
+  size_t images = 0;
+  for (PilotJob& job : jobs)
+  {
+    int last = 0;
+    for (int c : job.checkpoints)
+    {
+      if (c <= last)
+      {
+        throw std::invalid_argument("mcvol: pilot checkpoints must be positive and ascending");
+      }
+      last = c;
+    }
+    if (job.checkpoints.empty())
+    {
+      throw std::invalid_argument("mcvol: a pilot needs at least one checkpoint");
+    }
+    RenderSettings st = job.settings;
+    st.samplesPerPixel = 1;
+    Accumulator probe; // the argument checks of render()
+    probe.setErrorEstimation(false);
+    checkRenderArguments(camera, st, probe);
+    images += 2 * size_t(last);
+  }
+  if (jobs.empty())
+  {
+    return;
+  }
+  MCVOL_CUDA(cudaSetDevice(in.Device));
+  in.sync(scene);
+  const size_t P = size_t(camera.width) * size_t(camera.height);
+  in.PilotImages.resize(std::max(in.PilotImages.count, images * P));
+  in.PilotCounters.resize(std::max(in.PilotCounters.count, 9 * (jobs.size() + 1)));
+  MCVOL_CUDA(cudaMemset(in.PilotImages.ptr, 0, images * P * sizeof(float4)));
+  MCVOL_CUDA(cudaMemset(in.PilotCounters.ptr, 0, 9 * (jobs.size() + 1) * sizeof(unsigned long long)));
+  // Enough streams for every one-sample render of a typical round (expected
+  // value's 2 x 8 and two marches' 2 x 2) to run side by side.
+  constexpr size_t kStreams = 32;
+  while (in.PilotStreams.size() < kStreams)
+  {
+    cudaStream_t st = nullptr;
+    MCVOL_CUDA(cudaStreamCreateWithFlags(&st, cudaStreamNonBlocking));
+    in.PilotStreams.push_back(st);
+  }
+  // The memsets above run on the legacy default stream, which the
+  // non-blocking streams do not wait for.
+  MCVOL_CUDA(cudaDeviceSynchronize());
+
+  const CameraView cam = toView(camera);
+  const dim3 block = in.Block;
+  const dim3 grid((unsigned(camera.width) + block.x - 1) / block.x, (unsigned(camera.height) + block.y - 1) / block.y);
+  const bool textures = in.Sampling == CudaSampling::Texture;
+  size_t image = 0;
+  for (size_t j = 0; j < jobs.size(); ++j)
+  {
+    const PilotJob& job = jobs[j];
+    SceneView s = in.renderView(scene, textures);
+    setRenderRates(s, job.settings, camera, cam);
+    bool plain = in.PlainKernels && !s.volume.cubic;
+    for (int n = 0; n < s.volume.numChannels; ++n)
+    {
+      plain = plain && s.volume.channels[n].format == ChannelFormat::Scalar;
+    }
+    for (int r = 0; r < 2; ++r)
+    {
+      RenderSettings st = job.settings;
+      st.samplesPerPixel = 1;
+      st.seed = job.seeds[r];
+      unsigned long long* counters = in.PilotCounters.ptr + 9 * (r == 0 ? j : jobs.size());
+      for (int k = 0; k < job.checkpoints.back(); ++k, ++image)
+      {
+        const FrameParams fp = frameParams(st, uint32_t(k));
+        cudaStream_t stream = in.PilotStreams[image % kStreams];
+        float4* out = in.PilotImages.ptr + image * P;
+        switch (hv.blend.mode)
+        {
+          case BlendMode::Max:
+            launchRender<BlendMode::Max>(true, false, plain, grid, block, s, cam, fp, nullptr, out, nullptr, 0u, counters, stream);
+            break;
+          case BlendMode::Mix:
+            launchRender<BlendMode::Mix>(true, false, plain, grid, block, s, cam, fp, nullptr, out, nullptr, 0u, counters, stream);
+            break;
+          case BlendMode::Density:
+          default:
+            launchRender<BlendMode::Density>(
+              true, false, plain, grid, block, s, cam, fp, nullptr, out, nullptr, 0u, counters, stream);
+            break;
+        }
+        MCVOL_CUDA(cudaGetLastError());
+      }
+    }
+  }
+  MCVOL_CUDA(cudaDeviceSynchronize());
+  std::vector<float> host(images * P * 4);
+  MCVOL_CUDA(cudaMemcpy(host.data(), in.PilotImages.ptr, host.size() * sizeof(float), cudaMemcpyDeviceToHost));
+  std::vector<unsigned long long> c(9 * (jobs.size() + 1));
+  MCVOL_CUDA(cudaMemcpy(c.data(), in.PilotCounters.ptr, c.size() * sizeof(unsigned long long), cudaMemcpyDeviceToHost));
+
+  // Each replicate's means at its checkpoints, folded as render() folds a
+  // chunk of samples into the running mean (accumulate()).
+  image = 0;
+  for (size_t j = 0; j < jobs.size(); ++j)
+  {
+    PilotJob& job = jobs[j];
+    const int n = job.checkpoints.back();
+    for (int r = 0; r < 2; ++r)
+    {
+      job.means[r].clear();
+      std::vector<float> mean(4 * P, 0.f);
+      int done = 0;
+      for (int upTo : job.checkpoints)
+      {
+        for (size_t p = 0; p < P; ++p)
+        {
+          Vec4f sum;
+          for (int k = done; k < upTo; ++k)
+          {
+            const float* v = host.data() + 4 * ((image + size_t(k)) * P + p);
+            sum.r += v[0];
+            sum.g += v[1];
+            sum.b += v[2];
+            sum.a += v[3];
+          }
+          accumulate(mean.data() + 4 * p, sum, uint32_t(done), upTo - done);
+        }
+        done = upTo;
+        job.means[r].push_back(mean);
+      }
+      image += size_t(n);
+    }
+    const unsigned long long* cj = c.data() + 9 * j;
+    job.counters = RenderCounters();
+    job.counters.rays = uint64_t(P) * uint64_t(n);
+    job.counters.ddaSteps = cj[0];
+    job.counters.tentativeCollisions = cj[1];
+    job.counters.realCollisions = cj[2];
+    job.counters.channelSamples = cj[3];
   }
 }
 

@@ -144,17 +144,17 @@ __global__ void MCVOL_UNLIT_BOUNDS renderKernelUnlit(const __grid_constant__ Sce
 template <BlendMode Mode, int Unlit>
 void launchUnlitKernel(bool count, dim3 grid, dim3 block, const SceneView& s, const CameraView& cam,
   const FrameParams& fp, const float* depth, float4* accum, float4* even, uint32_t previous,
-  unsigned long long* counters)
+  unsigned long long* counters, cudaStream_t stream)
 {
   if constexpr (Unlit == 0 || Mode != BlendMode::Composite)
   {
     if (count)
     {
-      renderKernelUnlit<Mode, true, Unlit><<<grid, block>>>(s, cam, fp, depth, accum, even, previous, counters);
+      renderKernelUnlit<Mode, true, Unlit><<<grid, block, 0, stream>>>(s, cam, fp, depth, accum, even, previous, counters);
     }
     else
     {
-      renderKernelUnlit<Mode, false, Unlit><<<grid, block>>>(s, cam, fp, depth, accum, even, previous, counters);
+      renderKernelUnlit<Mode, false, Unlit><<<grid, block, 0, stream>>>(s, cam, fp, depth, accum, even, previous, counters);
     }
   }
 }
@@ -163,31 +163,31 @@ void launchUnlitKernel(bool count, dim3 grid, dim3 block, const SceneView& s, co
 template <BlendMode Mode>
 void launchUnlit(int unlit, bool count, dim3 grid, dim3 block, const SceneView& s, const CameraView& cam,
   const FrameParams& fp, const float* depth, float4* accum, float4* even, uint32_t previous,
-  unsigned long long* counters)
+  unsigned long long* counters, cudaStream_t stream)
 {
   if (unlit == 3)
   {
-    launchUnlitKernel<Mode, 3>(count, grid, block, s, cam, fp, depth, accum, even, previous, counters);
+    launchUnlitKernel<Mode, 3>(count, grid, block, s, cam, fp, depth, accum, even, previous, counters, stream);
   }
   else if (unlit == 2)
   {
-    launchUnlitKernel<Mode, 2>(count, grid, block, s, cam, fp, depth, accum, even, previous, counters);
+    launchUnlitKernel<Mode, 2>(count, grid, block, s, cam, fp, depth, accum, even, previous, counters, stream);
   }
   else if (unlit == 1)
   {
-    launchUnlitKernel<Mode, 1>(count, grid, block, s, cam, fp, depth, accum, even, previous, counters);
+    launchUnlitKernel<Mode, 1>(count, grid, block, s, cam, fp, depth, accum, even, previous, counters, stream);
   }
   else
   {
-    launchUnlitKernel<Mode, 0>(count, grid, block, s, cam, fp, depth, accum, even, previous, counters);
+    launchUnlitKernel<Mode, 0>(count, grid, block, s, cam, fp, depth, accum, even, previous, counters, stream);
   }
 }
 
 } // namespace
 
 /// CUDALaunchPlain.cu: launches the plain unlit kernel of `mode` (estimator
-/// code `unlit`, with or without counters).
+/// code `unlit`, with or without counters) on `stream`.
 void launchPlainUnlit(BlendMode mode, bool count, int unlit, dim3 grid, dim3 block, const SceneView& s,
   const CameraView& cam, const FrameParams& fp, const float* depth, float4* accum, float4* even, uint32_t previous,
-  unsigned long long* counters);
+  unsigned long long* counters, cudaStream_t stream);
 } // namespace mcvol

@@ -142,6 +142,33 @@ double meanSquaredDifference(const float* x, const float* y, int width, int heig
 }
 } // namespace
 
+void Renderer::renderPilots(const Scene& scene, const Camera& camera, std::vector<PilotJob>& jobs)
+{
+  for (PilotJob& job : jobs)
+  {
+    RenderSettings st = job.settings;
+    st.readBack = true;
+    job.counters = RenderCounters();
+    for (int r = 0; r < 2; ++r)
+    {
+      st.seed = job.seeds[r];
+      Accumulator rep;
+      rep.setErrorEstimation(false);
+      rep.resize(camera.width, camera.height);
+      rep.reset();
+      job.means[r].clear();
+      int done = 0;
+      for (int upTo : job.checkpoints)
+      {
+        st.samplesPerPixel = upTo - done;
+        this->render(scene, camera, st, nullptr, rep, r == 0 ? &job.counters : nullptr);
+        done = upTo;
+        job.means[r].emplace_back(rep.rgba(), rep.rgba() + 4 * size_t(camera.width) * size_t(camera.height));
+      }
+    }
+  }
+}
+
 EstimatorChoice chooseEstimator(Renderer& renderer, const Scene& scene, const Camera& camera,
   const RenderSettings& base, const EstimatorChoiceSettings& choice)
 {
@@ -230,42 +257,33 @@ EstimatorChoice chooseEstimator(Renderer& renderer, const Scene& scene, const Ca
   // Replicate seeds: fixed functions of the image's seed (any two distinct
   // seeds scramble independently).
   const uint32_t seeds[2] = { base.seed * 2654435761u + 0x2545F491u, base.seed * 2654435761u + 0x9E3779B9u };
-  const auto pilotTrial = [&](const EstimatorCandidate& c) {
-    RenderSettings st = candidateSettings(base, camera, c);
-    st.readBack = true;
-    // Each replicate is rendered in doublings (1, 2, 4, ... samples per
-    // pixel, up to the candidate's pilot samples), and the replicates' mean
-    // squared difference taken at each: MSE(1), MSE(2), MSE(4), ... With
-    // Sobol' points a pixel's samples are negatively correlated, so n MSE(n)
-    // understates the noise of a single sample: the 1-sample images decide
-    // whether one frame suffices, the later ones predict the frames beyond.
+  // A candidate's pilot: each replicate rendered in doublings (1, 2, 4, ...
+  // samples per pixel, up to the candidate's pilot samples), and the
+  // replicates' mean squared difference taken at each: MSE(1), MSE(2),
+  // MSE(4), ... With Sobol' points a pixel's samples are negatively
+  // correlated, so n MSE(n) understates the noise of a single sample: the
+  // 1-sample images decide whether one frame suffices, the later ones
+  // predict the frames beyond.
+  const auto pilotJob = [&](const EstimatorCandidate& c) {
+    PilotJob job;
+    job.settings = candidateSettings(base, camera, c);
+    job.seeds[0] = seeds[0];
+    job.seeds[1] = seeds[1];
     const int samples = c.estimator == Estimator::ExpectedValue
       ? std::max(choice.pilotSamples, choice.expectedValuePilotSamples)
       : choice.pilotSamples;
-    Accumulator rep[2];
-    std::vector<int> checkpoints;
     for (int k = 1; k < samples; k *= 2)
     {
-      checkpoints.push_back(k);
+      job.checkpoints.push_back(k);
     }
-    checkpoints.push_back(samples);
-    std::vector<std::vector<float>> images[2];
-    RenderCounters counters;
-    for (int k = 0; k < 2; ++k)
-    {
-      st.seed = seeds[k];
-      rep[k].setErrorEstimation(false);
-      rep[k].resize(pilot.width, pilot.height);
-      rep[k].reset();
-      int done = 0;
-      for (int upTo : checkpoints)
-      {
-        st.samplesPerPixel = upTo - done;
-        renderer.render(scene, pilot, st, nullptr, rep[k], k == 0 ? &counters : nullptr);
-        done = upTo;
-        images[k].emplace_back(rep[k].rgba(), rep[k].rgba() + 4 * size_t(pilot.width) * size_t(pilot.height));
-      }
-    }
+    job.checkpoints.push_back(samples);
+    return job;
+  };
+  const auto trialOf = [&](const EstimatorCandidate& c, const PilotJob& job) {
+    const std::vector<int>& checkpoints = job.checkpoints;
+    const int samples = checkpoints.back();
+    const std::vector<std::vector<float>>* images = job.means;
+    const RenderCounters& counters = job.counters;
     // E[(m1 - m2)^2] = 2 MSE(n) for independent replicates of an n-sample mean.
     std::vector<double> mse(checkpoints.size());
     for (size_t i = 0; i < checkpoints.size(); ++i)
@@ -319,10 +337,44 @@ EstimatorChoice chooseEstimator(Renderer& renderer, const Scene& scene, const Ca
     return t;
   };
 
+  // The pilots run in rounds (Renderer::renderPilots: a device backend
+  // renders a round's samples all at once): first expected value and the
+  // lowest rate of each offered variant, which every search renders, then
+  // one candidate at a time, as the stop rule below decides.
+  const auto runRound = [&](const std::vector<EstimatorCandidate>& round) {
+    std::vector<PilotJob> jobs;
+    for (const EstimatorCandidate& c : round)
+    {
+      jobs.push_back(pilotJob(c));
+    }
+    renderer.renderPilots(scene, pilot, jobs);
+    std::vector<EstimatorTrial> trials;
+    for (size_t i = 0; i < round.size(); ++i)
+    {
+      trials.push_back(trialOf(round[i], jobs[i]));
+    }
+    return trials;
+  };
   double best = 0;
   // The last trial of each march variant (plain, control variates), for the
   // stop rule; -1: none yet.
   int lastOf[2] = { -1, -1 };
+  std::vector<EstimatorTrial> first;
+  {
+    std::vector<EstimatorCandidate> round;
+    bool seen[2] = { false, false };
+    for (const EstimatorCandidate& c : candidates)
+    {
+      const int variant = c.controlVariates ? 1 : 0;
+      if (c.estimator != Estimator::UnbiasedMarch || !seen[variant])
+      {
+        round.push_back(c);
+        seen[variant] = seen[variant] || c.estimator == Estimator::UnbiasedMarch;
+      }
+    }
+    first = runRound(round);
+  }
+  size_t nextFirst = 0;
   for (const EstimatorCandidate& c : candidates)
   {
     const int variant = c.controlVariates ? 1 : 0;
@@ -340,7 +392,10 @@ EstimatorChoice chooseEstimator(Renderer& renderer, const Scene& scene, const Ca
         continue;
       }
     }
-    out.trials.push_back(pilotTrial(c));
+    const bool inFirst = nextFirst < first.size() && first[nextFirst].candidate.estimator == c.estimator &&
+      first[nextFirst].candidate.marchSamplesPerVoxel == c.marchSamplesPerVoxel &&
+      first[nextFirst].candidate.controlVariates == c.controlVariates;
+    out.trials.push_back(inFirst ? first[nextFirst++] : runRound({ c }).front());
     if (c.estimator == Estimator::UnbiasedMarch)
     {
       lastOf[variant] = int(out.trials.size()) - 1;
@@ -395,7 +450,7 @@ EstimatorChoice chooseEstimator(Renderer& renderer, const Scene& scene, const Ca
         {
           EstimatorCandidate c = t.candidate;
           c.marchSamplesPerVoxel = float(r);
-          EstimatorTrial between = pilotTrial(c);
+          EstimatorTrial between = runRound({ c }).front();
           between.refined = true;
           if (between.firstFrameMSE > aim)
           {

@@ -11,6 +11,7 @@
 #include "mcvol/Pyramid.h"
 
 #include "mcvol/CUDARenderer.h"
+#include "mcvol/EstimatorChoice.h"
 #include "mcvol/MarchSetup.h"
 #include "mcvol/RenderSetup.h"
 
@@ -869,6 +870,106 @@ TEST(CudaRender, PlainKernelsEqualGeneral)
         }
         EXPECT_GT(sum, 1.0) << toString(mode);
         EXPECT_LE(worst, 1e-5) << toString(mode) << " " << toString(e) << " " << toString(interp);
+      }
+    }
+  }
+}
+
+// The estimator choice's pilots rendered at once (CUDARenderer::renderPilots:
+// each replicate's samples as one-sample renders of their own, folded on the
+// host) equal the renders one after the other (Renderer::renderPilots, the
+// concurrent path switched off): the same means to float rounding (the fold
+// runs on the host, the device folds with fused multiply-adds), the same work
+// counters, and chooseEstimator() the same choice from the same trials. Every
+// estimator code and blend mode the pilots run, scalar and cubic sampling.
+TEST(CudaRender, ConcurrentPilotsEqualOneAfterTheOther)
+{
+  EXPECT_TRUE(CUDARenderer().concurrentPilots()); // the default
+  const TypedVolume v(ScalarType::UInt16, 3, 30, 28, 26);
+  const Camera cam = orbitCamera(v.dims, std::array<double, 3>{ 1, 1, 1 }.data(), 20, 16, 30, 20);
+  for (BlendMode mode : { BlendMode::Density, BlendMode::Max, BlendMode::Mix })
+  {
+    for (Interpolation interp : { Interpolation::Linear, Interpolation::Cubic })
+    {
+      Scene scene;
+      v.configure(scene, mode);
+      scene.setInterpolation(interp);
+      scene.update();
+      std::vector<PilotJob> jobs[2];
+      for (int concurrent = 0; concurrent < 2; ++concurrent)
+      {
+        PilotJob ev;
+        ev.settings.estimator = Estimator::ExpectedValue;
+        ev.seeds[0] = 11u;
+        ev.seeds[1] = 12u;
+        ev.checkpoints = { 1, 2, 4, 8 };
+        PilotJob march = ev;
+        march.settings.estimator = Estimator::UnbiasedMarch;
+        march.settings.marchSamplesPerVoxel = 0.5f;
+        march.checkpoints = { 1, 2 };
+        PilotJob control = march; // pixel centres, control variates (estimator code 3)
+        control.settings.jitterPixels = false;
+        control.settings.marchControlVariatesFrom = 0.f;
+        control.checkpoints = { 1, 3 };
+        jobs[concurrent] = { ev, march, control };
+        CUDARenderer g;
+        g.setConcurrentPilots(concurrent == 1);
+        g.renderPilots(scene, cam, jobs[concurrent]);
+      }
+      for (size_t j = 0; j < jobs[0].size(); ++j)
+      {
+        const PilotJob& a = jobs[0][j];
+        const PilotJob& b = jobs[1][j];
+        EXPECT_EQ(a.counters.rays, b.counters.rays);
+        EXPECT_EQ(a.counters.ddaSteps, b.counters.ddaSteps) << j;
+        EXPECT_EQ(a.counters.tentativeCollisions, b.counters.tentativeCollisions) << j;
+        EXPECT_EQ(a.counters.channelSamples, b.counters.channelSamples) << j;
+        EXPECT_GT(a.counters.channelSamples, 0u) << j;
+        for (int r = 0; r < 2; ++r)
+        {
+          ASSERT_EQ(a.means[r].size(), a.checkpoints.size());
+          ASSERT_EQ(b.means[r].size(), a.checkpoints.size());
+          for (size_t i = 0; i < a.checkpoints.size(); ++i)
+          {
+            ASSERT_EQ(a.means[r][i].size(), size_t(cam.width) * cam.height * 4);
+            double worst = 0.0, sum = 0.0;
+            for (size_t k = 0; k < a.means[r][i].size(); ++k)
+            {
+              worst = std::max(worst, double(std::fabs(a.means[r][i][k] - b.means[r][i][k])));
+              sum += a.means[r][i][k];
+            }
+            EXPECT_GT(sum, 0.1) << toString(mode) << " job " << j;
+            EXPECT_LE(worst, 1e-6) << toString(mode) << " " << toString(interp) << " job " << j << " replicate " << r
+                                   << " checkpoint " << i;
+          }
+        }
+        // The replicates differ (independent scrambles).
+        EXPECT_NE(a.means[0][0], a.means[1][0]) << j;
+      }
+      if (interp == Interpolation::Linear)
+      {
+        for (bool jitter : { true, false })
+        {
+          RenderSettings base;
+          base.seed = 3;
+          base.jitterPixels = jitter;
+          EstimatorChoice c[2];
+          for (int concurrent = 0; concurrent < 2; ++concurrent)
+          {
+            CUDARenderer g;
+            g.setConcurrentPilots(concurrent == 1);
+            c[concurrent] = chooseEstimator(g, scene, cam, base);
+          }
+          ASSERT_TRUE(c[0].applies);
+          ASSERT_EQ(c[0].trials.size(), c[1].trials.size());
+          EXPECT_EQ(c[0].chosen, c[1].chosen);
+          for (size_t i = 0; i < c[0].trials.size(); ++i)
+          {
+            EXPECT_EQ(c[0].trials[i].costPerSample, c[1].trials[i].costPerSample) << i;
+            EXPECT_NEAR(c[0].trials[i].firstFrameMSE, c[1].trials[i].firstFrameMSE,
+              1e-4 * c[0].trials[i].firstFrameMSE) << i;
+          }
+        }
       }
     }
   }

@@ -76,6 +76,19 @@ public:
   void march(const Scene& scene, const Camera& camera, const MarchSettings& settings, const float* depth,
     Accumulator& accum, MarchCounters* counters = nullptr) override;
   const char* name() const override { return "cuda"; }
+  /**
+   * The pilots of chooseEstimator() with every sample of every job launched
+   * at once, each replicate's sample k a one-sample render of its own (first
+   * sample index k) into an image of its own, on streams that run
+   * concurrently; the means are folded on the host. One after the other, a
+   * 48-pixel pilot's renders are bound by a ray's latency (about 1 ms each
+   * on the H100, 40+ per choice: Benchmarks/RESULTS.md, "Sixteenth
+   * session"). setConcurrentPilots(false) renders them one after the other
+   * (Renderer::renderPilots), the benchmark's comparison.
+   */
+  void renderPilots(const Scene& scene, const Camera& camera, std::vector<PilotJob>& jobs) override;
+  void setConcurrentPilots(bool on);
+  bool concurrentPilots() const;
   void readBack(Accumulator& accum) override;
   void readBackEven(Accumulator& accum) override;
   const uint8_t* displayImage(Accumulator& accum) override;

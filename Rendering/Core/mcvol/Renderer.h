@@ -275,6 +275,26 @@ private:
  * A backend renders a Scene into an Accumulator. create() picks one:
  * Auto takes CUDA when a usable device exists, otherwise the CPU.
  */
+/**
+ * One candidate's pilot images for chooseEstimator() (EstimatorChoice.h):
+ * two replicates of the view with independent scrambles (seeds), each
+ * rendered to checkpoints.back() samples per pixel, and each replicate's
+ * mean image after every checkpoint's samples.
+ */
+struct PilotJob
+{
+  /// The candidate's settings; their seed and samplesPerPixel are not used.
+  RenderSettings settings;
+  uint32_t seeds[2] = { 0u, 0u };
+  /// Ascending sample counts (at least one), e.g. 1, 2, 4, 8.
+  std::vector<int> checkpoints;
+  /// Out: means[r][i], replicate r's image (premultiplied RGBA, the
+  /// Accumulator's layout) after checkpoints[i] samples per pixel.
+  std::vector<std::vector<float>> means[2];
+  /// Out: the work counters of replicate 0's samples.
+  RenderCounters counters;
+};
+
 class Renderer
 {
 public:
@@ -287,6 +307,20 @@ public:
   virtual void render(const Scene& scene, const Camera& camera, const RenderSettings& settings, const float* depth,
     Accumulator& accum, RenderCounters* counters = nullptr) = 0;
   virtual const char* name() const = 0;
+
+  /**
+   * Renders every job's pilot (PilotJob) into its `means` and `counters`.
+   * Each replicate's images are what render() gives an Accumulator of its
+   * own, reset and rendered in chunks up to each checkpoint with the
+   * replicate's seed. The default does exactly that, job after job. A device
+   * backend may run every job's samples at once: pilot images are a few
+   * thousand pixels, too few to fill a GPU, so one after the other they cost
+   * a ray's latency each (CUDARenderer: sample k of a replicate rendered
+   * alone with first sample index k, the means folded on the host; equal to
+   * the chunked renders up to float rounding). Unlit, unoptimized,
+   * non-composite scenes only (those chooseEstimator() pilots).
+   */
+  virtual void renderPilots(const Scene& scene, const Camera& camera, std::vector<PilotJob>& jobs);
 
   /**
    * The deterministic ray-marching reference (RayMarch.h) on this backend:
