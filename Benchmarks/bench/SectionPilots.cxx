@@ -5,8 +5,10 @@
 // three times (the first after the data's first frames; median reported).
 // On CUDA both ways: the renders one after the other (Renderer::renderPilots,
 // the fifteenth session's pilots) and all of a round's samples at once
-// (CUDARenderer::renderPilots, the default), with whether the two chose the
-// same estimator and their largest difference in predicted time.
+// (CUDARenderer::renderPilots, the default; with it chooseEstimator() renders
+// ahead the rates it will most likely reach), with whether the two chose the
+// same estimator from the same trials and their largest difference in
+// predicted time.
 
 #include "BenchCommon.h"
 #include "Sections.h"
@@ -94,7 +96,7 @@ void runPilots(Bench& bench)
     }
   }
   std::printf("\n## Automatic choice's pilots: %s, %dx%d (median of 3 runs)\n\n", ds.c_str(), o.width, o.height);
-  std::printf("| pixels | pilot renders | ms (3 runs) | median ms | rounds | candidates | choice | predicted |\n");
+  std::printf("| pixels | pilot renders | ms (3 runs) | median ms | rounds | candidates reached | choice | predicted |\n");
   std::printf("|---|---|---|---|---|---|---|---|\n");
   std::string reports;
   for (int centres = 0; centres < 2; ++centres)
@@ -129,24 +131,10 @@ void runPilots(Bench& bench)
         r.finish();
         ms.push_back(1e3 * seconds(t0));
       }
-      // Rounds: the first (expected value and each variant's lowest rate),
-      // then one per further candidate.
-      int firstRound = 0;
-      bool seen[2] = { false, false };
-      for (const mcvol::EstimatorTrial& t : choice.trials)
-      {
-        const int v = t.candidate.controlVariates ? 1 : 0;
-        if (t.candidate.estimator != mcvol::Estimator::UnbiasedMarch || !seen[v])
-        {
-          ++firstRound;
-          seen[v] = seen[v] || t.candidate.estimator == mcvol::Estimator::UnbiasedMarch;
-        }
-      }
-      const int rounds = choice.applies ? 1 + int(choice.trials.size()) - firstRound : 0;
       char buf[512];
-      std::snprintf(buf, sizeof(buf), "| %s | %s | %.1f / %.1f / %.1f | **%.1f** | %d | %zu | %s | %.4g |\n",
-        centres ? "centres" : "jittered", modes[m].c_str(), ms[0], ms[1], ms[2], median(ms), rounds,
-        choice.trials.size(), choice.chosenName().c_str(),
+      std::snprintf(buf, sizeof(buf), "| %s | %s | %.1f / %.1f / %.1f | **%.1f** | %d | %zu of %d rendered | %s | %.4g |\n",
+        centres ? "centres" : "jittered", modes[m].c_str(), ms[0], ms[1], ms[2], median(ms), choice.rounds,
+        choice.trials.size(), choice.rendered, choice.chosenName().c_str(),
         choice.chosen >= 0 ? choice.trials[size_t(choice.chosen)].score : 0.0);
       std::fputs(buf, stdout);
       bench.row("pilots", ds, s.volume.numChannels(), o.macrocell,

@@ -474,9 +474,10 @@ void CUDARenderer::renderPilots(const Scene& scene, const Camera& camera, std::v
   in.PilotCounters.resize(std::max(in.PilotCounters.count, 9 * (jobs.size() + 1)));
   MCVOL_CUDA(cudaMemset(in.PilotImages.ptr, 0, images * P * sizeof(float4)));
   MCVOL_CUDA(cudaMemset(in.PilotCounters.ptr, 0, 9 * (jobs.size() + 1) * sizeof(unsigned long long)));
-  // Enough streams for every one-sample render of a typical round (expected
-  // value's 2 x 8 and two marches' 2 x 2) to run side by side.
-  constexpr size_t kStreams = 32;
+  // Enough streams for every one-sample render of the largest round
+  // chooseEstimator() makes (expected value's 2 x 8 with two marches' 2 x 2,
+  // or 8 marches' 2 x 2) to run side by side.
+  constexpr size_t kStreams = 48;
   while (in.PilotStreams.size() < kStreams)
   {
     cudaStream_t st = nullptr;

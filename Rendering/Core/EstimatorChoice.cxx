@@ -105,7 +105,8 @@ std::string EstimatorChoice::report() const
       t.costPerSample, t.score, t.refined ? "  (between listed rates)" : "");
     out += line;
   }
-  std::snprintf(line, sizeof(line), "pilots took %.1f ms\n", 1e3 * this->seconds);
+  std::snprintf(line, sizeof(line), "pilots took %.1f ms (%d rounds, %d candidates rendered)\n", 1e3 * this->seconds,
+    this->rounds, this->rendered);
   out += line;
   return out;
 }
@@ -340,43 +341,57 @@ EstimatorChoice chooseEstimator(Renderer& renderer, const Scene& scene, const Ca
   // The pilots run in rounds (Renderer::renderPilots: a device backend
   // renders a round's samples all at once): first expected value and the
   // lowest rate of each offered variant, which every search renders, then
-  // one candidate at a time, as the stop rule below decides.
-  const auto runRound = [&](const std::vector<EstimatorCandidate>& round) {
+  // the candidate the stop rule below reaches next. A backend that renders
+  // a round at once (Renderer::rendersPilotsAtOnce) also gets, in that
+  // round, the variants' higher rates the search will most likely reach:
+  // those whose cost per sample, extrapolated in proportion to the rate
+  // from the variant's last trial (the cost grows more slowly than the rate:
+  // a fixed part per ray), is below the best prediction so far. The search
+  // itself is unchanged: it takes a rendered result only where it reaches
+  // that candidate, so the trials and the choice are those of the pilots one
+  // after the other; a rate rendered ahead and not reached costs only its
+  // share of the round.
+  std::vector<EstimatorTrial> results(candidates.size());
+  std::vector<char> have(candidates.size(), 0);
+  const auto runRound = [&](const std::vector<size_t>& round) {
     std::vector<PilotJob> jobs;
-    for (const EstimatorCandidate& c : round)
+    for (size_t i : round)
     {
-      jobs.push_back(pilotJob(c));
+      jobs.push_back(pilotJob(candidates[i]));
     }
     renderer.renderPilots(scene, pilot, jobs);
-    std::vector<EstimatorTrial> trials;
-    for (size_t i = 0; i < round.size(); ++i)
+    ++out.rounds;
+    out.rendered += int(round.size());
+    for (size_t k = 0; k < round.size(); ++k)
     {
-      trials.push_back(trialOf(round[i], jobs[i]));
+      results[round[k]] = trialOf(candidates[round[k]], jobs[k]);
+      have[round[k]] = 1;
     }
-    return trials;
   };
+  {
+    std::vector<size_t> round;
+    bool seen[2] = { false, false };
+    for (size_t i = 0; i < candidates.size(); ++i)
+    {
+      const EstimatorCandidate& c = candidates[i];
+      const int variant = c.controlVariates ? 1 : 0;
+      if (c.estimator != Estimator::UnbiasedMarch || !seen[variant])
+      {
+        round.push_back(i);
+        seen[variant] = seen[variant] || c.estimator == Estimator::UnbiasedMarch;
+      }
+    }
+    runRound(round);
+  }
+  const bool ahead = renderer.rendersPilotsAtOnce() && !choice.tryAllRates;
+  constexpr size_t kMaxRound = 8;
   double best = 0;
   // The last trial of each march variant (plain, control variates), for the
   // stop rule; -1: none yet.
   int lastOf[2] = { -1, -1 };
-  std::vector<EstimatorTrial> first;
+  for (size_t i = 0; i < candidates.size(); ++i)
   {
-    std::vector<EstimatorCandidate> round;
-    bool seen[2] = { false, false };
-    for (const EstimatorCandidate& c : candidates)
-    {
-      const int variant = c.controlVariates ? 1 : 0;
-      if (c.estimator != Estimator::UnbiasedMarch || !seen[variant])
-      {
-        round.push_back(c);
-        seen[variant] = seen[variant] || c.estimator == Estimator::UnbiasedMarch;
-      }
-    }
-    first = runRound(round);
-  }
-  size_t nextFirst = 0;
-  for (const EstimatorCandidate& c : candidates)
-  {
+    const EstimatorCandidate& c = candidates[i];
     const int variant = c.controlVariates ? 1 : 0;
     if (!choice.tryAllRates && c.estimator == Estimator::UnbiasedMarch && lastOf[variant] >= 0)
     {
@@ -392,10 +407,33 @@ EstimatorChoice chooseEstimator(Renderer& renderer, const Scene& scene, const Ca
         continue;
       }
     }
-    const bool inFirst = nextFirst < first.size() && first[nextFirst].candidate.estimator == c.estimator &&
-      first[nextFirst].candidate.marchSamplesPerVoxel == c.marchSamplesPerVoxel &&
-      first[nextFirst].candidate.controlVariates == c.controlVariates;
-    out.trials.push_back(inFirst ? first[nextFirst++] : runRound({ c }).front());
+    if (!have[i])
+    {
+      std::vector<size_t> round = { i };
+      bool open[2] = { true, true };
+      for (size_t k = i + 1; ahead && k < candidates.size() && round.size() < kMaxRound; ++k)
+      {
+        const EstimatorCandidate& d = candidates[k];
+        const int v = d.controlVariates ? 1 : 0;
+        if (have[k] || d.estimator != Estimator::UnbiasedMarch || !open[v] || lastOf[v] < 0)
+        {
+          continue;
+        }
+        const EstimatorTrial& last = out.trials[size_t(lastOf[v])];
+        const double predicted = last.costPerSample * double(d.marchSamplesPerVoxel) /
+          double(last.candidate.marchSamplesPerVoxel);
+        if (predicted < best)
+        {
+          round.push_back(k);
+        }
+        else
+        {
+          open[v] = false; // higher rates of the variant cost more
+        }
+      }
+      runRound(round);
+    }
+    out.trials.push_back(results[i]);
     if (c.estimator == Estimator::UnbiasedMarch)
     {
       lastOf[variant] = int(out.trials.size()) - 1;
@@ -450,7 +488,11 @@ EstimatorChoice chooseEstimator(Renderer& renderer, const Scene& scene, const Ca
         {
           EstimatorCandidate c = t.candidate;
           c.marchSamplesPerVoxel = float(r);
-          EstimatorTrial between = runRound({ c }).front();
+          std::vector<PilotJob> jobs = { pilotJob(c) };
+          renderer.renderPilots(scene, pilot, jobs);
+          ++out.rounds;
+          ++out.rendered;
+          EstimatorTrial between = trialOf(c, jobs.front());
           between.refined = true;
           if (between.firstFrameMSE > aim)
           {

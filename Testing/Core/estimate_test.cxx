@@ -370,7 +370,15 @@ public:
   {
   }
   const char* name() const override { return "cpu"; }
+  bool rendersPilotsAtOnce() const override { return this->AtOnce; }
+  void renderPilots(const Scene& scene, const Camera& camera, std::vector<PilotJob>& jobs) override
+  {
+    ++this->Rounds;
+    Renderer::renderPilots(scene, camera, jobs);
+  }
   std::map<uint32_t, double> Signs;
+  bool AtOnce = false;
+  int Rounds = 0;
 };
 } // namespace
 
@@ -741,6 +749,63 @@ TEST(EstimatorChoice, BothVariantsAtPixelCentres)
 // scene between 1 and 1.25 per voxel), work per sample proportional to the
 // rate, target 1e-4: 1 per voxel needs 2 frames (1% over), 1.25 one, and
 // 1.125 one for less (MSE(1) 0.68e-4; 1.0915 aimed at).
+// A backend that renders a round of pilots at once gets, with the candidate
+// the search needs, the higher rates it will most likely reach (cost per
+// sample extrapolated in proportion to the rate below the best prediction),
+// and the search takes a result only where it reaches that candidate: the
+// trials and the choice are those of the pilots one after the other, in
+// fewer rounds. Synthetic noise: expected value never reaches the target
+// soon, the march from 1/4 per voxel in one frame, the work in proportion
+// to the rate (so the extrapolation is exact).
+TEST(EstimatorChoice, RendersAheadWithoutChangingTheChoice)
+{
+  const DemoVolume v = makeDemo("cosmology", { 16, 16, 16 });
+  Scene scene;
+  configureDemo(scene, v, 4);
+  const Camera cam = demoCam(v, 32, 32);
+  EstimatorChoiceSettings cs;
+  cs.targetMSE = 1e-4;
+  cs.marchRates = { 0.0625f, 0.125f, 0.25f, 0.5f, 1.f };
+  EstimatorChoice c[2];
+  int rounds[2] = { 0, 0 };
+  for (int atOnce = 0; atOnce < 2; ++atOnce)
+  {
+    SyntheticNoiseRenderer r;
+    r.AtOnce = atOnce == 1;
+    r.Mse = [](const RenderSettings& st, double n) {
+      return st.estimator == Estimator::ExpectedValue ? 1.0 / n
+                                                      : (st.marchSamplesPerVoxel < 0.2f ? 1.0 : 0.5e-4) / n;
+    };
+    r.Work = [](const RenderSettings& st) {
+      return st.estimator == Estimator::ExpectedValue ? 1.0 : 16.0 * st.marchSamplesPerVoxel;
+    };
+    c[atOnce] = chooseEstimator(r, scene, cam, RenderSettings(), cs);
+    rounds[atOnce] = r.Rounds;
+    EXPECT_EQ(c[atOnce].rounds, r.Rounds);
+    std::printf("%s", c[atOnce].report().c_str());
+  }
+  ASSERT_EQ(c[0].trials.size(), c[1].trials.size());
+  EXPECT_EQ(c[0].chosen, c[1].chosen);
+  for (size_t i = 0; i < c[0].trials.size(); ++i)
+  {
+    EXPECT_EQ(c[0].trials[i].candidate.marchSamplesPerVoxel, c[1].trials[i].candidate.marchSamplesPerVoxel) << i;
+    EXPECT_EQ(c[0].trials[i].score, c[1].trials[i].score) << i;
+  }
+  // One after the other: expected value with 1/16, then 1/8, then 1/4 (one
+  // frame: the best), after which 1/2 is not reached (1/4's sample cost is
+  // the best prediction). No rate between 1/8 and 1/4: the interpolation
+  // rounds up to 1/4.
+  ASSERT_EQ(c[0].trials.size(), 4u);
+  EXPECT_EQ(c[0].chosen, 3);
+  EXPECT_EQ(c[0].rendered, 4);
+  EXPECT_EQ(rounds[0], 3);
+  EXPECT_FLOAT_EQ(c[0].settings.marchSamplesPerVoxel, c[0].trials[size_t(c[0].chosen)].candidate.marchSamplesPerVoxel);
+  // At once: 1/8 with 1/4, 1/2 and 1 ahead (all predicted below the best
+  // so far, expected value's score), the last two never reached.
+  EXPECT_EQ(rounds[1], 2);
+  EXPECT_EQ(c[1].rendered, 6);
+}
+
 TEST(EstimatorChoice, RefinesBetweenRates)
 {
   const DemoVolume v = makeDemo("cosmology", { 16, 16, 16 });

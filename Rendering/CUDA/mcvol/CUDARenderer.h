@@ -87,6 +87,7 @@ public:
    * (Renderer::renderPilots), the benchmark's comparison.
    */
   void renderPilots(const Scene& scene, const Camera& camera, std::vector<PilotJob>& jobs) override;
+  bool rendersPilotsAtOnce() const override { return this->concurrentPilots(); }
   void setConcurrentPilots(bool on);
   bool concurrentPilots() const;
   void readBack(Accumulator& accum) override;

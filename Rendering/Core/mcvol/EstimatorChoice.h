@@ -205,6 +205,11 @@ struct EstimatorChoice
   std::vector<EstimatorTrial> trials;
   int chosen = -1; ///< index into trials
   double seconds = 0; ///< wall time of the pilots (reported, not used)
+  /// Renderer::renderPilots() calls (rounds) and the candidates rendered in
+  /// them: more than trials.size() where a round rendered ahead a rate the
+  /// search did not reach (Renderer::rendersPilotsAtOnce).
+  int rounds = 0;
+  int rendered = 0;
   /// One line per candidate, the chosen one marked.
   std::string report() const;
   /// "ExpectedValue" or "UnbiasedMarch(1)" (rate in parentheses).

@@ -321,6 +321,10 @@ public:
    * non-composite scenes only (those chooseEstimator() pilots).
    */
   virtual void renderPilots(const Scene& scene, const Camera& camera, std::vector<PilotJob>& jobs);
+  /// True where renderPilots() renders its jobs at once, so that a round
+  /// of several candidates costs about what one does (chooseEstimator()
+  /// then renders ahead the candidates it will most likely reach).
+  virtual bool rendersPilotsAtOnce() const { return false; }
 
   /**
    * The deterministic ray-marching reference (RayMarch.h) on this backend:
