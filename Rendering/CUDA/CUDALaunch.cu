@@ -443,25 +443,13 @@ void CUDARenderer::renderPilots(const Scene& scene, const Camera& camera, std::v
   size_t images = 0;
   for (PilotJob& job : jobs)
   {
-    int last = 0;
-    for (int c : job.checkpoints)
-    {
-      if (c <= last)
-      {
-        throw std::invalid_argument("mcvol: pilot checkpoints must be positive and ascending");
-      }
-      last = c;
-    }
-    if (job.checkpoints.empty())
-    {
-      throw std::invalid_argument("mcvol: a pilot needs at least one checkpoint");
-    }
+    checkPilotCheckpoints(job);
     RenderSettings st = job.settings;
     st.samplesPerPixel = 1;
     Accumulator probe; // the argument checks of render()
     probe.setErrorEstimation(false);
     checkRenderArguments(camera, st, probe);
-    images += 2 * size_t(last);
+    images += 2 * size_t(job.checkpoints.back());
   }
   if (jobs.empty())
   {

@@ -145,6 +145,10 @@ double meanSquaredDifference(const float* x, const float* y, int width, int heig
 
 void Renderer::renderPilots(const Scene& scene, const Camera& camera, std::vector<PilotJob>& jobs)
 {
+  for (const PilotJob& job : jobs)
+  {
+    checkPilotCheckpoints(job);
+  }
   for (PilotJob& job : jobs)
   {
     RenderSettings st = job.settings;

@@ -806,6 +806,34 @@ TEST(EstimatorChoice, RendersAheadWithoutChangingTheChoice)
   EXPECT_EQ(c[1].rendered, 6);
 }
 
+// Renderer::renderPilots refuses checkpoints that are missing, not positive
+// or not ascending with a clear error, on every backend (testRenderer()),
+// and renders a valid job after that.
+TEST(EstimatorChoice, PilotJobsAreChecked)
+{
+  const DemoVolume v = makeDemo("cosmology", { 16, 16, 16 });
+  Scene scene;
+  configureDemo(scene, v, 4);
+  const Camera cam = demoCam(v, 16, 12);
+  std::unique_ptr<Renderer> r = testRenderer();
+  for (const std::vector<int>& bad : { std::vector<int>{}, std::vector<int>{ 0 }, std::vector<int>{ 2, 2 },
+         std::vector<int>{ 2, 1 }, std::vector<int>{ -1, 2 } })
+  {
+    std::vector<PilotJob> jobs(2);
+    jobs[0].checkpoints = { 1, 2 };
+    jobs[1].checkpoints = bad;
+    EXPECT_THROW(r->renderPilots(scene, cam, jobs), std::invalid_argument) << bad.size();
+  }
+  std::vector<PilotJob> jobs(1);
+  jobs[0].checkpoints = { 1, 3 };
+  jobs[0].seeds[1] = 9u;
+  r->renderPilots(scene, cam, jobs);
+  ASSERT_EQ(jobs[0].means[0].size(), 2u);
+  ASSERT_EQ(jobs[0].means[1][1].size(), size_t(4) * 16 * 12);
+  EXPECT_EQ(jobs[0].counters.rays, uint64_t(16 * 12 * 3));
+  EXPECT_NE(jobs[0].means[0][1], jobs[0].means[1][1]);
+}
+
 TEST(EstimatorChoice, RefinesBetweenRates)
 {
   const DemoVolume v = makeDemo("cosmology", { 16, 16, 16 });

@@ -120,6 +120,25 @@ inline FrameParams frameParams(const RenderSettings& s, uint32_t firstSample)
   return fp;
 }
 
+/// The checks of Renderer::renderPilots on a job's checkpoints, shared by
+/// the backends (the render arguments are checkRenderArguments').
+inline void checkPilotCheckpoints(const PilotJob& job)
+{
+  if (job.checkpoints.empty())
+  {
+    throw std::invalid_argument("mcvol: a pilot needs at least one checkpoint");
+  }
+  int last = 0;
+  for (int c : job.checkpoints)
+  {
+    if (c <= last)
+    {
+      throw std::invalid_argument("mcvol: pilot checkpoints must be positive and ascending");
+    }
+    last = c;
+  }
+}
+
 /// The argument checks of Renderer::render, shared by the backends; sizes
 /// `accum` to the camera (which restarts it when the size changes).
 inline void checkRenderArguments(const Camera& camera, const RenderSettings& settings, Accumulator& accum)
