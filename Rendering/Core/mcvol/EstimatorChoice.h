@@ -218,7 +218,9 @@ struct EstimatorChoice
 
 /**
  * Renders the pilots on `renderer` (the backend that will render the image:
- * the cost model is its own) through `camera` scaled to settings.pilotSize,
+ * the cost model is its own; Renderer::renderPilots, in rounds, with the
+ * rates the search will most likely reach rendered ahead where the backend
+ * renders a round at once) through `camera` scaled to settings.pilotSize,
  * without depth (geometry is not in the pilot), each
  * candidate as two replicates with seeds derived from `base`'s, with its
  * sampler, and picks the lowest score; ties go to the earlier candidate
