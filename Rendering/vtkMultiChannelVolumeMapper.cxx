@@ -97,6 +97,7 @@ struct vtkMultiChannelVolumeMapper::vtkInternals
   unsigned long long LevelSceneVersion = 0; // the level LevelScene holds (0: none)
   std::string LevelReport = "no render yet";
   std::string LevelWarning; // the last case warned about (warned once)
+  std::string IgnoredSettings; // GetIgnoredSettings(): the last render's
   std::vector<float> Depth; // this render's depth buffer (reused storage)
 
   // Samples per pixel of the batch being traced (0: SamplesPerPixel).
@@ -240,6 +241,84 @@ const char* vtkMultiChannelVolumeMapper::GetChosenEstimatorAsString()
 const char* vtkMultiChannelVolumeMapper::GetEstimatorReport()
 {
   return this->Internals->ChoiceReport.c_str();
+}
+
+//------------------------------------------------------------------------------
+const char* vtkMultiChannelVolumeMapper::GetIgnoredSettings()
+{
+  return this->Internals->IgnoredSettings.c_str();
+}
+
+namespace
+{
+/// Whether a gradient opacity function changes anything: some node below 1
+/// or above (an empty function is taken as unset).
+bool GradientOpacityHasEffect(vtkPiecewiseFunction* f)
+{
+  if (!f)
+  {
+    return false;
+  }
+  for (int i = 0; i < f->GetSize(); ++i)
+  {
+    double node[4];
+    f->GetNodeValue(i, node);
+    if (node[1] != 1.0)
+    {
+      return true;
+    }
+  }
+  return false;
+}
+} // namespace
+
+//------------------------------------------------------------------------------
+void vtkMultiChannelVolumeMapper::ReportIgnoredSettings(vtkVolume* volume)
+{
+  std::vector<std::string> ignored;
+  if (this->GetCropping())
+  {
+    ignored.emplace_back("cropping (SetCropping)");
+  }
+  if (this->GetNumberOfClippingPlanes() > 0)
+  {
+    ignored.emplace_back("clipping planes");
+  }
+  if (this->GetBlendMode() != vtkVolumeMapper::COMPOSITE_BLEND)
+  {
+    ignored.emplace_back(
+      "vtkVolumeMapper::SetBlendMode (the channels combine by SetChannelBlendMode: density, max, mix or composite)");
+  }
+  vtkVolumeProperty* property = volume ? volume->GetProperty() : nullptr;
+  if (property && property->GetTransferFunctionMode() == vtkVolumeProperty::TF_2D)
+  {
+    ignored.emplace_back("2D transfer functions (the 1D colour and scalar opacity functions are used)");
+  }
+  else if (property)
+  {
+    for (int c = 0; c < VTK_MAX_VRCOMP; ++c)
+    {
+      if (property->HasGradientOpacity(c) && !property->GetDisableGradientOpacity(c) &&
+        GradientOpacityHasEffect(property->GetStoredGradientOpacity(c)))
+      {
+        ignored.emplace_back("the gradient opacity of component " + std::to_string(c));
+      }
+    }
+  }
+  std::string text;
+  for (const std::string& s : ignored)
+  {
+    text += (text.empty() ? "" : "; ") + s;
+  }
+  vtkInternals& in = *this->Internals;
+  if (text != in.IgnoredSettings)
+  {
+    in.IgnoredSettings = text;
+    if (!text.empty())
+    {
+      vtkWarningMacro("Not supported by this mapper, so not used: " << text << ".");
+    }
+  }
 }
 
 //------------------------------------------------------------------------------
@@ -926,6 +1005,7 @@ void vtkMultiChannelVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
       (this->InteractiveRendering == -1 && window &&
         window->GetDesiredUpdateRate() >= this->InteractiveUpdateRate);
   }
+  this->ReportIgnoredSettings(vol); // VTK settings this mapper does not use: warned once
   if (!this->BindChannels(pass) ||              // input image -> channels read in place
     !this->ClassifyDependentComponents(pass) || // IndependentComponentsOff: RGBA -> one classified channel
     !this->ResolveTransferFunctions(pass) ||    // VTK functions of each channel

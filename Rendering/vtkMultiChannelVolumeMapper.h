@@ -68,9 +68,12 @@
  *
  * How channels combine is SetChannelBlendMode (density, max, mix, composite).
  * This is separate from, and ignores, vtkVolumeMapper::SetBlendMode.
- * The vtkVolumeProperty's interpolation type (nearest or linear) selects
- * the sampling. Cropping, clipping planes, gradient opacity and its shading
- * settings are not used by this mapper (lighting comes in a later release).
+ * The vtkVolumeProperty's interpolation type (nearest, linear, or cubic
+ * with SetInterpolationTypeToCubic) selects the sampling, and ShadeOn()
+ * lights the volume with the renderer's lights (the user guide's
+ * "Lighting"). Cropping, clipping planes, gradient opacity, 2D transfer
+ * functions and vtkVolumeMapper::SetBlendMode are not used: a render with
+ * any of them set warns once, naming them (GetIgnoredSettings()).
  *
  * Bad input (no input, no scalars, an unsupported type, an empty extent, more
  * than 32 channels, a channel without transfer functions) is reported with
@@ -268,6 +271,17 @@ public:
   /// Automatic choices that rendered pilots so far (a choice is kept while
   /// only the camera moves; tests count on it).
   int GetNumberOfEstimatorChoices();
+
+  /**
+   * The VTK settings the last render found set and did not use, separated by
+   * "; " (empty when none): cropping, clipping planes,
+   * vtkVolumeMapper::SetBlendMode other than composite (the channels combine
+   * by SetChannelBlendMode), a gradient opacity function that is enabled and
+   * not constant 1 (per property component), 2D transfer functions. The
+   * render warns when this text changes to a non-empty one, so a setting
+   * left on warns once, not at every frame.
+   */
+  const char* GetIgnoredSettings();
   ///@}
 
   ///@{
@@ -1073,6 +1087,8 @@ private:
   // Rendering/VTK/ and reports its own errors (false ends the frame).
   struct RenderPass;
   bool BindChannels(RenderPass& pass);
+  /// GetIgnoredSettings(): finds them, warns when they change.
+  void ReportIgnoredSettings(vtkVolume* volume);
   bool ClassifyDependentComponents(RenderPass& pass);
   bool ResolveTransferFunctions(RenderPass& pass);
   bool EnsureBackend();
