@@ -14,16 +14,10 @@ import numpy as np
 import vtkmodules.vtkRenderingOpenGL2  # noqa: F401 (OpenGL render window)
 from vtkmodules.util.numpy_support import numpy_to_vtk
 from vtkmodules.vtkCommonDataModel import vtkImageData, vtkPiecewiseFunction, vtkPlane
-from vtkmodules.vtkRenderingCore import (
-    vtkColorTransferFunction,
-    vtkRenderer,
-    vtkRenderWindow,
-    vtkVolume,
-    vtkVolumeProperty,
-)
+from vtkmodules.vtkRenderingCore import vtkColorTransferFunction, vtkVolumeProperty
 
 from mcvol import vtkMultiChannelRayMarchMapper, vtkMultiChannelVolumeMapper
-from mcvolTesting import Checker, ErrorCatcher, capture_rgba, use_test_backend
+from mcvolTesting import Checker, ErrorCatcher, capture_rgba, offscreen_view, use_test_backend
 
 t = Checker()
 
@@ -51,18 +45,7 @@ for c, rgb in enumerate([(1, 0.2, 0.1), (0.1, 1, 0.2), (0.2, 0.3, 1)]):
 def scene(mapper):
     use_test_backend(mapper)
     mapper.SetInputData(image)
-    volume = vtkVolume()
-    volume.SetMapper(mapper)
-    volume.SetProperty(prop)
-    renderer = vtkRenderer()
-    renderer.AddVolume(volume)
-    window = vtkRenderWindow()
-    window.SetOffScreenRendering(1)
-    window.SetMultiSamples(0)
-    window.SetSize(48, 48)
-    window.AddRenderer(renderer)
-    renderer.ResetCamera()
-    return window
+    return offscreen_view(mapper, prop, (48, 48))
 
 
 mapper = vtkMultiChannelVolumeMapper()

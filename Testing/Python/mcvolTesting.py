@@ -4,7 +4,7 @@ import os
 import sys
 
 from vtkmodules.vtkCommonCore import VTK_STRING
-from vtkmodules.vtkRenderingCore import vtkWindowToImageFilter
+from vtkmodules.vtkRenderingCore import vtkRenderer, vtkRenderWindow, vtkVolume, vtkWindowToImageFilter
 from vtkmodules.util.misc import calldata_type
 from vtkmodules.util.numpy_support import vtk_to_numpy
 
@@ -18,6 +18,24 @@ def use_test_backend(mapper):
         mapper.SetBackendToCUDA()
     else:
         mapper.SetBackendToCPU()
+
+def offscreen_view(mapper, prop, size=(64, 64)):
+    """`mapper` with `prop` as the one volume of a renderer in an off-screen
+    window of `size` (no multisampling), the camera reset to the volume: the
+    set-up the tests share. Returns the window."""
+    volume = vtkVolume()
+    volume.SetMapper(mapper)
+    volume.SetProperty(prop)
+    renderer = vtkRenderer()
+    renderer.AddVolume(volume)
+    window = vtkRenderWindow()
+    window.SetOffScreenRendering(1)
+    window.SetMultiSamples(0)
+    window.SetSize(*size)
+    window.AddRenderer(renderer)
+    renderer.ResetCamera()
+    return window
+
 
 def capture_rgba(window):
     """Renders once more and returns the window as an (H, W, 4) uint8 array,
