@@ -47,12 +47,7 @@ void runPilots(Bench& bench)
     // pixel footprint), as the pilots render one after the other: median of
     // 20, with the counters and the read-back, at 1 and 8 samples per pixel,
     // and at the full image size for scale.
-    const mcvol::EstimatorChoiceSettings defaults;
-    mcvol::Camera pilot = cam;
-    const double f = double(defaults.pilotSize) / double(std::max(cam.width, cam.height));
-    pilot.width = std::max(1, int(std::lround(cam.width * f)));
-    pilot.height = std::max(1, int(std::lround(cam.height * f)));
-    pilot.jitterScale = float(cam.jitterScale * f);
+    const mcvol::Camera pilot = mcvol::pilotCamera(cam, mcvol::EstimatorChoiceSettings().pilotSize);
     std::printf("\n## One pilot-sized render: %s, %dx%d, jittered (median of 20; counters and read-back)\n\n",
       ds.c_str(), pilot.width, pilot.height);
     std::printf("| estimator | 1 spp ms | 8 spp ms | %dx%d, 1 spp ms |\n|---|---|---|---|\n", cam.width, cam.height);

@@ -141,6 +141,47 @@ void launchRender(bool count, bool lit, bool plain, dim3 grid, dim3 block, const
     launchUnlit<Mode>(unlit, count, grid, block, s, cam, fp, depth, accum, even, previous, counters, stream);
   }
 }
+/// launchRender() for the blend mode known at run time.
+void launchRenderFor(BlendMode mode, bool count, bool lit, bool plain, dim3 grid, dim3 block, const SceneView& s,
+  const CameraView& cam, const FrameParams& fp, const float* depth, float4* accum, float4* even, uint32_t previous,
+  unsigned long long* counters, cudaStream_t stream = 0)
+{
+  switch (mode)
+  {
+    case BlendMode::Max:
+      launchRender<BlendMode::Max>(count, lit, plain, grid, block, s, cam, fp, depth, accum, even, previous, counters, stream);
+      break;
+    case BlendMode::Mix:
+      launchRender<BlendMode::Mix>(count, lit, plain, grid, block, s, cam, fp, depth, accum, even, previous, counters, stream);
+      break;
+    case BlendMode::Composite:
+      launchRender<BlendMode::Composite>(
+        count, lit, plain, grid, block, s, cam, fp, depth, accum, even, previous, counters, stream);
+      break;
+    case BlendMode::Density:
+    default:
+      launchRender<BlendMode::Density>(
+        count, lit, plain, grid, block, s, cam, fp, depth, accum, even, previous, counters, stream);
+      break;
+  }
+}
+
+/// Adds the device's counters (`c`: DDA steps, tentative, real, channel
+/// samples, scattering, shadow rays, gradients, importance samples) and
+/// `rays` to `out`.
+void addCounters(RenderCounters& out, const unsigned long long* c, uint64_t rays)
+{
+  out.rays += rays;
+  out.ddaSteps += c[0];
+  out.tentativeCollisions += c[1];
+  out.realCollisions += c[2];
+  out.channelSamples += c[3];
+  out.scatteringEvents += c[4];
+  out.shadowRays += c[5];
+  out.gradientEvaluations += c[6];
+  out.importanceSamples += c[7];
+}
+
 /// The per-render rates of the view: the extinction limit, the
 /// expected-value and march rates, the march's variant.
 void setRenderRates(SceneView& s, const RenderSettings& settings, const Camera& camera, const CameraView& cam)
@@ -363,26 +404,10 @@ void CUDARenderer::render(const Scene& scene, const Camera& camera, const Render
       }
     }
     else
-      switch (s.blend.mode)
-      {
-        case BlendMode::Max:
-          launchRender<BlendMode::Max>(
-            count, lit, plain, grid, block, s, cam, fp, devDepth, in.Accum.ptr, devEven, previous, in.Counters.ptr);
-          break;
-        case BlendMode::Mix:
-          launchRender<BlendMode::Mix>(
-            count, lit, plain, grid, block, s, cam, fp, devDepth, in.Accum.ptr, devEven, previous, in.Counters.ptr);
-          break;
-        case BlendMode::Composite:
-          launchRender<BlendMode::Composite>(
-            count, lit, plain, grid, block, s, cam, fp, devDepth, in.Accum.ptr, devEven, previous, in.Counters.ptr);
-          break;
-        case BlendMode::Density:
-        default:
-          launchRender<BlendMode::Density>(
-            count, lit, plain, grid, block, s, cam, fp, devDepth, in.Accum.ptr, devEven, previous, in.Counters.ptr);
-          break;
-      }
+    {
+      launchRenderFor(
+        s.blend.mode, count, lit, plain, grid, block, s, cam, fp, devDepth, in.Accum.ptr, devEven, previous, in.Counters.ptr);
+    }
     MCVOL_CUDA(cudaGetLastError());
   }
   accum.addSamples(uint32_t(settings.samplesPerPixel));
@@ -403,15 +428,7 @@ void CUDARenderer::render(const Scene& scene, const Camera& camera, const Render
   }
   if (counters)
   {
-    counters->rays += uint64_t(camera.width) * uint64_t(camera.height) * uint64_t(settings.samplesPerPixel);
-    counters->ddaSteps += c[0];
-    counters->tentativeCollisions += c[1];
-    counters->realCollisions += c[2];
-    counters->channelSamples += c[3];
-    counters->scatteringEvents += c[4];
-    counters->shadowRays += c[5];
-    counters->gradientEvaluations += c[6];
-    counters->importanceSamples += c[7];
+    addCounters(*counters, c, uint64_t(camera.width) * uint64_t(camera.height) * uint64_t(settings.samplesPerPixel));
   }
   if (settings.readBack)
   {
@@ -502,20 +519,7 @@ void CUDARenderer::renderPilots(const Scene& scene, const Camera& camera, std::v
         const FrameParams fp = frameParams(st, uint32_t(k));
         cudaStream_t stream = in.PilotStreams[image % kStreams];
         float4* out = in.PilotImages.ptr + image * P;
-        switch (hv.blend.mode)
-        {
-          case BlendMode::Max:
-            launchRender<BlendMode::Max>(true, false, plain, grid, block, s, cam, fp, nullptr, out, nullptr, 0u, counters, stream);
-            break;
-          case BlendMode::Mix:
-            launchRender<BlendMode::Mix>(true, false, plain, grid, block, s, cam, fp, nullptr, out, nullptr, 0u, counters, stream);
-            break;
-          case BlendMode::Density:
-          default:
-            launchRender<BlendMode::Density>(
-              true, false, plain, grid, block, s, cam, fp, nullptr, out, nullptr, 0u, counters, stream);
-            break;
-        }
+        launchRenderFor(hv.blend.mode, true, false, plain, grid, block, s, cam, fp, nullptr, out, nullptr, 0u, counters, stream);
         MCVOL_CUDA(cudaGetLastError());
       }
     }
@@ -558,13 +562,8 @@ void CUDARenderer::renderPilots(const Scene& scene, const Camera& camera, std::v
       }
       image += size_t(n);
     }
-    const unsigned long long* cj = c.data() + 9 * j;
     job.counters = RenderCounters();
-    job.counters.rays = uint64_t(P) * uint64_t(n);
-    job.counters.ddaSteps = cj[0];
-    job.counters.tentativeCollisions = cj[1];
-    job.counters.realCollisions = cj[2];
-    job.counters.channelSamples = cj[3];
+    addCounters(job.counters, c.data() + 9 * j, uint64_t(P) * uint64_t(n));
   }
 }
 

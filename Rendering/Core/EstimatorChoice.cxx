@@ -174,6 +174,24 @@ void Renderer::renderPilots(const Scene& scene, const Camera& camera, std::vecto
   }
 }
 
+Camera pilotCamera(const Camera& camera, int pilotSize)
+{
+  Camera pilot = camera;
+  const int longer = std::max(camera.width, camera.height);
+  const int size = std::max(1, pilotSize);
+  if (longer > size)
+  {
+    const double f = double(size) / double(longer);
+    pilot.width = std::max(1, int(std::lround(camera.width * f)));
+    pilot.height = std::max(1, int(std::lround(camera.height * f)));
+    // Jitter over one image pixel's footprint: the image's own
+    // anti-aliasing noise, which every candidate pays alike.
+    pilot.jitterScale = float(camera.jitterScale * std::min(double(pilot.width) / double(camera.width),
+                                                      double(pilot.height) / double(camera.height)));
+  }
+  return pilot;
+}
+
 EstimatorChoice chooseEstimator(Renderer& renderer, const Scene& scene, const Camera& camera,
   const RenderSettings& base, const EstimatorChoiceSettings& choice)
 {
@@ -207,21 +225,7 @@ EstimatorChoice chooseEstimator(Renderer& renderer, const Scene& scene, const Ca
   out.applies = true;
   const auto start = std::chrono::steady_clock::now();
 
-  // The same view at a smaller size: the rays unproject normalised device
-  // coordinates, so only the pixel counts change.
-  Camera pilot = camera;
-  const int longer = std::max(camera.width, camera.height);
-  const int size = std::max(1, choice.pilotSize);
-  if (longer > size)
-  {
-    const double f = double(size) / double(longer);
-    pilot.width = std::max(1, int(std::lround(camera.width * f)));
-    pilot.height = std::max(1, int(std::lround(camera.height * f)));
-    // Jitter over one image pixel's footprint: the image's own
-    // anti-aliasing noise, which every candidate pays alike.
-    pilot.jitterScale = float(camera.jitterScale * std::min(double(pilot.width) / double(camera.width),
-                                                      double(pilot.height) / double(camera.height)));
-  }
+  const Camera pilot = pilotCamera(camera, choice.pilotSize);
   const double pixels = double(pilot.width) * double(pilot.height);
 
   // At pixel centres the march is offered with and without its control

@@ -176,6 +176,12 @@ std::string estimatorName(Estimator estimator, float marchSamplesPerVoxel, bool 
 /// when it is chosen.
 RenderSettings candidateSettings(const RenderSettings& base, const Camera& camera, const EstimatorCandidate& c);
 
+/// The pilot's view: `camera` with its longer side at most `pilotSize`
+/// pixels (the rays unproject normalised device coordinates, so only the
+/// pixel counts change), its jitter scaled to one image pixel's footprint
+/// (EstimatorChoiceSettings::pilotSize says why).
+Camera pilotCamera(const Camera& camera, int pilotSize);
+
 /// One candidate's pilot.
 struct EstimatorTrial
 {
