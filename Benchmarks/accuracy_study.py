@@ -10,8 +10,11 @@ For each demo dataset and blend mode, `mcvol-accuracy` renders (one run):
     configuration of MC_CONFIGS (--mc-configs): the renderer's default since
     issue 14 (expected-value estimator, Owen-scrambled Sobol' points, 1-DDA),
     the collision estimator with Sobol' points, and the default before it
-    (collision estimator, independent samples, 1-DDA and N-DDA), and the
-    unbiased march (Sobol', its default 2 strata per voxel). The composite
+    (collision estimator, independent samples, 1-DDA and N-DDA), the
+    unbiased march (Sobol', its default 2 strata per voxel), and the
+    automatic choice (mcvol::chooseEstimator aiming at 35 dB; the series
+    starts with its pilots' wall time, and ACCURACY.md names what it
+    chose; not under composite blending, where it does not apply). The composite
     blend keeps the collision estimator (Types.h, Estimator), so there the
     new default is the collision + Sobol' series;
   - the ray marcher at steps of 4 voxels down to 1/8 voxel, extinction- and
@@ -38,6 +41,7 @@ import csv
 import math
 import os
 import platform
+import re
 import shlex
 import subprocess
 import sys
@@ -65,11 +69,28 @@ MC_CONFIGS = [
     ("collision", "independent", "1dda", "old", "MC old default (collision, independent, 1-DDA)", "tab:orange", "-"),
     ("collision", "independent", "ndda", "old-ndda", "MC old default, N-DDA", "tab:brown", "--"),
     ("unbiased-march", "sobol", "1dda", "march", "MC unbiased march (2 per voxel, Sobol')", "tab:olive", "-."),
+    ("automatic", "sobol", "1dda", "auto", "MC automatic choice (its pilots counted)", "tab:cyan", "-"),
 ]
 MARCHES = [("extinction", "RM extinction", "tab:blue", "-"), ("opacity", "RM opacity", "tab:red", "--")]
 GPU_LABEL = "GPU"
 QUALITY = [30.0, 35.0, 40.0]   # PSNR targets (dB)
 BUDGETS = [50.0, 200.0, 1000.0]  # time budgets (ms)
+
+
+# The automatic series' choices: (dataset, mode, gpu) -> (name, pilot ms,
+# rounds), from the tool's meta.txt.
+CHOICES = {}
+CHOICE_LINE = re.compile(r"^automatic_choice (\S+) (.*) pilots_ms ([0-9.]+) rounds (\d+) rendered (\d+)$")
+
+
+def read_choices(meta, dataset, mode, gpu):
+    if not os.path.exists(meta):
+        return
+    with open(meta) as f:
+        for line in f:
+            m = CHOICE_LINE.match(line.strip())
+            if m:
+                CHOICES[(dataset, mode, gpu)] = (m.group(2), float(m.group(3)), int(m.group(4)))
 
 
 def load(path, w, h):
@@ -112,6 +133,7 @@ def run_tool(binary, dataset, mode, size, work, ref_spp, spp_max):
 
 def analyse(folder, dataset, mode, size):
     rows = []
+    read_choices(os.path.join(folder, "meta.txt"), dataset, mode, False)
     ref = load(os.path.join(folder, "reference.f32"), size, size)
     with open(os.path.join(folder, "timings.csv")) as f:
         for r in csv.DictReader(f):
@@ -149,6 +171,7 @@ def load_gpu(folder, datasets, modes, notes):
             path = os.path.join(folder, "%s-%s.csv" % (ds, mode))
             if not os.path.exists(path):
                 continue
+            read_choices(os.path.join(folder, "%s-%s.meta.txt" % (ds, mode)), ds, mode, True)
             with open(path) as f:
                 for r in csv.DictReader(f):
                     est, smp = r.get("estimator") or "", r.get("sampler") or ""
@@ -178,7 +201,9 @@ def effective_estimator(mode, estimator):
     """The estimator the renderer runs when `estimator` is asked for (unlit):
     the composite blend keeps the collision estimator (Integrator.h,
     usesExpectedValue)."""
-    return "collision" if mode == "composite" else estimator
+    if mode == "composite":
+        return None if estimator == "automatic" else "collision"
+    return estimator
 
 
 def methods_for(mode, gpu=False):
@@ -189,7 +214,7 @@ def methods_for(mode, gpu=False):
     out, seen = [], set()
     for est, smp, trk, key, label, colour, line in MC_CONFIGS:
         run = effective_estimator(mode, est)
-        if (run, smp, trk) in seen:
+        if run is None or (run, smp, trk) in seen:
             continue
         seen.add((run, smp, trk))
         if run != est:
@@ -493,10 +518,10 @@ def headline(rows, datasets, args, target=35.0):
     g = args.gpu_label
     cols = [("MC new default, CPU", "new", False), ("MC collision + Sobol', CPU", "col-sobol", False),
             ("MC old default, CPU", "old", False), ("MC unbiased march, CPU", "march", False),
-            ("RM extinction, CPU", "extinction", False),
+            ("MC automatic, CPU", "auto", False), ("RM extinction, CPU", "extinction", False),
             ("RM opacity, CPU", "opacity", False), ("MC new default, %s" % g, "new", True),
             ("MC old default, %s" % g, "old", True), ("MC unbiased march, %s" % g, "march", True),
-            ("RM extinction, %s" % g, "extinction", True)]
+            ("MC automatic, %s" % g, "auto", True), ("RM extinction, %s" % g, "extinction", True)]
     lines = ["| dataset | " + " | ".join(c[0] for c in cols) + " | old / new MC, CPU |",
              "|---|" + "---|" * (len(cols) + 1)]
     pairs = {k: [] for k in ("old-new", "new-rm", "old-rm", "gold-gnew", "gnew-grm")}
@@ -561,6 +586,17 @@ def headline(rows, datasets, args, target=35.0):
         said.append("On the %s it takes %s times as long as the CUDA ray marcher (extinction model)." % (g, r))
     if said:
         lines += ["", " ".join(said) + " (Datasets where both reach it; a ratio below 1 means sooner.)"]
+    chosen = []
+    for ds in datasets:
+        for gpu, where in ((False, "CPU"), (True, g)):
+            c = CHOICES.get((ds, "density", gpu))
+            if c:
+                chosen.append("%s, %s: %s (pilots %s ms, %d rounds)" % (
+                    ds, where, c[0], ("%.0f" % c[1]) if c[1] >= 10 else ("%.2g" % c[1]), c[2]))
+    if chosen:
+        lines += ["", "The automatic choice (`chooseEstimator`, aiming at %.0f dB, pixel centres; its series' times "
+                  "start with the pilots' wall time, a choice made after a first one in the process): %s." % (
+                      target, "; ".join(chosen))]
     return lines
 
 

@@ -28,7 +28,10 @@
 // trackers; --mc-configs lists estimator:sampler:tracker triples instead
 // (e.g. expected-value:sobol:1dda,collision:independent:1dda; a 4th field,
 // expected-value:sobol:1dda:1, sets RenderSettings::minSamplesPerVoxel and
-// names the series' variant 1dda-min1), so that one
+// names the series' variant 1dda-min1; the estimator "automatic" makes the
+// automatic choice, mcvol::chooseEstimator at 35 dB, from that base and
+// renders what it chose, its pilots' wall time counted first, with the
+// choice in meta.txt), so that one
 // run, with one reference, times several Monte Carlo configurations. A
 // configuration the renderer would not run as asked (the expected-value
 // estimator under the composite blend, which keeps the collision estimator)
@@ -37,6 +40,7 @@
 
 #include "mcvol/CameraMath.h"
 #include "mcvol/DemoData.h"
+#include "mcvol/EstimatorChoice.h"
 #include "mcvol/Integrator.h"
 #include "mcvol/MarchSetup.h"
 #include "mcvol/RayMarch.h"
@@ -73,6 +77,10 @@ struct McConfig
   mcvol::Sampler sampler;
   mcvol::Tracker tracker;
   float minSamplesPerVoxel = 0.f; ///< RenderSettings::minSamplesPerVoxel
+  /// The automatic choice (mcvol::chooseEstimator at the study's 35 dB,
+  /// from `estimator` as the base): the series renders what it chose, and
+  /// its cumulative time starts with the pilots' wall time.
+  bool automatic = false;
 };
 
 struct Options
@@ -138,10 +146,12 @@ std::vector<McConfig> splitConfigs(const std::string& s)
     {
       throw std::invalid_argument("--mc-configs: tracker 1dda or ndda, not " + t);
     }
-    v.push_back(
-      { estimatorOf(item.substr(0, a), "--mc-configs"), samplerOf(item.substr(a + 1, b - a - 1), "--mc-configs"),
-        t == "ndda" ? mcvol::Tracker::NDDA : mcvol::Tracker::OneDDA,
-        c == std::string::npos ? 0.f : std::stof(item.substr(c + 1)) });
+    const std::string e = item.substr(0, a);
+    const bool automatic = e == "automatic";
+    v.push_back({ automatic ? mcvol::Estimator::ExpectedValue : estimatorOf(e, "--mc-configs"),
+      samplerOf(item.substr(a + 1, b - a - 1), "--mc-configs"),
+      t == "ndda" ? mcvol::Tracker::NDDA : mcvol::Tracker::OneDDA,
+      c == std::string::npos ? 0.f : std::stof(item.substr(c + 1)), automatic });
   }
   return v;
 }
@@ -401,7 +411,7 @@ int main(int argc, char** argv)
       const bool isMc = m == "montecarlo" || var == "montecarlo";
       const bool textures = m == "raymarch" && o.marchTextures && std::string(marcher->name()) == "cuda";
       s << "," << (isMc ? r->name() : marcher->name()) << (textures ? "+textures" : "");
-      s << "," << (mc ? mcvol::toString(effective(mc->estimator)) : "") << ","
+      s << "," << (mc ? (mc->automatic ? "automatic" : mcvol::toString(effective(mc->estimator))) : "") << ","
         << (mc ? mcvol::toString(mc->sampler) : "");
       rows.push_back(s.str());
     };
@@ -453,8 +463,16 @@ int main(int argc, char** argv)
         { o.estimator, o.sampler, mcvol::Tracker::NDDA } };
     }
     std::vector<McConfig> done;
+    std::vector<std::string> choices; // meta.txt lines of the automatic series
     for (McConfig c : configs)
     {
+      if (c.automatic && effective(c.estimator) != c.estimator)
+      {
+        std::fprintf(stderr, "mcvol-accuracy: the automatic choice does not apply to the %s blend (it keeps the "
+                             "collision estimator): no automatic series\n",
+          o.blend.c_str());
+        continue;
+      }
       c.estimator = effective(c.estimator);
       if (c.estimator == mcvol::Estimator::ExpectedValue)
       {
@@ -466,7 +484,7 @@ int main(int argc, char** argv)
         [&](const McConfig& d)
         {
           return d.estimator == c.estimator && d.sampler == c.sampler && d.tracker == c.tracker &&
-            d.minSamplesPerVoxel == c.minSamplesPerVoxel;
+            d.minSamplesPerVoxel == c.minSamplesPerVoxel && d.automatic == c.automatic;
         });
       if (c.minSamplesPerVoxel > 0.f && c.estimator != mcvol::Estimator::ExpectedValue)
       {
@@ -482,7 +500,8 @@ int main(int argc, char** argv)
         std::snprintf(m, sizeof(m), "-min%g", double(c.minSamplesPerVoxel));
         trk += m;
       }
-      const std::string tag = std::string(mcvol::toString(c.estimator)) + "_" + mcvol::toString(c.sampler) + "_" + trk;
+      const std::string tag = std::string(c.automatic ? "automatic" : mcvol::toString(c.estimator)) + "_" +
+        mcvol::toString(c.sampler) + "_" + trk;
       if (again)
       {
         std::fprintf(stderr, "mcvol-accuracy: %s: the same series as an earlier configuration here (%s blend)\n",
@@ -504,11 +523,28 @@ int main(int argc, char** argv)
       rs.seed = 1;
       rs.tracker = c.tracker;
       double total = 0;
+      // The settings the series renders: rs, or what the automatic choice
+      // made of it (its pilots timed as a transfer-function edit after the
+      // first one in the process: an untimed choice first loads what the
+      // first pilots would, e.g. the CUDA streams).
+      mcvol::RenderSettings run = rs;
+      if (c.automatic)
+      {
+        mcvol::chooseEstimator(*r, scene, cam, rs);
+        const mcvol::EstimatorChoice choice = mcvol::chooseEstimator(*r, scene, cam, rs);
+        run = choice.settings;
+        total = 1e3 * choice.seconds;
+        char line[256];
+        std::snprintf(line, sizeof(line), "automatic_choice %s %s pilots_ms %.3f rounds %d rendered %d",
+          tag.c_str(), choice.chosenName().c_str(), total, choice.rounds, choice.rendered);
+        choices.push_back(line);
+        std::fprintf(stderr, "mcvol-accuracy: %s\n%s", line, choice.report().c_str());
+      }
       for (int spp = 1; spp <= o.sppMax; spp *= 2)
       {
-        rs.samplesPerPixel = spp - int(acc.samples());
+        run.samplesPerPixel = spp - int(acc.samples());
         t0 = Clock::now();
-        r->render(scene, cam, rs, nullptr, acc);
+        r->render(scene, cam, run, nullptr, acc);
         r->finish();
         total += msSince(t0);
         r->readBack(acc);
@@ -553,8 +589,12 @@ int main(int argc, char** argv)
       << mcvol::toString(o.estimator) << "\n";
     for (const McConfig& c : done)
     {
-      m << "mc_series " << mcvol::toString(c.estimator) << " " << mcvol::toString(c.sampler) << " "
-        << mcvol::toString(c.tracker) << " " << c.minSamplesPerVoxel << "\n";
+      m << "mc_series " << (c.automatic ? "automatic" : mcvol::toString(c.estimator)) << " "
+        << mcvol::toString(c.sampler) << " " << mcvol::toString(c.tracker) << " " << c.minSamplesPerVoxel << "\n";
+    }
+    for (const std::string& l : choices)
+    {
+      m << l << "\n";
     }
   }
   catch (const std::exception& e)

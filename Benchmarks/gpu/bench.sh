@@ -181,14 +181,16 @@ for stage in "$@"; do
       # The Monte Carlo configurations are the study's (accuracy_study.py
       # MC_CONFIGS): the new default (expected value, Sobol', 1-DDA),
       # collision + Sobol', the old default (collision, independent,
-      # 1-DDA and N-DDA) and the unbiased march (2 per voxel, Sobol').
+      # 1-DDA and N-DDA), the unbiased march (2 per voxel, Sobol') and the
+      # automatic choice (its pilots timed into the series; the choice in
+      # <dataset>-<mode>.meta.txt).
       # Writes accuracy/<dataset>-<mode>.csv, the layout accuracy_study.py
       # --gpu reads, and packs them with their logs into accuracy.tgz, one
       # file to bring back. ACCURACY_MODES (default: all four) and
       # ACCURACY_DATASETS (default: all four) shorten the stage.
       mkdir -p "$out/accuracy"
       configs="expected-value:sobol:1dda,collision:sobol:1dda,collision:independent:1dda,collision:independent:ndda"
-      configs="$configs,unbiased-march:sobol:1dda"
+      configs="$configs,unbiased-march:sobol:1dda,automatic:sobol:1dda"
       for ds in ${ACCURACY_DATASETS:-figure3 microscopy cosmology weather}; do
         for mode in ${ACCURACY_MODES:-density max mix composite}; do
           work="$(mktemp -d)"
