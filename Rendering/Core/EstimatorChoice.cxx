@@ -418,25 +418,60 @@ EstimatorChoice chooseEstimator(Renderer& renderer, const Scene& scene, const Ca
     if (!have[i])
     {
       std::vector<size_t> round = { i };
-      bool open[2] = { true, true };
-      for (size_t k = i + 1; ahead && k < candidates.size() && round.size() < kMaxRound; ++k)
+      if (ahead)
       {
-        const EstimatorCandidate& d = candidates[k];
-        const int v = d.controlVariates ? 1 : 0;
-        if (have[k] || d.estimator != Estimator::UnbiasedMarch || !open[v] || lastOf[v] < 0)
+        // The search reaches a later rate of a variant while the cost per
+        // sample of the variant's rate before it is below `best` (the stop
+        // rule above). That cost is known for a rate already tried; for one
+        // in this round it is extrapolated from the variant's last known
+        // rate in proportion to the rate (an upper bound where the cost has
+        // a fixed part per ray).
+        double lastCost[2] = { -1, -1 }, lastRate[2] = { 0, 0 };
+        for (int v = 0; v < 2; ++v)
         {
-          continue;
+          if (lastOf[v] >= 0)
+          {
+            lastCost[v] = out.trials[size_t(lastOf[v])].costPerSample;
+            lastRate[v] = out.trials[size_t(lastOf[v])].candidate.marchSamplesPerVoxel;
+          }
         }
-        const EstimatorTrial& last = out.trials[size_t(lastOf[v])];
-        const double predicted = last.costPerSample * double(d.marchSamplesPerVoxel) /
-          double(last.candidate.marchSamplesPerVoxel);
-        if (predicted < best)
+        const auto step = [&](size_t k) {
+          // Candidate k joins the chain of its variant (known or predicted).
+          const EstimatorCandidate& d = candidates[k];
+          const int v = d.controlVariates ? 1 : 0;
+          if (have[k])
+          {
+            lastCost[v] = results[k].costPerSample;
+          }
+          else if (lastCost[v] >= 0)
+          {
+            lastCost[v] *= double(d.marchSamplesPerVoxel) / lastRate[v];
+          }
+          lastRate[v] = d.marchSamplesPerVoxel;
+        };
+        if (c.estimator == Estimator::UnbiasedMarch)
         {
-          round.push_back(k);
+          step(i);
         }
-        else
+        bool open[2] = { true, true };
+        for (size_t k = i + 1; k < candidates.size() && round.size() < kMaxRound; ++k)
         {
-          open[v] = false; // higher rates of the variant cost more
+          const EstimatorCandidate& d = candidates[k];
+          const int v = d.controlVariates ? 1 : 0;
+          if (d.estimator != Estimator::UnbiasedMarch || !open[v] || lastCost[v] < 0)
+          {
+            continue;
+          }
+          if (!(lastCost[v] < best))
+          {
+            open[v] = false; // the search stops this variant before d
+            continue;
+          }
+          if (!have[k])
+          {
+            round.push_back(k);
+          }
+          step(k);
         }
       }
       runRound(round);
@@ -461,9 +496,16 @@ EstimatorChoice chooseEstimator(Renderer& renderer, const Scene& scene, const Ca
   // 1.25 per voxel, 19% dearer (Benchmarks/RESULTS.md, "Fourteenth session").
   if (choice.refineRates)
   {
-    const size_t scanned = out.trials.size();
-    for (int variant = 0; variant < 2; ++variant)
+    // Each variant's rate between (at most one), planned from the scanned
+    // trials; `cost` is its interpolated cost per sample.
+    struct Between
     {
+      EstimatorCandidate candidate;
+      double cost = 0;
+      double aim = 0;
+    };
+    const size_t scanned = out.trials.size();
+    const auto plan = [&](int variant, Between& between) {
       int lo = -1;
       for (size_t i = 0; i < scanned; ++i)
       {
@@ -479,39 +521,85 @@ EstimatorChoice chooseEstimator(Renderer& renderer, const Scene& scene, const Ca
         }
         if (lo < 0)
         {
-          break; // the lowest rate already takes one frame
+          return false; // the lowest rate already takes one frame
         }
         const EstimatorTrial& a = out.trials[size_t(lo)];
         const double r0 = a.candidate.marchSamplesPerVoxel, r1 = t.candidate.marchSamplesPerVoxel;
         if (!(a.firstFrameMSE > choice.targetMSE && t.firstFrameMSE > 0 && t.firstFrameMSE < a.firstFrameMSE))
         {
-          break;
+          return false;
         }
         const double slope = std::log(a.firstFrameMSE / t.firstFrameMSE) / std::log(r1 / r0);
-        const double aim = choice.refineMargin * choice.targetMSE;
-        double r = r0 * std::pow(a.firstFrameMSE / aim, 1.0 / slope);
+        between.aim = choice.refineMargin * choice.targetMSE;
+        double r = r0 * std::pow(a.firstFrameMSE / between.aim, 1.0 / slope);
         r = std::ceil(r / kChoiceRateStep - 1e-9) * kChoiceRateStep;
-        const double cost = a.costPerSample + (r - r0) / (r1 - r0) * (t.costPerSample - a.costPerSample);
-        if (r > r0 && r < r1 && cost < best)
-        {
-          EstimatorCandidate c = t.candidate;
-          c.marchSamplesPerVoxel = float(r);
-          std::vector<PilotJob> jobs = { pilotJob(c) };
-          renderer.renderPilots(scene, pilot, jobs);
-          ++out.rounds;
-          ++out.rendered;
-          EstimatorTrial between = trialOf(c, jobs.front());
-          between.refined = true;
-          if (between.firstFrameMSE > aim)
-          {
-            between.frames = std::max(between.frames, 2.0);
-            between.score = between.frames * between.costPerSample;
-          }
-          out.trials.push_back(between);
-          best = std::min(best, between.score);
-        }
-        break;
+        between.cost = a.costPerSample + (r - r0) / (r1 - r0) * (t.costPerSample - a.costPerSample);
+        between.candidate = t.candidate;
+        between.candidate.marchSamplesPerVoxel = float(r);
+        return r > r0 && r < r1 && between.cost < best;
       }
+      return false;
+    };
+    // Variant by variant, as the search takes them: a variant's rate
+    // between is tried where its interpolated cost is below the best so far,
+    // the first variant's between included. Where the backend renders at
+    // once, both variants' are rendered in one round and the second's result
+    // is dropped where the first's lowered `best` below its cost.
+    Between planned[2];
+    bool wanted[2] = { plan(0, planned[0]), false };
+    std::vector<PilotJob> jobs[2];
+    if (ahead)
+    {
+      wanted[1] = plan(1, planned[1]);
+      std::vector<PilotJob> round;
+      for (int v = 0; v < 2; ++v)
+      {
+        if (wanted[v])
+        {
+          round.push_back(pilotJob(planned[v].candidate));
+        }
+      }
+      if (!round.empty())
+      {
+        renderer.renderPilots(scene, pilot, round);
+        ++out.rounds;
+        out.rendered += int(round.size());
+        size_t next = 0;
+        for (int v = 0; v < 2; ++v)
+        {
+          if (wanted[v])
+          {
+            jobs[v].push_back(std::move(round[next++]));
+          }
+        }
+      }
+    }
+    for (int variant = 0; variant < 2; ++variant)
+    {
+      if (variant == 1 && !ahead)
+      {
+        wanted[1] = plan(1, planned[1]);
+      }
+      if (!wanted[variant] || !(planned[variant].cost < best))
+      {
+        continue;
+      }
+      if (jobs[variant].empty())
+      {
+        jobs[variant].push_back(pilotJob(planned[variant].candidate));
+        renderer.renderPilots(scene, pilot, jobs[variant]);
+        ++out.rounds;
+        ++out.rendered;
+      }
+      EstimatorTrial between = trialOf(planned[variant].candidate, jobs[variant].front());
+      between.refined = true;
+      if (between.firstFrameMSE > planned[variant].aim)
+      {
+        between.frames = std::max(between.frames, 2.0);
+        between.score = between.frames * between.costPerSample;
+      }
+      out.trials.push_back(between);
+      best = std::min(best, between.score);
     }
   }
 

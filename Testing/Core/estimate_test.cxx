@@ -806,6 +806,85 @@ TEST(EstimatorChoice, RendersAheadWithoutChangingTheChoice)
   EXPECT_EQ(c[1].rendered, 6);
 }
 
+// Rendering ahead follows the search's own stop rule: a variant's next rate
+// is reached while the sample cost of the rate before it is below the best
+// prediction, so a rate whose predecessor is already known goes into the
+// round whatever its own extrapolated cost. Both variants' rates between
+// (pixel centres) share one round. Synthetic noise with a fixed part in the
+// march's work (so the extrapolation in proportion to the rate is high):
+// the trials and the choice equal those of the pilots one after the other.
+// (Before, the round of 1/2 per voxel stopped at a rate whose own
+// extrapolated cost reached the best, and each variant's rate between had a
+// round of its own.)
+TEST(EstimatorChoice, RendersAheadWhatTheSearchReaches)
+{
+  const DemoVolume v = makeDemo("cosmology", { 16, 16, 16 });
+  Scene scene;
+  configureDemo(scene, v, 4);
+  Camera centres = demoCam(v, 32, 32);
+  centres.jitterScale = 0.f;
+  EstimatorChoiceSettings cs;
+  cs.targetMSE = 1e-4;
+  cs.marchRates = { 0.25f, 0.5f, 1.f, 2.f };
+  const auto control = [&](const RenderSettings& st) { return marchControlVariates(st, centres); };
+  EstimatorChoice c[2];
+  int rounds[2] = { 0, 0 };
+  for (int atOnce = 0; atOnce < 2; ++atOnce)
+  {
+    SyntheticNoiseRenderer r;
+    r.AtOnce = atOnce == 1;
+    r.Mse = [&](const RenderSettings& st, double n) {
+      if (st.estimator == Estimator::ExpectedValue)
+      {
+        return 1.0 / n;
+      }
+      const double rate = st.marchSamplesPerVoxel;
+      return (control(st) ? 1.5e-4 / std::pow(rate, 3.4) : 1.3e-4 / (rate * rate)) / n;
+    };
+    r.Work = [&](const RenderSettings& st) {
+      return st.estimator == Estimator::ExpectedValue
+        ? 1.0
+        : 16.0 * ((control(st) ? 0.5 : 0.25) + double(st.marchSamplesPerVoxel));
+    };
+    c[atOnce] = chooseEstimator(r, scene, centres, RenderSettings(), cs);
+    rounds[atOnce] = r.Rounds;
+    EXPECT_EQ(c[atOnce].rounds, r.Rounds);
+    std::printf("%s%d rounds, %d rendered\n", c[atOnce].report().c_str(), c[atOnce].rounds, c[atOnce].rendered);
+  }
+  ASSERT_EQ(c[0].trials.size(), c[1].trials.size());
+  EXPECT_EQ(c[0].chosen, c[1].chosen);
+  for (size_t i = 0; i < c[0].trials.size(); ++i)
+  {
+    const EstimatorCandidate& a = c[0].trials[i].candidate;
+    const EstimatorCandidate& b = c[1].trials[i].candidate;
+    EXPECT_EQ(a.marchSamplesPerVoxel, b.marchSamplesPerVoxel) << i;
+    EXPECT_EQ(a.controlVariates, b.controlVariates) << i;
+    EXPECT_EQ(c[0].trials[i].refined, c[1].trials[i].refined) << i;
+    EXPECT_EQ(c[0].trials[i].score, c[1].trials[i].score) << i;
+  }
+  // Both variants' 1 per voxel takes two frames and 2 per voxel one, so
+  // each has a rate between to try. The plain one (1.375) is tried first and
+  // takes one frame for less than any listed rate; that lowers the best
+  // below the control variates' interpolated cost, so one after the other
+  // their rate between is never rendered, and at once it is rendered in the
+  // same round and dropped: one rate between among the trials either way.
+  int refined = 0;
+  for (const EstimatorTrial& t : c[0].trials)
+  {
+    refined += t.refined ? 1 : 0;
+  }
+  EXPECT_EQ(refined, 1);
+  EXPECT_TRUE(c[0].trials[size_t(c[0].chosen)].refined);
+  EXPECT_EQ(c[0].rendered, int(c[0].trials.size()));
+  EXPECT_EQ(c[1].rendered, int(c[1].trials.size()) + 1);
+  // One after the other: a round per candidate after the first three. At
+  // once: the first round, every listed rate in the second (each one's
+  // predecessor costs less per sample than the best so far, expected
+  // value's), and both rates between in the third.
+  EXPECT_EQ(rounds[0], int(c[0].trials.size()) - 2);
+  EXPECT_EQ(rounds[1], 3);
+}
+
 // Renderer::renderPilots refuses checkpoints that are missing, not positive
 // or not ascending with a clear error, on every backend (testRenderer()),
 // and renders a valid job after that.
