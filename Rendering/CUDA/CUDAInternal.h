@@ -203,6 +203,10 @@ struct CUDARenderer::Internal
   DeviceBuffer<float4> PilotImages;
   DeviceBuffer<unsigned long long> PilotCounters;
   std::vector<cudaStream_t> PilotStreams;
+  /// Page-locked host copy of PilotImages (a copy from pageable memory
+  /// goes through a staging buffer of the driver), PilotHostCount floats.
+  float* PilotHost = nullptr;
+  size_t PilotHostCount = 0;
   bool ConcurrentPilots = true;
   /// classifyLevel()'s kept inputs (CUDAPyramid.cu).
   std::vector<std::unique_ptr<LevelInput>> LevelInputs;
@@ -218,6 +222,10 @@ struct CUDARenderer::Internal
     if (this->DisplayHost)
     {
       cudaFreeHost(this->DisplayHost);
+    }
+    if (this->PilotHost)
+    {
+      cudaFreeHost(this->PilotHost);
     }
     if (this->Start)
     {

@@ -525,8 +525,20 @@ void CUDARenderer::renderPilots(const Scene& scene, const Camera& camera, std::v
     }
   }
   MCVOL_CUDA(cudaDeviceSynchronize());
-  std::vector<float> host(images * P * 4);
-  MCVOL_CUDA(cudaMemcpy(host.data(), in.PilotImages.ptr, host.size() * sizeof(float), cudaMemcpyDeviceToHost));
+  const size_t floats = images * P * 4;
+  if (in.PilotHostCount < floats)
+  {
+    if (in.PilotHost)
+    {
+      MCVOL_CUDA(cudaFreeHost(in.PilotHost));
+      in.PilotHost = nullptr;
+      in.PilotHostCount = 0;
+    }
+    MCVOL_CUDA(cudaMallocHost(reinterpret_cast<void**>(&in.PilotHost), floats * sizeof(float)));
+    in.PilotHostCount = floats;
+  }
+  const float* host = in.PilotHost;
+  MCVOL_CUDA(cudaMemcpy(in.PilotHost, in.PilotImages.ptr, floats * sizeof(float), cudaMemcpyDeviceToHost));
   std::vector<unsigned long long> c(9 * (jobs.size() + 1));
   MCVOL_CUDA(cudaMemcpy(c.data(), in.PilotCounters.ptr, c.size() * sizeof(unsigned long long), cudaMemcpyDeviceToHost));
 
@@ -549,7 +561,7 @@ void CUDARenderer::renderPilots(const Scene& scene, const Camera& camera, std::v
           Vec4f sum;
           for (int k = done; k < upTo; ++k)
           {
-            const float* v = host.data() + 4 * ((image + size_t(k)) * P + p);
+            const float* v = host + 4 * ((image + size_t(k)) * P + p);
             sum.r += v[0];
             sum.g += v[1];
             sum.b += v[2];

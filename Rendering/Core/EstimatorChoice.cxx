@@ -351,14 +351,15 @@ EstimatorChoice chooseEstimator(Renderer& renderer, const Scene& scene, const Ca
   // lowest rate of each offered variant, which every search renders, then
   // the candidate the stop rule below reaches next. A backend that renders
   // a round at once (Renderer::rendersPilotsAtOnce) also gets, in that
-  // round, the variants' higher rates the search will most likely reach:
-  // those whose cost per sample, extrapolated in proportion to the rate
-  // from the variant's last trial (the cost grows more slowly than the rate:
-  // a fixed part per ray), is below the best prediction so far. The search
-  // itself is unchanged: it takes a rendered result only where it reaches
-  // that candidate, so the trials and the choice are those of the pilots one
-  // after the other; a rate rendered ahead and not reached costs only its
-  // share of the round.
+  // round, the variants' higher rates the search will reach if the best
+  // prediction so far stays: each rate whose predecessor in its variant
+  // costs less per sample than that best (known where the predecessor was
+  // tried, else extrapolated in proportion to the rate, which overstates a
+  // cost with a fixed part per ray), at most kMaxRound; and both variants'
+  // rates between (below) share a round. The search itself is unchanged: it
+  // takes a rendered result only where it reaches that candidate, so the
+  // trials and the choice are those of the pilots one after the other; a
+  // rate rendered ahead and not reached costs only its share of the round.
   std::vector<EstimatorTrial> results(candidates.size());
   std::vector<char> have(candidates.size(), 0);
   const auto runRound = [&](const std::vector<size_t>& round) {
