@@ -321,10 +321,13 @@ def grid_dataset(rows, dataset, size, peers, out):
     ref = [r for r in rs if r["method"] == "reference" and r["variant"] == "raymarch"][0]
     nyq = [r for r in rs if r["method"] == "raymarch" and r["variant"] == "extinction" and r["param"] == 0.5][0]
     budget, target = nyq["ms"], 35.0
-    # The new and the old Monte Carlo default and both marches (the other
-    # series are in the plots and tables).
-    picked = [("new", "MC new default"), ("old", "MC old default"), ("extinction", "RM extinction"),
-              ("opacity", "RM opacity")]
+    # The new and the old Monte Carlo default, the automatic choice (where
+    # the run has it) and both marches (the other series are in the plots
+    # and tables).
+    picked = [("new", "MC new default"), ("old", "MC old default")]
+    if find(rs, "density", "auto"):
+        picked.append(("auto", "MC automatic (pilots counted)"))
+    picked += [("extinction", "RM extinction"), ("opacity", "RM opacity")]
     cols = []
     for label, pick in (("equal time: %.0f ms" % budget, lambda s: best_within(s, budget)),
                         ("equal quality: %.1f dB" % target, lambda s: cheapest_reaching(s, target))):
@@ -342,7 +345,8 @@ def grid_dataset(rows, dataset, size, peers, out):
         axes[row][0].set_title("reference\n(RM extinction, 1/16 voxel)", fontsize=7)
         for ax, (label, name, r) in zip(axes[row][1:1 + n], cols[row * n:(row + 1) * n]):
             if r is None:
-                ax.text(0.5, 0.5, "not reached", ha="center", va="center", fontsize=8)
+                ax.text(0.5, 0.5, "no image within the time" if row == 0 else "not reached", ha="center",
+                        va="center", fontsize=8)
                 ax.set_title("%s\n%s" % (label, name), fontsize=7)
                 continue
             ax.imshow(display(load(r["file"], size, size)))
