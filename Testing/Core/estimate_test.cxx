@@ -885,6 +885,68 @@ TEST(EstimatorChoice, RendersAheadWhatTheSearchReaches)
   EXPECT_EQ(rounds[1], 3);
 }
 
+// The same on rendered demo data: a backend that renders each round at once
+// (here the test backend, wrapped to say so) gets the same trials, scores
+// and choice as one after the other, in no more rounds, with the GPU's cost
+// model (the one the CUDA backend's choice uses), jittered and at pixel
+// centres, on a dense and a sparse set.
+TEST(EstimatorChoice, AtOnceEqualsOneAfterTheOtherOnDemoData)
+{
+  class AtOnce : public Renderer
+  {
+  public:
+    explicit AtOnce(bool atOnce)
+      : On(atOnce)
+    {
+    }
+    void render(const Scene& s, const Camera& c, const RenderSettings& st, const float* d, Accumulator& a,
+      RenderCounters* k) override
+    {
+      this->In->render(s, c, st, d, a, k);
+    }
+    void renderPilots(const Scene& s, const Camera& c, std::vector<PilotJob>& jobs) override
+    {
+      this->In->renderPilots(s, c, jobs);
+    }
+    bool rendersPilotsAtOnce() const override { return this->On; }
+    void march(const Scene& s, const Camera& c, const MarchSettings& m, const float* d, Accumulator& a,
+      MarchCounters* k) override
+    {
+      this->In->march(s, c, m, d, a, k);
+    }
+    const char* name() const override { return "cuda"; } // the GPU's cost model
+    std::unique_ptr<Renderer> In = testRenderer();
+    bool On;
+  };
+  for (const char* set : { "microscopy", "cosmology" })
+  {
+    const DemoVolume v = makeDemo(set, { 48, 40, 24 });
+    Scene scene;
+    configureDemo(scene, v, 4);
+    Camera centres = demoCam(v, 96, 80);
+    centres.jitterScale = 0.f;
+    for (const Camera& cam : { demoCam(v, 96, 80), centres })
+    {
+      AtOnce one(false), all(true);
+      const EstimatorChoice a = chooseEstimator(one, scene, cam, RenderSettings());
+      const EstimatorChoice b = chooseEstimator(all, scene, cam, RenderSettings());
+      const std::string where = std::string(set) + (cam.jitterScale > 0.f ? ", jittered" : ", centres");
+      ASSERT_EQ(a.trials.size(), b.trials.size()) << where;
+      EXPECT_EQ(a.chosen, b.chosen) << where;
+      for (size_t i = 0; i < a.trials.size(); ++i)
+      {
+        EXPECT_EQ(a.trials[i].candidate.marchSamplesPerVoxel, b.trials[i].candidate.marchSamplesPerVoxel) << where;
+        EXPECT_EQ(a.trials[i].candidate.controlVariates, b.trials[i].candidate.controlVariates) << where;
+        EXPECT_EQ(a.trials[i].score, b.trials[i].score) << where << ", trial " << i;
+      }
+      EXPECT_LE(b.rounds, a.rounds) << where;
+      EXPECT_GE(b.rendered, int(b.trials.size())) << where;
+      std::printf("%s: %s; %d rounds one after the other, %d at once (%d rendered for %zu trials)\n", where.c_str(),
+        b.chosenName().c_str(), a.rounds, b.rounds, b.rendered, b.trials.size());
+    }
+  }
+}
+
 // Renderer::renderPilots refuses checkpoints that are missing, not positive
 // or not ascending with a clear error, on every backend (testRenderer()),
 // and renders a valid job after that.
