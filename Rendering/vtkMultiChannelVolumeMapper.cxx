@@ -1519,6 +1519,13 @@ bool vtkMultiChannelVolumeMapper::ChooseEstimator(RenderPass& pass)
     // choice's MSE is).
     settings.targetMSE = this->TargetError * this->TargetError;
   }
+  // The previous choice's candidates go into the first round of pilots on
+  // a backend that renders a round at once (after a transfer-function edit
+  // the search likely reaches them again): fewer rounds, the same choice.
+  if (in.Choice.applies)
+  {
+    settings.hint = in.Choice.hint();
+  }
   try
   {
     in.Choice = mcvol::chooseEstimator(*in.Backend.Get(), scene, pass.Camera, base, settings);

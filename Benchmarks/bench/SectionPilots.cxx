@@ -6,9 +6,11 @@
 // On CUDA both ways: the renders one after the other (Renderer::renderPilots,
 // the fifteenth session's pilots) and all of a round's samples at once
 // (CUDARenderer::renderPilots, the default; with it chooseEstimator() renders
-// ahead the rates it will most likely reach), with whether the two chose the
-// same estimator from the same trials and their largest difference in
-// predicted time.
+// ahead the rates it will most likely reach), and at once with the previous
+// choice's candidates as the hint (EstimatorChoiceSettings::hint, what the
+// mapper passes after a transfer-function edit), with whether every way
+// chose the same estimator from the same trials and their largest
+// difference in predicted time.
 
 #include "BenchCommon.h"
 #include "Sections.h"
@@ -102,6 +104,10 @@ void runPilots(Bench& bench)
     if (cuda)
     {
       modes.push_back("concurrent");
+      // A transfer-function edit after a first choice: the mapper hands the
+      // previous choice's candidates over as the hint (here the same scene's,
+      // so the first round holds every candidate the search reaches).
+      modes.push_back("concurrent, the previous choice as hint");
     }
 #endif
     std::vector<mcvol::EstimatorChoice> choices;
@@ -110,9 +116,14 @@ void runPilots(Bench& bench)
 #ifdef MCVOL_WITH_CUDA
       if (cuda)
       {
-        cuda->setConcurrentPilots(m == 1);
+        cuda->setConcurrentPilots(m >= 1);
       }
 #endif
+      mcvol::EstimatorChoiceSettings cs;
+      if (m == 2)
+      {
+        cs.hint = choices[0].hint();
+      }
       mcvol::RenderSettings st;
       st.seed = 7;
       st.jitterPixels = centres == 0;
@@ -122,7 +133,7 @@ void runPilots(Bench& bench)
       {
         r.finish();
         const auto t0 = Clock::now();
-        choice = mcvol::chooseEstimator(r, s.scene, cam, st, mcvol::EstimatorChoiceSettings());
+        choice = mcvol::chooseEstimator(r, s.scene, cam, st, cs);
         r.finish();
         ms.push_back(1e3 * seconds(t0));
       }
@@ -137,18 +148,23 @@ void runPilots(Bench& bench)
       reports += std::string("\n") + (centres ? "centres" : "jittered") + ", " + modes[m] + ":\n" + choice.report();
       choices.push_back(choice);
     }
-    if (choices.size() == 2)
+    if (choices.size() >= 2)
     {
+      // Every way against the first (one after the other).
       double worst = 0;
-      bool sameTrials = choices[0].trials.size() == choices[1].trials.size();
-      for (size_t i = 0; sameTrials && i < choices[0].trials.size(); ++i)
+      bool sameTrials = true, sameChoice = true;
+      for (size_t k = 1; k < choices.size(); ++k)
       {
-        const double a = choices[0].trials[i].score, b = choices[1].trials[i].score;
-        worst = std::max(worst, std::fabs(a - b) / std::max(1e-30, std::fabs(a)));
+        sameChoice = sameChoice && choices[0].chosenName() == choices[k].chosenName();
+        sameTrials = sameTrials && choices[0].trials.size() == choices[k].trials.size();
+        for (size_t i = 0; sameTrials && i < choices[0].trials.size(); ++i)
+        {
+          const double a = choices[0].trials[i].score, b = choices[k].trials[i].score;
+          worst = std::max(worst, std::fabs(a - b) / std::max(1e-30, std::fabs(a)));
+        }
       }
       std::printf("| %s | same choice: %s; same candidates: %s; largest relative difference in predicted time: %.2g | | | | | | |\n",
-        centres ? "centres" : "jittered", choices[0].chosenName() == choices[1].chosenName() ? "yes" : "**no**",
-        sameTrials ? "yes" : "no", worst);
+        centres ? "centres" : "jittered", sameChoice ? "yes" : "**no**", sameTrials ? "yes" : "no", worst);
     }
   }
 #ifdef MCVOL_WITH_CUDA

@@ -88,6 +88,16 @@ std::string EstimatorChoice::chosenName() const
   return candidateName(this->trials[size_t(this->chosen)].candidate);
 }
 
+std::vector<EstimatorCandidate> EstimatorChoice::hint() const
+{
+  std::vector<EstimatorCandidate> h;
+  for (const EstimatorTrial& t : this->trials)
+  {
+    h.push_back(t.candidate);
+  }
+  return h;
+}
+
 std::string EstimatorChoice::report() const
 {
   if (!this->applies)
@@ -362,20 +372,38 @@ EstimatorChoice chooseEstimator(Renderer& renderer, const Scene& scene, const Ca
   // rate rendered ahead and not reached costs only its share of the round.
   std::vector<EstimatorTrial> results(candidates.size());
   std::vector<char> have(candidates.size(), 0);
-  const auto runRound = [&](const std::vector<size_t>& round) {
+  const bool ahead = renderer.rendersPilotsAtOnce() && !choice.tryAllRates;
+  constexpr size_t kMaxRound = 8;       // a later round: the candidate and those ahead
+  constexpr size_t kMaxFirstRound = 16; // the first round with the hint
+  // Rates between two listed ones rendered ahead from the hint (below), for
+  // the refinement to take where it plans the same rate.
+  std::vector<EstimatorTrial> hinted;
+  const auto runRound = [&](const std::vector<size_t>& round, const std::vector<EstimatorCandidate>& extra) {
     std::vector<PilotJob> jobs;
     for (size_t i : round)
     {
       jobs.push_back(pilotJob(candidates[i]));
     }
+    for (const EstimatorCandidate& c : extra)
+    {
+      jobs.push_back(pilotJob(c));
+    }
     renderer.renderPilots(scene, pilot, jobs);
     ++out.rounds;
-    out.rendered += int(round.size());
+    out.rendered += int(jobs.size());
     for (size_t k = 0; k < round.size(); ++k)
     {
       results[round[k]] = trialOf(candidates[round[k]], jobs[k]);
       have[round[k]] = 1;
     }
+    for (size_t k = 0; k < extra.size(); ++k)
+    {
+      hinted.push_back(trialOf(extra[k], jobs[round.size() + k]));
+    }
+  };
+  const auto sameCandidate = [](const EstimatorCandidate& a, const EstimatorCandidate& b) {
+    return a.estimator == b.estimator && a.marchSamplesPerVoxel == b.marchSamplesPerVoxel &&
+      a.controlVariates == b.controlVariates;
   };
   {
     std::vector<size_t> round;
@@ -390,10 +418,43 @@ EstimatorChoice chooseEstimator(Renderer& renderer, const Scene& scene, const Ca
         seen[variant] = seen[variant] || c.estimator == Estimator::UnbiasedMarch;
       }
     }
-    runRound(round);
+    // The hint (e.g. the previous choice's trials, EstimatorChoiceSettings::
+    // hint) joins the first round where the backend renders at once: the
+    // search will likely reach the same candidates again, and what it does
+    // not reach costs only its share of the round.
+    std::vector<EstimatorCandidate> extra;
+    if (ahead)
+    {
+      for (const EstimatorCandidate& h : choice.hint)
+      {
+        if (round.size() + extra.size() >= kMaxFirstRound)
+        {
+          break;
+        }
+        if (h.estimator != Estimator::UnbiasedMarch || (h.controlVariates ? !offerControl : !offerPlain) ||
+          !(h.marchSamplesPerVoxel > 0.f) || !std::isfinite(h.marchSamplesPerVoxel))
+        {
+          continue;
+        }
+        const auto listed = std::find_if(candidates.begin(), candidates.end(),
+          [&](const EstimatorCandidate& c) { return sameCandidate(c, h); });
+        if (listed != candidates.end())
+        {
+          const size_t k = size_t(listed - candidates.begin());
+          if (std::find(round.begin(), round.end(), k) == round.end())
+          {
+            round.push_back(k);
+          }
+        }
+        else if (std::none_of(
+                   extra.begin(), extra.end(), [&](const EstimatorCandidate& e) { return sameCandidate(e, h); }))
+        {
+          extra.push_back(h);
+        }
+      }
+    }
+    runRound(round, extra);
   }
-  const bool ahead = renderer.rendersPilotsAtOnce() && !choice.tryAllRates;
-  constexpr size_t kMaxRound = 8;
   double best = 0;
   // The last trial of each march variant (plain, control variates), for the
   // stop rule; -1: none yet.
@@ -475,7 +536,7 @@ EstimatorChoice chooseEstimator(Renderer& renderer, const Scene& scene, const Ca
           step(k);
         }
       }
-      runRound(round);
+      runRound(round, {});
     }
     out.trials.push_back(results[i]);
     if (c.estimator == Estimator::UnbiasedMarch)
@@ -548,16 +609,30 @@ EstimatorChoice chooseEstimator(Renderer& renderer, const Scene& scene, const Ca
     // is dropped where the first's lowered `best` below its cost.
     Between planned[2];
     bool wanted[2] = { plan(0, planned[0]), false };
-    std::vector<PilotJob> jobs[2];
+    EstimatorTrial tried[2];
+    bool done[2] = { false, false };
+    const auto fromHint = [&](int v) {
+      for (const EstimatorTrial& h : hinted)
+      {
+        if (sameCandidate(h.candidate, planned[v].candidate))
+        {
+          tried[v] = h;
+          done[v] = true;
+        }
+      }
+      return done[v];
+    };
     if (ahead)
     {
       wanted[1] = plan(1, planned[1]);
       std::vector<PilotJob> round;
+      std::vector<int> of;
       for (int v = 0; v < 2; ++v)
       {
-        if (wanted[v])
+        if (wanted[v] && !fromHint(v))
         {
           round.push_back(pilotJob(planned[v].candidate));
+          of.push_back(v);
         }
       }
       if (!round.empty())
@@ -565,13 +640,10 @@ EstimatorChoice chooseEstimator(Renderer& renderer, const Scene& scene, const Ca
         renderer.renderPilots(scene, pilot, round);
         ++out.rounds;
         out.rendered += int(round.size());
-        size_t next = 0;
-        for (int v = 0; v < 2; ++v)
+        for (size_t k = 0; k < round.size(); ++k)
         {
-          if (wanted[v])
-          {
-            jobs[v].push_back(std::move(round[next++]));
-          }
+          tried[of[k]] = trialOf(planned[of[k]].candidate, round[k]);
+          done[of[k]] = true;
         }
       }
     }
@@ -585,14 +657,15 @@ EstimatorChoice chooseEstimator(Renderer& renderer, const Scene& scene, const Ca
       {
         continue;
       }
-      if (jobs[variant].empty())
+      if (!done[variant])
       {
-        jobs[variant].push_back(pilotJob(planned[variant].candidate));
-        renderer.renderPilots(scene, pilot, jobs[variant]);
+        std::vector<PilotJob> jobs = { pilotJob(planned[variant].candidate) };
+        renderer.renderPilots(scene, pilot, jobs);
         ++out.rounds;
         ++out.rendered;
+        tried[variant] = trialOf(planned[variant].candidate, jobs.front());
       }
-      EstimatorTrial between = trialOf(planned[variant].candidate, jobs[variant].front());
+      EstimatorTrial between = tried[variant];
       between.refined = true;
       if (between.firstFrameMSE > planned[variant].aim)
       {

@@ -889,7 +889,8 @@ TEST(EstimatorChoice, RendersAheadWhatTheSearchReaches)
 // (here the test backend, wrapped to say so) gets the same trials, scores
 // and choice as one after the other, in no more rounds, with the GPU's cost
 // model (the one the CUDA backend's choice uses), jittered and at pixel
-// centres, on a dense and a sparse set.
+// centres, on a dense and a sparse set; and the same with any hint
+// (EstimatorChoiceSettings::hint), in one round with its own.
 TEST(EstimatorChoice, AtOnceEqualsOneAfterTheOtherOnDemoData)
 {
   class AtOnce : public Renderer
@@ -918,6 +919,8 @@ TEST(EstimatorChoice, AtOnceEqualsOneAfterTheOtherOnDemoData)
     std::unique_ptr<Renderer> In = testRenderer();
     bool On;
   };
+  std::vector<EstimatorCandidate> lastHint = { { Estimator::UnbiasedMarch, 0.3125f, true },
+    { Estimator::UnbiasedMarch, 4.f, false } }; // a rate between and a high one
   for (const char* set : { "microscopy", "cosmology" })
   {
     const DemoVolume v = makeDemo(set, { 48, 40, 24 });
@@ -941,6 +944,38 @@ TEST(EstimatorChoice, AtOnceEqualsOneAfterTheOtherOnDemoData)
       }
       EXPECT_LE(b.rounds, a.rounds) << where;
       EXPECT_GE(b.rendered, int(b.trials.size())) << where;
+      // With a hint: the choice's own candidates (a transfer-function edit
+      // that changed nothing the choice sees) render in one round, rates
+      // between included; another set's candidates change only the rounds.
+      // Either way the trials and the choice stay, and a backend that
+      // renders one after the other ignores the hint.
+      EstimatorChoiceSettings self;
+      self.hint = b.hint();
+      EstimatorChoiceSettings other;
+      other.hint = lastHint;
+      for (const EstimatorChoiceSettings* cs : { &self, &other })
+      {
+        AtOnce hinted(true), ignoring(false);
+        const EstimatorChoice h = chooseEstimator(hinted, scene, cam, RenderSettings(), *cs);
+        const EstimatorChoice g = chooseEstimator(ignoring, scene, cam, RenderSettings(), *cs);
+        const std::string how = where + (cs == &self ? ", its own hint" : ", another set's hint");
+        ASSERT_EQ(h.trials.size(), a.trials.size()) << how;
+        EXPECT_EQ(h.chosen, a.chosen) << how;
+        for (size_t i = 0; i < a.trials.size(); ++i)
+        {
+          EXPECT_EQ(h.trials[i].score, a.trials[i].score) << how << ", trial " << i;
+          EXPECT_EQ(h.trials[i].refined, a.trials[i].refined) << how << ", trial " << i;
+        }
+        EXPECT_EQ(g.rounds, a.rounds) << how;
+        EXPECT_EQ(g.rendered, a.rendered) << how;
+        if (cs == &self)
+        {
+          EXPECT_EQ(h.rounds, 1) << how;
+          EXPECT_EQ(h.rendered, int(h.trials.size())) << how;
+        }
+        std::printf("%s: %d rounds, %d rendered\n", how.c_str(), h.rounds, h.rendered);
+      }
+      lastHint = b.hint();
       std::printf("%s: %s; %d rounds one after the other, %d at once (%d rendered for %zu trials)\n", where.c_str(),
         b.chosenName().c_str(), a.rounds, b.rounds, b.rendered, b.trials.size());
     }

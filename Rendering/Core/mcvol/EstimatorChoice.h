@@ -152,6 +152,17 @@ struct EstimatorChoiceSettings
   /// full image needed two frames (Benchmarks/RESULTS.md, "Fourteenth
   /// session").
   double refineMargin = 0.75;
+  /// Candidates to render in the first round where the backend renders a
+  /// round at once (Renderer::rendersPilotsAtOnce), up to 16 with the
+  /// first round's own: typically the previous choice's trials
+  /// (EstimatorChoice::hint()), which the search after a transfer-function
+  /// edit will likely reach again. A hinted rate between two listed ones is
+  /// taken where the search plans that very rate. Only the wall time
+  /// depends on it: the search takes a rendered result only where it
+  /// reaches that candidate, so the trials and the choice are the same with
+  /// any hint or none (and with a backend that renders one after the other
+  /// the hint is not used).
+  std::vector<EstimatorCandidate> hint;
   /// Use `model` instead of defaultCostModel(renderer.name()) (the
   /// benchmark's --cost-model, to try a fit without rebuilding).
   bool customModel = false;
@@ -220,6 +231,9 @@ struct EstimatorChoice
   std::string report() const;
   /// "ExpectedValue" or "UnbiasedMarch(1)" (rate in parentheses).
   std::string chosenName() const;
+  /// The candidates of `trials`: the hint for the next choice of a scene
+  /// like this one (EstimatorChoiceSettings::hint).
+  std::vector<EstimatorCandidate> hint() const;
 };
 
 /**
