@@ -378,28 +378,38 @@ EstimatorChoice chooseEstimator(Renderer& renderer, const Scene& scene, const Ca
   // Rates between two listed ones rendered ahead from the hint (below), for
   // the refinement to take where it plans the same rate.
   std::vector<EstimatorTrial> hinted;
-  const auto runRound = [&](const std::vector<size_t>& round, const std::vector<EstimatorCandidate>& extra) {
+  // One renderPilots() call (a round) of these candidates, and their trials.
+  const auto renderRound = [&](const std::vector<EstimatorCandidate>& cs) {
     std::vector<PilotJob> jobs;
-    for (size_t i : round)
-    {
-      jobs.push_back(pilotJob(candidates[i]));
-    }
-    for (const EstimatorCandidate& c : extra)
+    for (const EstimatorCandidate& c : cs)
     {
       jobs.push_back(pilotJob(c));
     }
     renderer.renderPilots(scene, pilot, jobs);
     ++out.rounds;
     out.rendered += int(jobs.size());
+    std::vector<EstimatorTrial> trials;
+    for (size_t k = 0; k < cs.size(); ++k)
+    {
+      trials.push_back(trialOf(cs[k], jobs[k]));
+    }
+    return trials;
+  };
+  // The listed candidates `round` and the hinted rates between `extra`.
+  const auto runRound = [&](const std::vector<size_t>& round, const std::vector<EstimatorCandidate>& extra) {
+    std::vector<EstimatorCandidate> cs;
+    for (size_t i : round)
+    {
+      cs.push_back(candidates[i]);
+    }
+    cs.insert(cs.end(), extra.begin(), extra.end());
+    const std::vector<EstimatorTrial> trials = renderRound(cs);
     for (size_t k = 0; k < round.size(); ++k)
     {
-      results[round[k]] = trialOf(candidates[round[k]], jobs[k]);
+      results[round[k]] = trials[k];
       have[round[k]] = 1;
     }
-    for (size_t k = 0; k < extra.size(); ++k)
-    {
-      hinted.push_back(trialOf(extra[k], jobs[round.size() + k]));
-    }
+    hinted.insert(hinted.end(), trials.begin() + std::ptrdiff_t(round.size()), trials.end());
   };
   const auto sameCandidate = [](const EstimatorCandidate& a, const EstimatorCandidate& b) {
     return a.estimator == b.estimator && a.marchSamplesPerVoxel == b.marchSamplesPerVoxel &&
@@ -618,6 +628,7 @@ EstimatorChoice chooseEstimator(Renderer& renderer, const Scene& scene, const Ca
         {
           tried[v] = h;
           done[v] = true;
+          break;
         }
       }
       return done[v];
@@ -625,24 +636,22 @@ EstimatorChoice chooseEstimator(Renderer& renderer, const Scene& scene, const Ca
     if (ahead)
     {
       wanted[1] = plan(1, planned[1]);
-      std::vector<PilotJob> round;
+      std::vector<EstimatorCandidate> round;
       std::vector<int> of;
       for (int v = 0; v < 2; ++v)
       {
         if (wanted[v] && !fromHint(v))
         {
-          round.push_back(pilotJob(planned[v].candidate));
+          round.push_back(planned[v].candidate);
           of.push_back(v);
         }
       }
       if (!round.empty())
       {
-        renderer.renderPilots(scene, pilot, round);
-        ++out.rounds;
-        out.rendered += int(round.size());
-        for (size_t k = 0; k < round.size(); ++k)
+        const std::vector<EstimatorTrial> trials = renderRound(round);
+        for (size_t k = 0; k < trials.size(); ++k)
         {
-          tried[of[k]] = trialOf(planned[of[k]].candidate, round[k]);
+          tried[of[k]] = trials[k];
           done[of[k]] = true;
         }
       }
@@ -659,11 +668,7 @@ EstimatorChoice chooseEstimator(Renderer& renderer, const Scene& scene, const Ca
       }
       if (!done[variant])
       {
-        std::vector<PilotJob> jobs = { pilotJob(planned[variant].candidate) };
-        renderer.renderPilots(scene, pilot, jobs);
-        ++out.rounds;
-        ++out.rendered;
-        tried[variant] = trialOf(planned[variant].candidate, jobs.front());
+        tried[variant] = renderRound({ planned[variant].candidate }).front();
       }
       EstimatorTrial between = tried[variant];
       between.refined = true;
