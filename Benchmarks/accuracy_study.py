@@ -80,7 +80,8 @@ BUDGETS = [50.0, 200.0, 1000.0]  # time budgets (ms)
 # The automatic series' choices: (dataset, mode, gpu) -> (name, pilot ms,
 # rounds), from the tool's meta.txt.
 CHOICES = {}
-CHOICE_LINE = re.compile(r"^automatic_choice (\S+) (.*) pilots_ms ([0-9.]+) rounds (\d+) rendered (\d+)$")
+CHOICE_LINE = re.compile(r"^automatic_choice (\S+) (.*) pilots_ms ([0-9.]+) rounds (\d+) rendered (\d+)"
+                         r"(?: hinted_ms ([0-9.]+) hinted_rounds (\d+))?$")
 
 
 def read_choices(meta, dataset, mode, gpu):
@@ -90,7 +91,9 @@ def read_choices(meta, dataset, mode, gpu):
         for line in f:
             m = CHOICE_LINE.match(line.strip())
             if m:
-                CHOICES[(dataset, mode, gpu)] = (m.group(2), float(m.group(3)), int(m.group(4)))
+                CHOICES[(dataset, mode, gpu)] = (m.group(2), float(m.group(3)), int(m.group(4)),
+                                                 float(m.group(6)) if m.group(6) else None,
+                                                 int(m.group(7)) if m.group(7) else None)
 
 
 def load(path, w, h):
@@ -595,8 +598,9 @@ def headline(rows, datasets, args, target=35.0):
         for gpu, where in ((False, "CPU"), (True, g)):
             c = CHOICES.get((ds, "density", gpu))
             if c:
-                chosen.append("%s, %s: %s (pilots %s ms, %d rounds)" % (
-                    ds, where, c[0], ("%.0f" % c[1]) if c[1] >= 10 else ("%.2g" % c[1]), c[2]))
+                ms = lambda v: ("%.0f" % v) if v >= 10 else ("%.2g" % v)
+                hinted = "" if c[3] is None else "; hinted by the previous choice %s ms, %d rounds" % (ms(c[3]), c[4])
+                chosen.append("%s, %s: %s (pilots %s ms, %d rounds%s)" % (ds, where, c[0], ms(c[1]), c[2], hinted))
     if chosen:
         lines += ["", "The automatic choice (`chooseEstimator`, aiming at %.0f dB, pixel centres; its series' times "
                   "start with the pilots' wall time, a choice made after a first one in the process): %s." % (

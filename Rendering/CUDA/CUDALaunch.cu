@@ -9,6 +9,9 @@
 #include "CUDARenderKernels.h"
 
 #include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <stdexcept>
 
@@ -472,6 +475,13 @@ void CUDARenderer::renderPilots(const Scene& scene, const Camera& camera, std::v
   {
     return;
   }
+  // MCVOL_PILOT_PROFILE set: each round's wall time split into its steps on
+  // stderr (the benchmark's question of where a round's time goes; one more
+  // device synchronisation after the launches, so only while measuring).
+  static const bool profile = std::getenv("MCVOL_PILOT_PROFILE") != nullptr;
+  using PilotClock = std::chrono::steady_clock;
+  PilotClock::time_point tp[6];
+  tp[0] = PilotClock::now();
   MCVOL_CUDA(cudaSetDevice(in.Device));
   in.sync(scene);
   const size_t P = size_t(camera.width) * size_t(camera.height);
@@ -493,6 +503,7 @@ void CUDARenderer::renderPilots(const Scene& scene, const Camera& camera, std::v
   // non-blocking streams do not wait for.
   MCVOL_CUDA(cudaDeviceSynchronize());
 
+  tp[1] = PilotClock::now();
   const CameraView cam = toView(camera);
   const dim3 block = in.Block;
   const dim3 grid((unsigned(camera.width) + block.x - 1) / block.x, (unsigned(camera.height) + block.y - 1) / block.y);
@@ -524,7 +535,9 @@ void CUDARenderer::renderPilots(const Scene& scene, const Camera& camera, std::v
       }
     }
   }
+  tp[2] = PilotClock::now();
   MCVOL_CUDA(cudaDeviceSynchronize());
+  tp[3] = PilotClock::now();
   const size_t floats = images * P * 4;
   if (in.PilotHostCount < floats)
   {
@@ -542,6 +555,7 @@ void CUDARenderer::renderPilots(const Scene& scene, const Camera& camera, std::v
   std::vector<unsigned long long> c(9 * (jobs.size() + 1));
   MCVOL_CUDA(cudaMemcpy(c.data(), in.PilotCounters.ptr, c.size() * sizeof(unsigned long long), cudaMemcpyDeviceToHost));
 
+  tp[4] = PilotClock::now();
   // Each replicate's means at its checkpoints, folded as render() folds a
   // chunk of samples into the running mean (accumulate()).
   image = 0;
@@ -576,6 +590,15 @@ void CUDARenderer::renderPilots(const Scene& scene, const Camera& camera, std::v
     }
     job.counters = RenderCounters();
     addCounters(job.counters, c.data() + 9 * j, uint64_t(P) * uint64_t(n));
+  }
+  if (profile)
+  {
+    tp[5] = PilotClock::now();
+    auto ms = [&](int a, int b) { return std::chrono::duration<double, std::milli>(tp[b] - tp[a]).count(); };
+    std::fprintf(stderr,
+      "mcvol pilot round: jobs %zu launches %zu pixels %zu | setup %.3f issue %.3f kernels %.3f copy %.3f "
+      "fold %.3f total %.3f ms\n",
+      jobs.size(), images, P, ms(0, 1), ms(1, 2), ms(2, 3), ms(3, 4), ms(4, 5), ms(0, 5));
   }
 }
 
