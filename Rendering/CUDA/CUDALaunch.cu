@@ -485,14 +485,24 @@ void CUDARenderer::renderPilots(const Scene& scene, const Camera& camera, std::v
   MCVOL_CUDA(cudaSetDevice(in.Device));
   in.sync(scene);
   const size_t P = size_t(camera.width) * size_t(camera.height);
-  in.PilotImages.resize(std::max(in.PilotImages.count, images * P));
-  in.PilotCounters.resize(std::max(in.PilotCounters.count, 9 * (jobs.size() + 1)));
+  // Room for the largest round chooseEstimator() makes at the default pilot
+  // size (16 candidates: expected value's 2 x 8 images and 15 marches' 2 x
+  // 2) from the first round on, so that no later round (e.g. the first
+  // with a hint, which holds more candidates) grows the buffers and the
+  // page-locked host copy: on the H100 a round that grew them took 2-3 ms
+  // more (Benchmarks/RESULTS.md, eighteenth session).
+  constexpr size_t kReservedImages = 96;
+  const size_t reserved = std::max(images, kReservedImages) * P;
+  in.PilotImages.resize(std::max(in.PilotImages.count, reserved));
+  in.PilotCounters.resize(std::max(in.PilotCounters.count, 9 * (std::max<size_t>(jobs.size(), 16) + 1)));
   MCVOL_CUDA(cudaMemset(in.PilotImages.ptr, 0, images * P * sizeof(float4)));
   MCVOL_CUDA(cudaMemset(in.PilotCounters.ptr, 0, 9 * (jobs.size() + 1) * sizeof(unsigned long long)));
-  // Enough streams for every one-sample render of the largest round
-  // chooseEstimator() makes (expected value's 2 x 8 with two marches' 2 x 2,
-  // or 8 marches' 2 x 2) to run side by side.
-  constexpr size_t kStreams = 48;
+  // A stream per job of the largest round chooseEstimator() makes (16
+  // candidates), so that they run side by side; each job is one launch of
+  // all its one-sample images (FrameParams::batchSamples: blockIdx.z picks
+  // the replicate and the sample; before, one launch per image took 0.13-0.25
+  // ms a round on the H100 to issue).
+  constexpr size_t kStreams = 16;
   while (in.PilotStreams.size() < kStreams)
   {
     cudaStream_t st = nullptr;
@@ -519,27 +529,28 @@ void CUDARenderer::renderPilots(const Scene& scene, const Camera& camera, std::v
     {
       plain = plain && s.volume.channels[n].format == ChannelFormat::Scalar;
     }
-    for (int r = 0; r < 2; ++r)
-    {
-      RenderSettings st = job.settings;
-      st.samplesPerPixel = 1;
-      st.seed = job.seeds[r];
-      unsigned long long* counters = in.PilotCounters.ptr + 9 * (r == 0 ? j : jobs.size());
-      for (int k = 0; k < job.checkpoints.back(); ++k, ++image)
-      {
-        const FrameParams fp = frameParams(st, uint32_t(k));
-        cudaStream_t stream = in.PilotStreams[image % kStreams];
-        float4* out = in.PilotImages.ptr + image * P;
-        launchRenderFor(hv.blend.mode, true, false, plain, grid, block, s, cam, fp, nullptr, out, nullptr, 0u, counters, stream);
-        MCVOL_CUDA(cudaGetLastError());
-      }
-    }
+    // One launch: replicate r's sample k is the job's image r x n + k (its
+    // seed job.seeds[r]); replicate 0's counters go to the job's block of 9,
+    // replicate 1's to the last block (not read).
+    RenderSettings st = job.settings;
+    st.samplesPerPixel = 1;
+    st.seed = job.seeds[0];
+    FrameParams fp = frameParams(st, 0u);
+    const int n = job.checkpoints.back();
+    fp.batchSamples = n;
+    fp.batchSeed = job.seeds[1];
+    fp.batchCounterOffset = int(9 * (jobs.size() - j));
+    const dim3 batch(grid.x, grid.y, unsigned(2 * n));
+    launchRenderFor(hv.blend.mode, true, false, plain, batch, block, s, cam, fp, nullptr, in.PilotImages.ptr + image * P,
+      nullptr, 0u, in.PilotCounters.ptr + 9 * j, in.PilotStreams[j % kStreams]);
+    MCVOL_CUDA(cudaGetLastError());
+    image += size_t(2 * n);
   }
   tp[2] = PilotClock::now();
   MCVOL_CUDA(cudaDeviceSynchronize());
   tp[3] = PilotClock::now();
   const size_t floats = images * P * 4;
-  if (in.PilotHostCount < floats)
+  if (in.PilotHostCount < floats || in.PilotHostCount < 4 * reserved)
   {
     if (in.PilotHost)
     {
@@ -547,8 +558,8 @@ void CUDARenderer::renderPilots(const Scene& scene, const Camera& camera, std::v
       in.PilotHost = nullptr;
       in.PilotHostCount = 0;
     }
-    MCVOL_CUDA(cudaMallocHost(reinterpret_cast<void**>(&in.PilotHost), floats * sizeof(float)));
-    in.PilotHostCount = floats;
+    MCVOL_CUDA(cudaMallocHost(reinterpret_cast<void**>(&in.PilotHost), 4 * reserved * sizeof(float)));
+    in.PilotHostCount = 4 * reserved;
   }
   const float* host = in.PilotHost;
   MCVOL_CUDA(cudaMemcpy(in.PilotHost, in.PilotImages.ptr, floats * sizeof(float), cudaMemcpyDeviceToHost));

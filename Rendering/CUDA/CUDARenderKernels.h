@@ -71,13 +71,28 @@ __device__ __forceinline__ void renderKernelBody(const SceneView& s, const Camer
   const int x = int(blockIdx.x * blockDim.x + threadIdx.x);
   const int y = int(blockIdx.y * blockDim.y + threadIdx.y);
   RayCounters c;
+  // A batch of pilot images (FrameParams::batchSamples): this block's image,
+  // sample and replicate from blockIdx.z.
+  FrameParams f = fp;
+  if (fp.batchSamples > 0)
+  {
+    const int image = int(blockIdx.z);
+    const int replicate = image / fp.batchSamples;
+    f.firstSample = uint32_t(image - replicate * fp.batchSamples);
+    if (replicate > 0)
+    {
+      f.seed = fp.batchSeed;
+      counters += fp.batchCounterOffset;
+    }
+    accum += size_t(image) * size_t(cam.width) * size_t(cam.height);
+  }
   if (x < cam.width && y < cam.height)
   {
     const size_t p = size_t(y) * size_t(cam.width) + size_t(x);
     const float z = depth ? depth[p] : 1.f;
     Vec4f evenSum;
     const Vec4f sum =
-      renderPixel<Mode, Lit, false, Unlit>(s, cam, fp, x, y, z, c, nullptr, even ? &evenSum : nullptr);
+      renderPixel<Mode, Lit, false, Unlit>(s, cam, f, x, y, z, c, nullptr, even ? &evenSum : nullptr);
     accumulatePixel(accum + p, sum, previous, fp.samplesPerPixel);
     if (even)
     {

@@ -38,6 +38,14 @@ struct FrameParams
   bool jitter = true;
   Sampler sampler = Sampler::Sobol;
   Estimator estimator = Estimator::ExpectedValue;
+  /// A batch of one-sample pilot images in one CUDA launch
+  /// (CUDARenderer::renderPilots), 0 elsewhere: with batchSamples > 0,
+  /// blockIdx.z = r x batchSamples + k renders sample k of replicate r
+  /// (seed `seed` for r = 0, batchSeed for r = 1) into image z, and
+  /// replicate 1 adds its work counters batchCounterOffset further on.
+  int batchSamples = 0;
+  uint32_t batchSeed = 0;
+  int batchCounterOffset = 0;
 };
 
 /**
