@@ -570,6 +570,7 @@ void CUDARenderer::renderPilots(const Scene& scene, const Camera& camera, std::v
   // Each replicate's means at its checkpoints, folded as render() folds a
   // chunk of samples into the running mean (accumulate()).
   image = 0;
+  std::vector<float> sums(4 * P);
   for (size_t j = 0; j < jobs.size(); ++j)
   {
     PilotJob& job = jobs[j];
@@ -581,17 +582,22 @@ void CUDARenderer::renderPilots(const Scene& scene, const Camera& camera, std::v
       int done = 0;
       for (int upTo : job.checkpoints)
       {
+        // The samples summed image by image: each pixel's samples are added
+        // in the same order as pixel by pixel, but each image is read once,
+        // in order (pixel by pixel, the fold of a 64-image round took 0.5
+        // ms on the H100 machine's host).
+        std::fill(sums.begin(), sums.end(), 0.f);
+        for (int k = done; k < upTo; ++k)
+        {
+          const float* v = host + 4 * (image + size_t(k)) * P;
+          for (size_t i = 0; i < 4 * P; ++i)
+          {
+            sums[i] += v[i];
+          }
+        }
         for (size_t p = 0; p < P; ++p)
         {
-          Vec4f sum;
-          for (int k = done; k < upTo; ++k)
-          {
-            const float* v = host + 4 * ((image + size_t(k)) * P + p);
-            sum.r += v[0];
-            sum.g += v[1];
-            sum.b += v[2];
-            sum.a += v[3];
-          }
+          const Vec4f sum{ sums[4 * p], sums[4 * p + 1], sums[4 * p + 2], sums[4 * p + 3] };
           accumulate(mean.data() + 4 * p, sum, uint32_t(done), upTo - done);
         }
         done = upTo;
@@ -607,7 +613,7 @@ void CUDARenderer::renderPilots(const Scene& scene, const Camera& camera, std::v
     tp[5] = PilotClock::now();
     auto ms = [&](int a, int b) { return std::chrono::duration<double, std::milli>(tp[b] - tp[a]).count(); };
     std::fprintf(stderr,
-      "mcvol pilot round: jobs %zu launches %zu pixels %zu | setup %.3f issue %.3f kernels %.3f copy %.3f "
+      "mcvol pilot round: jobs %zu images %zu pixels %zu | setup %.3f issue %.3f kernels %.3f copy %.3f "
       "fold %.3f total %.3f ms\n",
       jobs.size(), images, P, ms(0, 1), ms(1, 2), ms(2, 3), ms(3, 4), ms(4, 5), ms(0, 5));
   }

@@ -43,6 +43,7 @@ struct FrameParams
   /// blockIdx.z = r x batchSamples + k renders sample k of replicate r
   /// (seed `seed` for r = 0, batchSeed for r = 1) into image z, and
   /// replicate 1 adds its work counters batchCounterOffset further on.
+  /// Only the kernels that count work read these (the pilots count).
   int batchSamples = 0;
   uint32_t batchSeed = 0;
   int batchCounterOffset = 0;
