@@ -74,10 +74,10 @@ __device__ __forceinline__ void renderKernelBody(const SceneView& s, const Camer
   // A batch of pilot images (FrameParams::batchSamples): this block's image,
   // sample and replicate from blockIdx.z. Only in the counting kernels, which
   // are what the pilots launch (CUDARenderer::renderPilots): the others,
-  // every render of the mapper, read the frame's parameters as before. In
-  // all kernels, the copy made the expected-value frame 7.5% slower on the
-  // H100 (NYX-like 0.75 -> 0.81 ms; Benchmarks/RESULTS.md, eighteenth
-  // session).
+  // every render of the mapper, read the frame's parameters as before
+  // (their PTX is unchanged by the batch). Read in every kernel, the copy
+  // made the expected-value frame 7.5% slower on the H100 (NYX-like 0.75 ->
+  // 0.81 ms; Benchmarks/RESULTS.md, eighteenth session).
   FrameParams batch = fp;
   if constexpr (Count)
   {
