@@ -500,7 +500,7 @@ void CUDARenderer::renderPilots(const Scene& scene, const Camera& camera, std::v
   // A stream per job of the largest round chooseEstimator() makes (16
   // candidates), so that they run side by side; each job is one launch of
   // all its one-sample images (FrameParams::batchSamples: blockIdx.z picks
-  // the replicate and the sample; before, one launch per image took 0.13-0.25
+  // the replicate and the sample; before, one launch per image took 0.13-0.34
   // ms a round on the H100 to issue).
   constexpr size_t kStreams = 16;
   while (in.PilotStreams.size() < kStreams)
