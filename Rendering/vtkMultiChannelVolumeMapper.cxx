@@ -143,6 +143,9 @@ struct vtkMultiChannelVolumeMapper::vtkInternals
   std::string ChoiceReport = "no automatic choice made yet";
   std::string ChosenEstimator = "none"; // backing store of GetChosenEstimatorAsString
   int Choices = 0;                      // choices that rendered pilots
+  // This render's batch was rendered during the choice's pilots and kept
+  // (mcvol::ChoiceAhead): TraceBatch() renders it no more.
+  bool BatchRenderedAhead = false;
 
   // Backing store for GetActiveBackendName and GetBackendReport.
   std::string BackendName = "none";
@@ -1526,19 +1529,50 @@ bool vtkMultiChannelVolumeMapper::ChooseEstimator(RenderPass& pass)
   {
     settings.hint = in.Choice.hint();
   }
+  // There, this render's batch also goes to the device first, with the
+  // previous choice's estimator: it runs beside the pilots (a round is a few
+  // thousand long rays, bound by one's latency) and is the image's first
+  // batch where the choice is the same again, else it is dropped
+  // (mcvol::ChoiceAhead). Still renders of a new image only: an interactive
+  // one may take expected value instead of the choice.
+  mcvol::Renderer& renderer = *in.Backend.Get();
+  mcvol::ChoiceAhead ahead;
+  const bool renderAhead = in.Choice.applies && renderer.rendersPilotsAtOnce() && !this->LastRenderInteractive &&
+    in.Accum.samples() == 0 && in.BatchSamples > 0;
+  if (renderAhead)
+  {
+    ahead.candidate = in.Choice.chosenCandidate();
+    ahead.accum = &in.Accum;
+    ahead.depth = in.Accumulation.Depth();
+  }
+  in.BatchRenderedAhead = false;
   try
   {
-    in.Choice = mcvol::chooseEstimator(*in.Backend.Get(), scene, pass.Camera, base, settings);
+    in.Choice = renderAhead ? mcvol::chooseEstimator(renderer, scene, pass.Camera, base, settings, ahead)
+                            : mcvol::chooseEstimator(renderer, scene, pass.Camera, base, settings);
   }
   catch (const std::exception& e)
   {
     vtkErrorMacro("Automatic estimator choice failed: " << e.what());
     in.ChoiceValid = false;
+    if (renderAhead)
+    {
+      in.Accum.reset(); // frames rendered ahead, if any, are not the image's
+    }
     return false;
   }
   in.ChoiceValid = true;
   in.ChoiceMadeFor = key;
+  in.BatchRenderedAhead = ahead.kept;
   in.ChoiceReport = in.Choice.report();
+  if (ahead.rendered)
+  {
+    in.ChoiceReport += std::string("the first ") + std::to_string(in.BatchSamples) +
+      " samples per pixel, rendered during the pilots with the previous choice's " +
+      mcvol::estimatorName(ahead.candidate.estimator, ahead.candidate.marchSamplesPerVoxel,
+        ahead.candidate.controlVariates) +
+      (ahead.kept ? ": kept\n" : ": dropped (another estimator was chosen)\n");
+  }
   in.Choices += in.Choice.applies ? 1 : 0;
   return true;
 }
@@ -1575,6 +1609,18 @@ bool vtkMultiChannelVolumeMapper::TraceBatch(RenderPass& pass)
     in.BatchSamples = 0;
     in.Accumulation.Invalidate();
     return false;
+  }
+  if (in.BatchRenderedAhead)
+  {
+    // The batch ran beside the pilots and is the chosen estimator's: done
+    // (its time is the pilots' wall time, not a sample cost for the budget).
+    in.BatchRenderedAhead = false;
+    in.ChosenEstimator = in.Choice.chosenName();
+    this->LastTraceTime = in.Choice.seconds;
+    in.EstimateCurrent = false;
+    in.BatchSamples = 0;
+    this->LastSamplesPerRender = batch;
+    return true;
   }
   const auto start = std::chrono::steady_clock::now();
   const bool ok =

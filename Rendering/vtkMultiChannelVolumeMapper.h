@@ -219,7 +219,11 @@ public:
    * PixelJitter or MarchControlVariates changes. The pilots cost about a
    * frame or two once per choice (Benchmarks/RESULTS.md, "The automatic
    * estimator"). GetChosenEstimatorAsString() says what was chosen and
-   * GetEstimatorReport() why.
+   * GetEstimatorReport() why. When a choice is made again (after an edit)
+   * on the CUDA backend, the render's first batch is rendered with the
+   * previous choice's estimator while the pilots run, and kept where the
+   * same estimator is chosen (mcvol::ChoiceAhead; the image is the same as
+   * without, and the report says whether it was kept).
    */
   vtkSetClampMacro(Estimator, int, COLLISION_ESTIMATOR, AUTOMATIC_ESTIMATOR);
   vtkGetMacro(Estimator, int);

@@ -7,7 +7,10 @@
 // independent sampler (the default until issue 14), and the unbiased march
 // (--march-samples-per-voxel, default 2; --no-collision leaves the collision
 // rows out), and the automatic choice (chooseEstimator(): its pilots' time
-// is added to its row's). A second table gives each configuration's work
+// is added to its row's). On a backend that renders pilots at once, the
+// automatic choice is also timed after an edit: hinted pilots then the
+// frames, against frames rendered during the pilots (mcvol::ChoiceAhead).
+// A second table gives each configuration's work
 // counters per pixel and frame with its back-to-back frame time: the data
 // the automatic choice's cost model (defaultCostModel()) is fitted to.
 
@@ -138,6 +141,7 @@ void runConverge(Bench& bench)
   }
   std::string costRows;
   std::string choiceReport;
+  std::string editRows;
   for (Config config : configs)
   {
     const std::vector<float>& target = config.centres ? refCentres : refImg;
@@ -154,11 +158,13 @@ void runConverge(Bench& bench)
     st.seed = 7;
     st.readBack = false;
     double pilotMs = 0;
+    const mcvol::RenderSettings unchosen = st;
+    mcvol::EstimatorChoiceSettings cs;
+    mcvol::EstimatorChoice choice;
     if (config.automatic)
     {
       r.finish();
       const auto t0 = Clock::now();
-      mcvol::EstimatorChoiceSettings cs;
       cs.tryAllRates = o.choiceAll;
       if (!o.marchSamplesPerVoxel.empty() && o.choiceAll)
       {
@@ -172,7 +178,7 @@ void runConverge(Bench& bench)
         cs.model.perTentative = o.costModel[2];
         cs.model.perChannelSample = o.costModel[3];
       }
-      const mcvol::EstimatorChoice choice = mcvol::chooseEstimator(r, s.scene, cam, st, cs);
+      choice = mcvol::chooseEstimator(r, s.scene, cam, st, cs);
       r.finish();
       pilotMs = 1e3 * seconds(t0);
       st = choice.settings;
@@ -244,7 +250,73 @@ void runConverge(Bench& bench)
         "frames=" + std::to_string(frames) + " psnr=" + std::to_string(q) +
           " back_to_back_ms_per_frame=" + std::to_string(per));
     }
+    if (config.automatic && choice.applies && r.rendersPilotsAtOnce() && !o.choiceAll)
+    {
+      // A transfer-function edit on a warm renderer, as the mapper handles
+      // it: the choice made again with the previous one's candidates as the
+      // hint, then the frames the loop above needed, back to back; against
+      // the same with the previous choice's first frame, or all of them,
+      // rendered during the pilots (mcvol::ChoiceAhead). Wall time from the
+      // pilots' start to the last frame's end, median of 5; the PSNR of
+      // each way's image checked after the timing.
+      mcvol::EstimatorChoiceSettings hinted = cs;
+      hinted.hint = choice.hint();
+      const char* ways[3] = { "hinted pilots, then the frames", "the first frame rendered during the pilots",
+        "every frame rendered during the pilots" };
+      for (int way = 0; way < 3; ++way)
+      {
+        std::vector<double> t;
+        double reached = 0;
+        bool kept = true;
+        for (int run = 0; run < 6; ++run)
+        {
+          mcvol::Accumulator a;
+          mcvol::ChoiceAhead ahead;
+          ahead.candidate = choice.chosenCandidate();
+          ahead.renders = way == 1 ? 1 : frames;
+          ahead.accum = &a;
+          r.finish();
+          const auto t0 = Clock::now();
+          const mcvol::EstimatorChoice c = way == 0 ? mcvol::chooseEstimator(r, s.scene, cam, unchosen, hinted)
+                                                    : mcvol::chooseEstimator(r, s.scene, cam, unchosen, hinted, ahead);
+          for (int f = ahead.kept ? ahead.renders : 0; f < frames; ++f)
+          {
+            r.render(s.scene, cam, c.settings, nullptr, a);
+          }
+          r.finish();
+          if (run > 0) // the first run warms the hinted round's path
+          {
+            t.push_back(1e3 * seconds(t0));
+          }
+          kept = kept && (way == 0 || ahead.kept);
+          r.readBack(a);
+          reached = psnrOf(a, target);
+        }
+        std::string runs;
+        for (double x : t)
+        {
+          char b[32];
+          std::snprintf(b, sizeof(b), "%s%.2f", runs.empty() ? "" : " / ", x);
+          runs += b;
+        }
+        char line[512];
+        std::snprintf(line, sizeof(line), "| %s | %s | %d | %s | **%.2f** | %.2f | %s |\n", config.centres ? "centres" : "jittered",
+          ways[way], frames, runs.c_str(), median(t), reached, way == 0 ? "-" : (kept ? "yes" : "**no**"));
+        editRows += line;
+        bench.row("converge-after-edit", ds, s.volume.numChannels(), o.macrocell,
+          std::string(config.centres ? "centres, " : "jittered, ") + ways[way], median(t), "ms",
+          "frames=" + std::to_string(frames) + " psnr=" + std::to_string(reached) + " kept=" + (kept ? "1" : "0"));
+      }
+    }
     std::fflush(stdout);
+  }
+  if (!editRows.empty())
+  {
+    std::printf("\nAfter an edit (warm renderer, the automatic choice made again with the previous one's hint), "
+                "time to the target: the pilots' start to the last frame's end (median of 5; PSNR checked after):\n\n"
+                "| pixels | way | frames | ms (5 runs) | median ms | PSNR | frames ahead kept |\n"
+                "|---|---|---|---|---|---|---|\n%s",
+      editRows.c_str());
   }
   std::printf("\nWork per pixel and frame (the automatic choice's cost model is fitted to these):\n\n"
               "| configuration | rays | DDA steps | tentative | channel samples | ms per frame |\n"

@@ -207,6 +207,13 @@ struct CUDARenderer::Internal
   /// goes through a staging buffer of the driver), PilotHostCount floats.
   float* PilotHost = nullptr;
   size_t PilotHostCount = 0;
+  /// Page-locked host copy of PilotCounters, PilotHostCounterCount items.
+  unsigned long long* PilotHostCounters = nullptr;
+  size_t PilotHostCounterCount = 0;
+  /// One event per pilot stream: the first stream's "buffers cleared" and
+  /// the others' "launches done", so that a round never touches the legacy
+  /// default stream, where a frame rendered ahead (ChoiceAhead) runs.
+  std::vector<cudaEvent_t> PilotEvents;
   bool ConcurrentPilots = true;
   /// classifyLevel()'s kept inputs (CUDAPyramid.cu).
   std::vector<std::unique_ptr<LevelInput>> LevelInputs;
@@ -226,6 +233,14 @@ struct CUDARenderer::Internal
     if (this->PilotHost)
     {
       cudaFreeHost(this->PilotHost);
+    }
+    if (this->PilotHostCounters)
+    {
+      cudaFreeHost(this->PilotHostCounters);
+    }
+    for (cudaEvent_t e : this->PilotEvents)
+    {
+      cudaEventDestroy(e);
     }
     if (this->Start)
     {

@@ -494,24 +494,41 @@ void CUDARenderer::renderPilots(const Scene& scene, const Camera& camera, std::v
   constexpr size_t kReservedImages = 96;
   const size_t reserved = std::max(images, kReservedImages) * P;
   in.PilotImages.resize(std::max(in.PilotImages.count, reserved));
-  in.PilotCounters.resize(std::max(in.PilotCounters.count, 9 * (std::max<size_t>(jobs.size(), 16) + 1)));
-  MCVOL_CUDA(cudaMemset(in.PilotImages.ptr, 0, images * P * sizeof(float4)));
-  MCVOL_CUDA(cudaMemset(in.PilotCounters.ptr, 0, 9 * (jobs.size() + 1) * sizeof(unsigned long long)));
+  const size_t counterItems = 9 * (std::max<size_t>(jobs.size(), 16) + 1);
+  in.PilotCounters.resize(std::max(in.PilotCounters.count, counterItems));
   // A stream per job of the largest round chooseEstimator() makes (16
   // candidates), so that they run side by side; each job is one launch of
   // all its one-sample images (FrameParams::batchSamples: blockIdx.z picks
   // the replicate and the sample; before, one launch per image took 0.13-0.34
-  // ms a round on the H100 to issue).
+  // ms a round on the H100 to issue). The streams are non-blocking and of
+  // the device's highest priority, and a round uses no other stream: frames
+  // rendered ahead on the default stream (ChoiceAhead) run beside the
+  // pilots, and the block scheduler gives the pilots' blocks the SMs first
+  // as the frame's blocks finish, so the round's latency stays the pilots'.
   constexpr size_t kStreams = 16;
-  while (in.PilotStreams.size() < kStreams)
+  if (in.PilotStreams.size() < kStreams)
   {
-    cudaStream_t st = nullptr;
-    MCVOL_CUDA(cudaStreamCreateWithFlags(&st, cudaStreamNonBlocking));
-    in.PilotStreams.push_back(st);
+    int least = 0, greatest = 0;
+    MCVOL_CUDA(cudaDeviceGetStreamPriorityRange(&least, &greatest));
+    while (in.PilotStreams.size() < kStreams)
+    {
+      cudaStream_t st = nullptr;
+      MCVOL_CUDA(cudaStreamCreateWithPriority(&st, cudaStreamNonBlocking, greatest));
+      in.PilotStreams.push_back(st);
+      cudaEvent_t e = nullptr;
+      MCVOL_CUDA(cudaEventCreateWithFlags(&e, cudaEventDisableTiming));
+      in.PilotEvents.push_back(e);
+    }
   }
-  // The memsets above run on the legacy default stream, which the
-  // non-blocking streams do not wait for.
-  MCVOL_CUDA(cudaDeviceSynchronize());
+  const size_t streams = std::min(jobs.size(), kStreams);
+  cudaStream_t first = in.PilotStreams[0];
+  MCVOL_CUDA(cudaMemsetAsync(in.PilotImages.ptr, 0, images * P * sizeof(float4), first));
+  MCVOL_CUDA(cudaMemsetAsync(in.PilotCounters.ptr, 0, 9 * (jobs.size() + 1) * sizeof(unsigned long long), first));
+  MCVOL_CUDA(cudaEventRecord(in.PilotEvents[0], first));
+  for (size_t k = 1; k < streams; ++k)
+  {
+    MCVOL_CUDA(cudaStreamWaitEvent(in.PilotStreams[k], in.PilotEvents[0], 0));
+  }
 
   tp[1] = PilotClock::now();
   const CameraView cam = toView(camera);
@@ -546,8 +563,17 @@ void CUDARenderer::renderPilots(const Scene& scene, const Camera& camera, std::v
     MCVOL_CUDA(cudaGetLastError());
     image += size_t(2 * n);
   }
+  // The first stream waits for the others' launches, then copies back.
+  for (size_t k = 1; k < streams; ++k)
+  {
+    MCVOL_CUDA(cudaEventRecord(in.PilotEvents[k], in.PilotStreams[k]));
+    MCVOL_CUDA(cudaStreamWaitEvent(first, in.PilotEvents[k], 0));
+  }
   tp[2] = PilotClock::now();
-  MCVOL_CUDA(cudaDeviceSynchronize());
+  if (profile)
+  {
+    MCVOL_CUDA(cudaStreamSynchronize(first)); // the kernels' end, for the split
+  }
   tp[3] = PilotClock::now();
   const size_t floats = images * P * 4;
   if (in.PilotHostCount < floats || in.PilotHostCount < 4 * reserved)
@@ -561,10 +587,25 @@ void CUDARenderer::renderPilots(const Scene& scene, const Camera& camera, std::v
     MCVOL_CUDA(cudaMallocHost(reinterpret_cast<void**>(&in.PilotHost), 4 * reserved * sizeof(float)));
     in.PilotHostCount = 4 * reserved;
   }
+  if (in.PilotHostCounterCount < in.PilotCounters.count)
+  {
+    if (in.PilotHostCounters)
+    {
+      MCVOL_CUDA(cudaFreeHost(in.PilotHostCounters));
+      in.PilotHostCounters = nullptr;
+      in.PilotHostCounterCount = 0;
+    }
+    MCVOL_CUDA(cudaMallocHost(
+      reinterpret_cast<void**>(&in.PilotHostCounters), in.PilotCounters.count * sizeof(unsigned long long)));
+    in.PilotHostCounterCount = in.PilotCounters.count;
+  }
   const float* host = in.PilotHost;
-  MCVOL_CUDA(cudaMemcpy(in.PilotHost, in.PilotImages.ptr, floats * sizeof(float), cudaMemcpyDeviceToHost));
-  std::vector<unsigned long long> c(9 * (jobs.size() + 1));
-  MCVOL_CUDA(cudaMemcpy(c.data(), in.PilotCounters.ptr, c.size() * sizeof(unsigned long long), cudaMemcpyDeviceToHost));
+  MCVOL_CUDA(cudaMemcpyAsync(in.PilotHost, in.PilotImages.ptr, floats * sizeof(float), cudaMemcpyDeviceToHost, first));
+  const size_t counterCount = 9 * (jobs.size() + 1);
+  MCVOL_CUDA(cudaMemcpyAsync(in.PilotHostCounters, in.PilotCounters.ptr, counterCount * sizeof(unsigned long long),
+    cudaMemcpyDeviceToHost, first));
+  MCVOL_CUDA(cudaStreamSynchronize(first));
+  const unsigned long long* c = in.PilotHostCounters;
 
   tp[4] = PilotClock::now();
   // Each replicate's means at its checkpoints, folded as render() folds a
@@ -606,7 +647,7 @@ void CUDARenderer::renderPilots(const Scene& scene, const Camera& camera, std::v
       image += size_t(n);
     }
     job.counters = RenderCounters();
-    addCounters(job.counters, c.data() + 9 * j, uint64_t(P) * uint64_t(n));
+    addCounters(job.counters, c + 9 * j, uint64_t(P) * uint64_t(n));
   }
   if (profile)
   {

@@ -74,7 +74,24 @@ std::string candidateName(const EstimatorCandidate& c)
 {
   return estimatorName(c.estimator, c.marchSamplesPerVoxel, c.controlVariates);
 }
+
+bool sameCandidate(const EstimatorCandidate& a, const EstimatorCandidate& b)
+{
+  return a.estimator == b.estimator && a.marchSamplesPerVoxel == b.marchSamplesPerVoxel &&
+    a.controlVariates == b.controlVariates;
+}
 } // namespace
+
+EstimatorCandidate EstimatorChoice::chosenCandidate() const
+{
+  if (this->chosen < 0 || size_t(this->chosen) >= this->trials.size())
+  {
+    EstimatorCandidate c;
+    c.marchSamplesPerVoxel = this->settings.marchSamplesPerVoxel;
+    return c;
+  }
+  return this->trials[size_t(this->chosen)].candidate;
+}
 
 std::string EstimatorChoice::chosenName() const
 {
@@ -202,8 +219,10 @@ Camera pilotCamera(const Camera& camera, int pilotSize)
   return pilot;
 }
 
-EstimatorChoice chooseEstimator(Renderer& renderer, const Scene& scene, const Camera& camera,
-  const RenderSettings& base, const EstimatorChoiceSettings& choice)
+namespace
+{
+EstimatorChoice choose(Renderer& renderer, const Scene& scene, const Camera& camera, const RenderSettings& base,
+  const EstimatorChoiceSettings& choice, ChoiceAhead* frames)
 {
   if (choice.pilotSamples < 2)
   {
@@ -233,6 +252,18 @@ EstimatorChoice chooseEstimator(Renderer& renderer, const Scene& scene, const Ca
     return out; // the estimator setting does not reach these renders
   }
   out.applies = true;
+  if (frames && frames->accum && renderer.rendersPilotsAtOnce())
+  {
+    // The frames go first: queued on the device, they run while the pilots
+    // below are issued on streams that do not wait for them.
+    RenderSettings st = candidateSettings(base, camera, frames->candidate);
+    st.readBack = false;
+    for (int i = 0; i < frames->renders; ++i)
+    {
+      renderer.render(scene, camera, st, frames->depth, *frames->accum);
+    }
+    frames->rendered = true;
+  }
   const auto start = std::chrono::steady_clock::now();
 
   const Camera pilot = pilotCamera(camera, choice.pilotSize);
@@ -410,10 +441,6 @@ EstimatorChoice chooseEstimator(Renderer& renderer, const Scene& scene, const Ca
       have[round[k]] = 1;
     }
     hinted.insert(hinted.end(), trials.begin() + std::ptrdiff_t(round.size()), trials.end());
-  };
-  const auto sameCandidate = [](const EstimatorCandidate& a, const EstimatorCandidate& b) {
-    return a.estimator == b.estimator && a.marchSamplesPerVoxel == b.marchSamplesPerVoxel &&
-      a.controlVariates == b.controlVariates;
   };
   {
     std::vector<size_t> round;
@@ -694,6 +721,38 @@ EstimatorChoice chooseEstimator(Renderer& renderer, const Scene& scene, const Ca
   }
   out.settings = candidateSettings(base, camera, out.trials[size_t(out.chosen)].candidate);
   out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (frames && frames->rendered)
+  {
+    frames->kept = sameCandidate(out.trials[size_t(out.chosen)].candidate, frames->candidate);
+    if (!frames->kept)
+    {
+      frames->accum->reset(); // the next render starts the image anew, on the device too
+    }
+  }
   return out;
+}
+} // namespace
+
+EstimatorChoice chooseEstimator(Renderer& renderer, const Scene& scene, const Camera& camera,
+  const RenderSettings& base, const EstimatorChoiceSettings& choice)
+{
+  return choose(renderer, scene, camera, base, choice, nullptr);
+}
+
+EstimatorChoice chooseEstimator(Renderer& renderer, const Scene& scene, const Camera& camera,
+  const RenderSettings& base, const EstimatorChoiceSettings& choice, ChoiceAhead& ahead)
+{
+  ahead.rendered = false;
+  ahead.kept = false;
+  if (ahead.renders < 1)
+  {
+    throw std::invalid_argument("mcvol: ChoiceAhead::renders must be at least 1");
+  }
+  if (ahead.accum && ahead.accum->samples() != 0)
+  {
+    throw std::invalid_argument(
+      "mcvol: ChoiceAhead::accum must hold no samples (the frames rendered ahead are the image's first)");
+  }
+  return choose(renderer, scene, camera, base, choice, &ahead);
 }
 } // namespace mcvol

@@ -975,6 +975,87 @@ TEST(CudaRender, ConcurrentPilotsEqualOneAfterTheOther)
   }
 }
 
+// Frames rendered during the pilots (ChoiceAhead): on the default stream
+// while the pilots run on their own streams. Kept (the previous choice's
+// estimator chosen again), the image equals the same frames rendered after
+// the choice, bit for bit; dropped (another estimator), the image restarts
+// and the frames rendered after the choice equal them too. The choice is the
+// one made without frames ahead. Jittered and at pixel centres.
+TEST(CudaRender, FramesAheadOfTheChoiceEqualFramesAfterIt)
+{
+  const TypedVolume v(ScalarType::UInt16, 3, 30, 28, 26);
+  const Camera cam = orbitCamera(v.dims, std::array<double, 3>{ 1, 1, 1 }.data(), 96, 80, 30, 20);
+  Scene scene;
+  v.configure(scene, BlendMode::Density);
+  scene.update();
+  for (bool jitter : { true, false })
+  {
+    RenderSettings base;
+    base.seed = 5;
+    base.samplesPerPixel = 2;
+    base.jitterPixels = jitter;
+    CUDARenderer g;
+    ASSERT_TRUE(g.rendersPilotsAtOnce());
+    const EstimatorChoice first = chooseEstimator(g, scene, cam, base);
+    ASSERT_TRUE(first.applies);
+    // The image of the choice's first two renders, rendered after it.
+    Accumulator after;
+    after.setErrorEstimation(false);
+    for (int i = 0; i < 2; ++i)
+    {
+      g.render(scene, cam, first.settings, nullptr, after);
+    }
+    g.readBack(after);
+    const std::vector<float> want(after.rgba(), after.rgba() + 4 * size_t(cam.width) * cam.height);
+    double sum = 0;
+    for (float x : want)
+    {
+      sum += x;
+    }
+    EXPECT_GT(sum, 1.0);
+    EstimatorCandidate other;
+    if (first.chosenCandidate().estimator == Estimator::ExpectedValue)
+    {
+      other.estimator = Estimator::UnbiasedMarch;
+      other.marchSamplesPerVoxel = 0.5f;
+    }
+    for (const EstimatorCandidate& c : { first.chosenCandidate(), other })
+    {
+      Accumulator image;
+      image.setErrorEstimation(false);
+      ChoiceAhead ahead;
+      ahead.candidate = c;
+      ahead.renders = 2;
+      ahead.accum = &image;
+      EstimatorChoiceSettings hinted;
+      hinted.hint = first.hint();
+      const EstimatorChoice again = chooseEstimator(g, scene, cam, base, hinted, ahead);
+      ASSERT_EQ(again.trials.size(), first.trials.size());
+      EXPECT_EQ(again.chosen, first.chosen);
+      EXPECT_TRUE(ahead.rendered);
+      const bool mine = c.estimator == first.chosenCandidate().estimator &&
+        c.marchSamplesPerVoxel == first.chosenCandidate().marchSamplesPerVoxel;
+      EXPECT_EQ(ahead.kept, mine) << again.chosenName();
+      if (!ahead.kept)
+      {
+        EXPECT_EQ(image.samples(), 0u);
+        for (int i = 0; i < 2; ++i)
+        {
+          g.render(scene, cam, again.settings, nullptr, image);
+        }
+      }
+      EXPECT_EQ(image.samples(), 4u);
+      g.readBack(image);
+      size_t differ = 0;
+      for (size_t k = 0; k < want.size(); ++k)
+      {
+        differ += image.rgba()[k] != want[k] ? 1 : 0;
+      }
+      EXPECT_EQ(differ, 0u) << (jitter ? "jittered " : "centres ") << (mine ? "kept" : "dropped");
+    }
+  }
+}
+
 // Depth clipping and counters on the device: geometry at mid-depth stops the
 // rays (less alpha, fewer collisions), and the counters add up like the CPU's.
 TEST(CudaRender, DepthAndCounters)

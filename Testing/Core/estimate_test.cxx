@@ -806,6 +806,100 @@ TEST(EstimatorChoice, RendersAheadWithoutChangingTheChoice)
   EXPECT_EQ(c[1].rendered, 6);
 }
 
+// Frames rendered during the pilots (ChoiceAhead): only where the backend
+// renders pilots at once; kept where the choice is their candidate (the
+// image then holds them: renders x samples per pixel), dropped (the image
+// reset) where it is not; the choice is the same either way. Bad input
+// throws before anything is rendered.
+TEST(EstimatorChoice, FramesAheadAreKeptOnlyWhereTheChoiceIsTheirs)
+{
+  const DemoVolume v = makeDemo("cosmology", { 16, 16, 16 });
+  Scene scene;
+  configureDemo(scene, v, 4);
+  const Camera cam = demoCam(v, 32, 32);
+  EstimatorChoiceSettings cs;
+  cs.targetMSE = 1e-4;
+  cs.marchRates = { 0.0625f, 0.125f, 0.25f, 0.5f, 1.f };
+  const auto makeRenderer = [](bool atOnce) {
+    auto r = std::make_unique<SyntheticNoiseRenderer>();
+    r->AtOnce = atOnce;
+    r->Mse = [](const RenderSettings& st, double n) {
+      return st.estimator == Estimator::ExpectedValue ? 1.0 / n
+                                                      : (st.marchSamplesPerVoxel < 0.2f ? 1.0 : 0.5e-4) / n;
+    };
+    r->Work = [](const RenderSettings& st) {
+      return st.estimator == Estimator::ExpectedValue ? 1.0 : 16.0 * st.marchSamplesPerVoxel;
+    };
+    return r;
+  };
+  RenderSettings base;
+  base.samplesPerPixel = 3;
+  const EstimatorChoice plain = chooseEstimator(*makeRenderer(true), scene, cam, base, cs);
+  ASSERT_TRUE(plain.applies);
+  const EstimatorCandidate chosen = plain.chosenCandidate();
+  EXPECT_EQ(chosen.estimator, Estimator::UnbiasedMarch);
+  EXPECT_FLOAT_EQ(chosen.marchSamplesPerVoxel, 0.25f);
+  EstimatorCandidate other; // expected value: not the choice
+  for (int atOnce = 0; atOnce < 2; ++atOnce)
+  {
+    for (const EstimatorCandidate& c : { chosen, other })
+    {
+      auto r = makeRenderer(atOnce == 1);
+      Accumulator accum;
+      accum.resize(cam.width, cam.height);
+      ChoiceAhead ahead;
+      ahead.candidate = c;
+      ahead.renders = 2;
+      ahead.accum = &accum;
+      EstimatorChoiceSettings hinted = cs;
+      hinted.hint = plain.hint();
+      const EstimatorChoice got = chooseEstimator(*r, scene, cam, base, hinted, ahead);
+      ASSERT_EQ(got.trials.size(), plain.trials.size());
+      EXPECT_EQ(got.chosen, plain.chosen);
+      EXPECT_EQ(ahead.rendered, atOnce == 1);
+      const bool mine = atOnce == 1 && c.estimator == chosen.estimator;
+      EXPECT_EQ(ahead.kept, mine);
+      EXPECT_EQ(accum.samples(), mine ? 6u : 0u);
+      if (mine)
+      {
+        // What the image's own frames would have been rendered with.
+        EXPECT_EQ(got.settings.estimator, Estimator::UnbiasedMarch);
+        EXPECT_FLOAT_EQ(got.settings.marchSamplesPerVoxel, 0.25f);
+      }
+    }
+  }
+  // Nothing rendered where the choice does not apply (composite blending).
+  {
+    Scene composite;
+    configureDemo(composite, v, 4, 128, 1.0, BlendMode::Composite);
+    auto r = makeRenderer(true);
+    Accumulator accum;
+    accum.resize(cam.width, cam.height);
+    ChoiceAhead ahead;
+    ahead.accum = &accum;
+    const EstimatorChoice got = chooseEstimator(*r, composite, cam, base, cs, ahead);
+    EXPECT_FALSE(got.applies);
+    EXPECT_FALSE(ahead.rendered);
+    EXPECT_EQ(accum.samples(), 0u);
+  }
+  // An image that already holds samples, or no render: refused.
+  {
+    auto r = makeRenderer(true);
+    Accumulator accum;
+    accum.resize(cam.width, cam.height);
+    RenderSettings one;
+    r->render(scene, cam, one, nullptr, accum, nullptr);
+    ChoiceAhead ahead;
+    ahead.accum = &accum;
+    EXPECT_THROW(chooseEstimator(*r, scene, cam, base, cs, ahead), std::invalid_argument);
+    EXPECT_EQ(accum.samples(), 1u);
+    accum.reset();
+    ahead.renders = 0;
+    EXPECT_THROW(chooseEstimator(*r, scene, cam, base, cs, ahead), std::invalid_argument);
+    EXPECT_EQ(accum.samples(), 0u);
+  }
+}
+
 // Rendering ahead follows the search's own stop rule: a variant's next rate
 // is reached while the sample cost of the rate before it is below the best
 // prediction, so a rate whose predecessor is already known goes into the

@@ -234,6 +234,9 @@ struct EstimatorChoice
   /// The candidates of `trials`: the hint for the next choice of a scene
   /// like this one (EstimatorChoiceSettings::hint).
   std::vector<EstimatorCandidate> hint() const;
+  /// The chosen trial's candidate (expected value where none was chosen):
+  /// the next choice's ChoiceAhead::candidate.
+  EstimatorCandidate chosenCandidate() const;
 };
 
 /**
@@ -251,4 +254,43 @@ struct EstimatorChoice
  */
 EstimatorChoice chooseEstimator(Renderer& renderer, const Scene& scene, const Camera& camera,
   const RenderSettings& base, const EstimatorChoiceSettings& choice = EstimatorChoiceSettings());
+
+/**
+ * The image's first frames rendered while the pilots run, with the estimator
+ * the choice will most likely pick again (after a transfer-function edit,
+ * the previous choice's: EstimatorChoice::chosenCandidate()). A pilot round
+ * is a few thousand long rays, bound by the slowest one's latency (on the
+ * H100 the Zebrafish-like hinted round's kernels took 2.2-3.8 ms), while a
+ * frame fills the GPU: a device backend runs both at once (CUDARenderer:
+ * the frames on the default stream, the pilots on streams of higher
+ * priority that never wait for it). Where the choice is `candidate`, the
+ * frames are the image's first ones, exactly what rendering them after the
+ * choice gives (the same settings and seeds); where it is not, they are
+ * dropped (`accum` reset) and the caller renders the chosen estimator's.
+ * The choice itself does not depend on them.
+ */
+struct ChoiceAhead
+{
+  EstimatorCandidate candidate;
+  /// render() calls of base.samplesPerPixel samples each (at least 1).
+  int renders = 1;
+  /// The image's depth (Renderer::render's), or null.
+  const float* depth = nullptr;
+  /// The image; it must hold no samples yet. Null: nothing is rendered ahead.
+  Accumulator* accum = nullptr;
+  /// Out: the frames were rendered (the backend renders pilots at once,
+  /// Renderer::rendersPilotsAtOnce, and the estimator choice applies to the
+  /// scene).
+  bool rendered = false;
+  /// Out: the choice is `candidate`, and `accum` holds the frames (left on
+  /// the device: RenderSettings::readBack off). False with `rendered`: they
+  /// were dropped and `accum` is reset.
+  bool kept = false;
+};
+
+/// chooseEstimator() with `ahead`'s frames rendered during the pilots
+/// (ChoiceAhead). Throws std::invalid_argument where ahead.accum holds
+/// samples or ahead.renders is below 1, and what chooseEstimator() throws.
+EstimatorChoice chooseEstimator(Renderer& renderer, const Scene& scene, const Camera& camera,
+  const RenderSettings& base, const EstimatorChoiceSettings& choice, ChoiceAhead& ahead);
 } // namespace mcvol
