@@ -112,7 +112,7 @@ for stage in "$@"; do
       for s in "${sets[@]}"; do
         read -r key ds x y z ch label <<< "$s"
         run "pilots-$key" --backend cuda --dataset "$ds" --dims "$x" "$y" "$z" --channels "$ch" \
-          --label "$label" --size 1024 1024 --reference-spp 4096 --sections converge,pilots --no-collision \
+          --label "$label" --size 1024 1024 --reference-spp 4096 --sections converge,pilots --no-collision --pixel-centres \
           --only-automatic
         grep -E "^\| (expected-value, sobol|automatic)" "$out/pilots-$key.md" | head -2 | sed "s/^/$label /"
         grep -E "^\| (jittered|centres) \|" "$out/pilots-$key.md" | sed "s/^/$label /"
