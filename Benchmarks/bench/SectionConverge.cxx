@@ -271,6 +271,7 @@ void runConverge(Bench& bench)
         for (int run = 0; run < 6; ++run)
         {
           mcvol::Accumulator a;
+          a.resize(cam.width, cam.height); // an application's image is sized before the edit
           mcvol::ChoiceAhead ahead;
           ahead.candidate = choice.chosenCandidate();
           ahead.renders = way == 1 ? 1 : frames;
