@@ -380,6 +380,19 @@ public:
   bool AtOnce = false;
   int Rounds = 0;
 };
+
+/// Synthetic noise where expected value never reaches the target soon and
+/// the march reaches it in one frame from 1/4 per voxel, its work in
+/// proportion to the rate.
+void quarterRateWins(SyntheticNoiseRenderer& r)
+{
+  r.Mse = [](const RenderSettings& st, double n) {
+    return st.estimator == Estimator::ExpectedValue ? 1.0 / n : (st.marchSamplesPerVoxel < 0.2f ? 1.0 : 0.5e-4) / n;
+  };
+  r.Work = [](const RenderSettings& st) {
+    return st.estimator == Estimator::ExpectedValue ? 1.0 : 16.0 * st.marchSamplesPerVoxel;
+  };
+}
 } // namespace
 
 // The choice is made where the estimator matters, and only there: lit
@@ -772,13 +785,7 @@ TEST(EstimatorChoice, RendersAheadWithoutChangingTheChoice)
   {
     SyntheticNoiseRenderer r;
     r.AtOnce = atOnce == 1;
-    r.Mse = [](const RenderSettings& st, double n) {
-      return st.estimator == Estimator::ExpectedValue ? 1.0 / n
-                                                      : (st.marchSamplesPerVoxel < 0.2f ? 1.0 : 0.5e-4) / n;
-    };
-    r.Work = [](const RenderSettings& st) {
-      return st.estimator == Estimator::ExpectedValue ? 1.0 : 16.0 * st.marchSamplesPerVoxel;
-    };
+    quarterRateWins(r);
     c[atOnce] = chooseEstimator(r, scene, cam, RenderSettings(), cs);
     rounds[atOnce] = r.Rounds;
     EXPECT_EQ(c[atOnce].rounds, r.Rounds);
@@ -823,13 +830,7 @@ TEST(EstimatorChoice, FramesAheadAreKeptOnlyWhereTheChoiceIsTheirs)
   const auto makeRenderer = [](bool atOnce) {
     auto r = std::make_unique<SyntheticNoiseRenderer>();
     r->AtOnce = atOnce;
-    r->Mse = [](const RenderSettings& st, double n) {
-      return st.estimator == Estimator::ExpectedValue ? 1.0 / n
-                                                      : (st.marchSamplesPerVoxel < 0.2f ? 1.0 : 0.5e-4) / n;
-    };
-    r->Work = [](const RenderSettings& st) {
-      return st.estimator == Estimator::ExpectedValue ? 1.0 : 16.0 * st.marchSamplesPerVoxel;
-    };
+    quarterRateWins(*r);
     return r;
   };
   RenderSettings base;
