@@ -84,6 +84,14 @@ CHOICE_LINE = re.compile(r"^automatic_choice (\S+) (.*) pilots_ms ([0-9.]+) roun
                          r"(?: hinted_ms ([0-9.]+) hinted_rounds (\d+))?$")
 
 
+# A transfer-function edit timed to 35 dB on a backend that renders pilots at
+# once: (dataset, mode, gpu) -> (frames, ms then, ms with the frames during
+# the pilots, kept, expected value's frames, its ms).
+EDITS = {}
+EDIT_LINE = re.compile(r"^automatic_edit (\S+) frames (\d+) then_ms ([0-9.]+) ahead_ms ([0-9.]+) kept (\d) "
+                       r"expected_value_frames (\d+) expected_value_ms ([0-9.]+)$")
+
+
 def read_choices(meta, dataset, mode, gpu):
     if not os.path.exists(meta):
         return
@@ -94,6 +102,10 @@ def read_choices(meta, dataset, mode, gpu):
                 CHOICES[(dataset, mode, gpu)] = (m.group(2), float(m.group(3)), int(m.group(4)),
                                                  float(m.group(6)) if m.group(6) else None,
                                                  int(m.group(7)) if m.group(7) else None)
+            m = EDIT_LINE.match(line.strip())
+            if m:
+                EDITS[(dataset, mode, gpu)] = (int(m.group(2)), float(m.group(3)), float(m.group(4)),
+                                               m.group(5) == "1", int(m.group(6)), float(m.group(7)))
 
 
 def load(path, w, h):
@@ -605,6 +617,19 @@ def headline(rows, datasets, args, target=35.0):
         lines += ["", "The automatic choice (`chooseEstimator`, aiming at %.0f dB, pixel centres; its series' times "
                   "start with the pilots' wall time, a choice made after a first one in the process): %s." % (
                       target, "; ".join(chosen))]
+    edits = []
+    for ds in datasets:
+        for gpu, where in ((False, "CPU"), (True, g)):
+            e = EDITS.get((ds, "density", gpu))
+            if e:
+                edits.append("%s, %s: automatic %d frames, %.2f ms with the hinted pilots first, **%.2f ms** with "
+                             "the frames rendered during them%s; expected value %d frames, **%.2f ms**" % (
+                                 ds, where, e[0], e[1], e[2], "" if e[3] else " (**not kept**)", e[4], e[5]))
+    if edits:
+        lines += ["", "A transfer-function edit timed to 35 dB against the reference (`mcvol-accuracy` on a backend "
+                  "that renders pilots at once: the warm, hinted choice and the chosen estimator's frames, or "
+                  "expected value's frames with no pilots; each from its start to the last frame's end, median "
+                  "of 5): %s." % "; ".join(edits)]
     return lines
 
 

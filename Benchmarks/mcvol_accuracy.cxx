@@ -31,7 +31,10 @@
 // names the series' variant 1dda-min1; the estimator "automatic" makes the
 // automatic choice, mcvol::chooseEstimator at 35 dB, from that base and
 // renders what it chose, its pilots' wall time counted first, with the
-// choice in meta.txt), so that one
+// choice in meta.txt; on a backend that renders pilots at once, meta.txt
+// also gets a transfer-function edit timed to 35 dB three ways: the hinted
+// choice then the frames, the frames rendered during the pilots, and
+// expected value's frames), so that one
 // run, with one reference, times several Monte Carlo configurations. A
 // configuration the renderer would not run as asked (the expected-value
 // estimator under the composite blend, which keeps the collision estimator)
@@ -528,10 +531,11 @@ int main(int argc, char** argv)
       // first one in the process: an untimed choice first loads what the
       // first pilots would, e.g. the CUDA streams).
       mcvol::RenderSettings run = rs;
+      mcvol::EstimatorChoice choice;
       if (c.automatic)
       {
         mcvol::chooseEstimator(*r, scene, cam, rs);
-        const mcvol::EstimatorChoice choice = mcvol::chooseEstimator(*r, scene, cam, rs);
+        choice = mcvol::chooseEstimator(*r, scene, cam, rs);
         run = choice.settings;
         total = 1e3 * choice.seconds;
         // The same edit with the previous choice's candidates as the hint
@@ -562,6 +566,87 @@ int main(int argc, char** argv)
         total += msSince(t0);
         r->readBack(acc);
         emit("montecarlo", trk, spp, total, "mc_" + tag + "_" + std::to_string(spp) + ".f32", acc, &c);
+      }
+      if (c.automatic && choice.applies && r->rendersPilotsAtOnce())
+      {
+        // A transfer-function edit on a warm renderer, timed to 35 dB: the
+        // hinted choice then the frames, the same with the frames rendered
+        // during the pilots (mcvol::ChoiceAhead), and expected value's frames
+        // (no pilots). The frames each way needs are counted first (one
+        // sample per pixel, scored against the reference, untimed); each way
+        // is then timed from its start to the last frame's end, median of 5
+        // after a warm-up run.
+        const double targetDb = 35.0;
+        mcvol::RenderSettings one = rs;
+        one.samplesPerPixel = 1;
+        mcvol::RenderSettings ev = one;
+        ev.estimator = mcvol::Estimator::ExpectedValue;
+        const auto framesTo = [&](const mcvol::RenderSettings& st) {
+          mcvol::Accumulator a;
+          int n = 0;
+          while (n < 1024)
+          {
+            r->render(scene, cam, st, nullptr, a);
+            ++n;
+            r->readBack(a);
+            if (score(a, refImage).second >= targetDb)
+            {
+              break;
+            }
+          }
+          return n;
+        };
+        mcvol::RenderSettings chosen = choice.settings;
+        chosen.samplesPerPixel = 1;
+        const int n = framesTo(chosen);
+        const int nEv = framesTo(ev);
+        mcvol::EstimatorChoiceSettings hinted;
+        hinted.hint = choice.hint();
+        double ms[3] = { 0, 0, 0 };
+        bool kept = true;
+        for (int way = 0; way < 3; ++way)
+        {
+          std::vector<double> t;
+          for (int k = 0; k < 6; ++k)
+          {
+            mcvol::Accumulator a;
+            a.resize(cam.width, cam.height);
+            mcvol::ChoiceAhead ahead;
+            ahead.candidate = choice.chosenCandidate();
+            ahead.renders = n;
+            ahead.accum = &a;
+            r->finish();
+            t0 = Clock::now();
+            int done = 0;
+            mcvol::RenderSettings st = ev;
+            if (way < 2)
+            {
+              const mcvol::EstimatorChoice e = way == 0 ? mcvol::chooseEstimator(*r, scene, cam, one, hinted)
+                                                        : mcvol::chooseEstimator(*r, scene, cam, one, hinted, ahead);
+              st = e.settings;
+              done = ahead.kept ? n : 0;
+              kept = kept && (way == 0 || ahead.kept);
+            }
+            for (int f = done; f < (way < 2 ? n : nEv); ++f)
+            {
+              r->render(scene, cam, st, nullptr, a);
+            }
+            r->finish();
+            if (k > 0)
+            {
+              t.push_back(msSince(t0));
+            }
+          }
+          std::sort(t.begin(), t.end());
+          ms[way] = t[t.size() / 2];
+        }
+        char line[320];
+        std::snprintf(line, sizeof(line),
+          "automatic_edit %s frames %d then_ms %.3f ahead_ms %.3f kept %d expected_value_frames %d "
+          "expected_value_ms %.3f",
+          tag.c_str(), n, ms[0], ms[1], kept ? 1 : 0, nEv, ms[2]);
+        choices.push_back(line);
+        std::fprintf(stderr, "mcvol-accuracy: %s\n", line);
       }
     }
 
