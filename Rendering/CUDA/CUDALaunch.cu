@@ -477,7 +477,8 @@ void CUDARenderer::renderPilots(const Scene& scene, const Camera& camera, std::v
   }
   // MCVOL_PILOT_PROFILE set: each round's wall time split into its steps on
   // stderr (the benchmark's question of where a round's time goes; one more
-  // device synchronisation after the launches, so only while measuring).
+  // synchronisation of the first pilot stream after the launches, so only
+  // while measuring).
   static const bool profile = std::getenv("MCVOL_PILOT_PROFILE") != nullptr;
   using PilotClock = std::chrono::steady_clock;
   PilotClock::time_point tp[6];
