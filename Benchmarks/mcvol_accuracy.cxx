@@ -614,15 +614,14 @@ int main(int argc, char** argv)
             mcvol::ChoiceAhead ahead;
             ahead.candidate = choice.chosenCandidate();
             ahead.renders = n;
-            ahead.accum = &a;
+            ahead.accum = way == 1 ? &a : nullptr; // null: nothing rendered ahead
             r->finish();
             t0 = Clock::now();
             int done = 0;
             mcvol::RenderSettings st = ev;
             if (way < 2)
             {
-              const mcvol::EstimatorChoice e = way == 0 ? mcvol::chooseEstimator(*r, scene, cam, one, hinted)
-                                                        : mcvol::chooseEstimator(*r, scene, cam, one, hinted, ahead);
+              const mcvol::EstimatorChoice e = mcvol::chooseEstimator(*r, scene, cam, one, hinted, ahead);
               st = e.settings;
               done = ahead.kept ? n : 0;
               kept = kept && (way == 0 || ahead.kept);

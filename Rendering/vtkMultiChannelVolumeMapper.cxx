@@ -1610,26 +1610,24 @@ bool vtkMultiChannelVolumeMapper::TraceBatch(RenderPass& pass)
     in.Accumulation.Invalidate();
     return false;
   }
-  if (in.BatchRenderedAhead)
-  {
-    // The batch ran beside the pilots and is the chosen estimator's: done
-    // (its time is the pilots' wall time, not a sample cost for the budget).
-    in.BatchRenderedAhead = false;
-    in.ChosenEstimator = in.Choice.chosenName();
-    this->LastTraceTime = in.Choice.seconds;
-    in.EstimateCurrent = false;
-    in.BatchSamples = 0;
-    this->LastSamplesPerRender = batch;
-    return true;
-  }
+  // A batch rendered beside the pilots and kept (ChooseEstimator) is this
+  // render's: not traced again, and its time is the pilots' wall time, not a
+  // sample cost for the budget.
+  const bool ahead = in.BatchRenderedAhead;
+  in.BatchRenderedAhead = false;
   const auto start = std::chrono::steady_clock::now();
-  const bool ok =
+  const bool ok = ahead ||
     this->TraceImage(*pass.Scene, pass.Camera, in.Accumulation.Depth(), in.Backend.Get(), in.Accum, error);
-  this->LastTraceTime = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  in.EstimateCurrent = false;
-  if (ok && this->AddsSamples())
+  if (ahead)
   {
-    cost.Record(batch, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+    in.ChosenEstimator = in.Choice.chosenName();
+  }
+  const double traced = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  this->LastTraceTime = ahead ? in.Choice.seconds : traced;
+  in.EstimateCurrent = false;
+  if (ok && !ahead && this->AddsSamples())
+  {
+    cost.Record(batch, traced);
   }
   in.BatchSamples = 0;
   this->LastSamplesPerRender = ok ? batch : 0;

@@ -275,11 +275,10 @@ void runConverge(Bench& bench)
           mcvol::ChoiceAhead ahead;
           ahead.candidate = choice.chosenCandidate();
           ahead.renders = way == 1 ? 1 : frames;
-          ahead.accum = &a;
+          ahead.accum = way == 0 ? nullptr : &a; // null: nothing rendered ahead
           r.finish();
           const auto t0 = Clock::now();
-          const mcvol::EstimatorChoice c = way == 0 ? mcvol::chooseEstimator(r, s.scene, cam, unchosen, hinted)
-                                                    : mcvol::chooseEstimator(r, s.scene, cam, unchosen, hinted, ahead);
+          const mcvol::EstimatorChoice c = mcvol::chooseEstimator(r, s.scene, cam, unchosen, hinted, ahead);
           for (int f = ahead.kept ? ahead.renders : 0; f < frames; ++f)
           {
             r.render(s.scene, cam, c.settings, nullptr, a);

@@ -524,7 +524,8 @@ void CUDARenderer::renderPilots(const Scene& scene, const Camera& camera, std::v
   const size_t streams = std::min(jobs.size(), kStreams);
   cudaStream_t first = in.PilotStreams[0];
   MCVOL_CUDA(cudaMemsetAsync(in.PilotImages.ptr, 0, images * P * sizeof(float4), first));
-  MCVOL_CUDA(cudaMemsetAsync(in.PilotCounters.ptr, 0, 9 * (jobs.size() + 1) * sizeof(unsigned long long), first));
+  const size_t counterCount = 9 * (jobs.size() + 1); // the jobs' blocks and replicate 1's
+  MCVOL_CUDA(cudaMemsetAsync(in.PilotCounters.ptr, 0, counterCount * sizeof(unsigned long long), first));
   MCVOL_CUDA(cudaEventRecord(in.PilotEvents[0], first));
   for (size_t k = 1; k < streams; ++k)
   {
@@ -602,7 +603,6 @@ void CUDARenderer::renderPilots(const Scene& scene, const Camera& camera, std::v
   }
   const float* host = in.PilotHost;
   MCVOL_CUDA(cudaMemcpyAsync(in.PilotHost, in.PilotImages.ptr, floats * sizeof(float), cudaMemcpyDeviceToHost, first));
-  const size_t counterCount = 9 * (jobs.size() + 1);
   MCVOL_CUDA(cudaMemcpyAsync(in.PilotHostCounters, in.PilotCounters.ptr, counterCount * sizeof(unsigned long long),
     cudaMemcpyDeviceToHost, first));
   MCVOL_CUDA(cudaStreamSynchronize(first));
