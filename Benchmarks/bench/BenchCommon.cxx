@@ -42,19 +42,20 @@ std::vector<int> splitInts(const std::string& s)
 
 void usage()
 {
-  std::puts("usage: mcvol-bench [--dataset NAME] [--dims X Y Z] [--channels N] [--size W H]\n"
-            "                   [--warmup N] [--frames N] [--macrocell M] [--backend cpu|cuda|auto]\n"
-            "                   [--sections trackers,channels,macrocell,rebuild,memory]\n"
-            "                   [--channel-counts 1,2,4] [--macrocell-sizes 4,8,16] [--csv FILE]\n"
-            "                   [--label TEXT] [--sampling texture|global] [--block X Y]\n"
-            "                   [--psnr DB] [--reference-spp N] [--density F]\n"
-            "                   [--samplers independent,sobol] [--spp-max N]\n"
-            "                   [--estimators collision,expected-value] [--min-samples-per-voxel 0.5,1]\n"
-            "                   [--march-samples-per-voxel 1,2] [--no-collision]\n"
-            "                   [--pixel-centres] [--centres-only] [--steady-frames N] [--only-automatic] [--choice-all]\n"
-            "                   [--cost-model RAY,DDA,TENTATIVE,SAMPLE]\n"
-            "sections: trackers channels macrocell rebuild memory paper converge sampling effects visibility estimate\n"
-            "          sequences pyramid pilots");
+  std::puts(
+    "usage: mcvol-bench [--dataset NAME] [--dims X Y Z] [--channels N] [--size W H]\n"
+    "                   [--warmup N] [--frames N] [--macrocell M] [--backend cpu|cuda|auto]\n"
+    "                   [--sections trackers,channels,macrocell,rebuild,memory]\n"
+    "                   [--channel-counts 1,2,4] [--macrocell-sizes 4,8,16] [--csv FILE]\n"
+    "                   [--label TEXT] [--sampling texture|global] [--block X Y]\n"
+    "                   [--psnr DB] [--reference-spp N] [--density F] [--pyramid-levels N]\n"
+    "                   [--samplers independent,sobol] [--spp-max N]\n"
+    "                   [--estimators collision,expected-value] [--min-samples-per-voxel 0.5,1]\n"
+    "                   [--march-samples-per-voxel 1,2] [--no-collision]\n"
+    "                   [--pixel-centres] [--centres-only] [--steady-frames N] [--only-automatic] [--choice-all]\n"
+    "                   [--cost-model RAY,DDA,TENTATIVE,SAMPLE]\n"
+    "sections: trackers channels macrocell rebuild memory paper converge sampling effects visibility estimate\n"
+    "          sequences pyramid pilots");
 }
 
 Options parse(int argc, char** argv)
@@ -232,6 +233,11 @@ Options parse(int argc, char** argv)
     {
       need(1);
       o.referenceSpp = std::stoi(argv[++i]);
+    }
+    else if (a == "--pyramid-levels")
+    {
+      need(1);
+      o.pyramidLevels = std::max(1, std::stoi(argv[++i]));
     }
     else if (a == "--sections")
     {

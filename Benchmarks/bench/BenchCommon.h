@@ -42,6 +42,7 @@ struct Options
   int blockY = 8;
   double psnr = 35.0;
   int referenceSpp = 2048;
+  int pyramidLevels = 2; ///< section pyramid: levels 1..N timed (half precision for 1 and 2 only)
   int maxConvergeFrames = 4096;
   double density = 1.0; ///< divides every opacity unit distance (denser volumes)
   std::vector<std::string> samplers = { "independent", "sobol" }; ///< section sequences
