@@ -563,14 +563,14 @@ void runPyramid(Bench& bench)
     {
       // The bound on any level's gain: level 0 against the coarsest level.
       const LevelRow& last = rows.back();
+      const double evBound = rows[0].evMs / last.evMs, colBound = rows[0].colMs / last.colMs;
       std::printf("Level 0 (scalar) / the coarsest level timed (%s, %dx%dx%d): Monte Carlo %.2fx expected-value, "
                   "%.2fx collision, %.2fx unbiased march; ray march %.2fx\n",
-        last.name.c_str(), last.dims[0], last.dims[1], last.dims[2], rows[0].evMs / last.evMs,
-        rows[0].colMs / last.colMs, rows[0].mcMarchMs / last.mcMarchMs, rows[0].marchMs / last.marchMs);
-      bench.row("pyramid", ds, s.volume.numChannels(), o.macrocell, "expected-value", rows[0].evMs / last.evMs, "ratio",
-        "level0/level" + last.name);
-      bench.row("pyramid", ds, s.volume.numChannels(), o.macrocell, "collision", rows[0].colMs / last.colMs, "ratio",
-        "level0/level" + last.name);
+        last.name.c_str(), last.dims[0], last.dims[1], last.dims[2], evBound, colBound,
+        rows[0].mcMarchMs / last.mcMarchMs, rows[0].marchMs / last.marchMs);
+      const std::string coarsest = "level0/level" + last.name;
+      bench.row("pyramid", ds, s.volume.numChannels(), o.macrocell, "expected-value", evBound, "ratio", coarsest);
+      bench.row("pyramid", ds, s.volume.numChannels(), o.macrocell, "collision", colBound, "ratio", coarsest);
     }
   }
   std::printf("\n");
