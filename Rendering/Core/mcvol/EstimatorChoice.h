@@ -9,14 +9,14 @@
 namespace mcvol
 {
 /**
- * The automatic estimator choice (issue 14, item 1: the estimator that
- * reaches a given error soonest, per scene). No estimator wins everywhere:
- * the expected-value estimator reaches 35 dB sooner on thin, sparse data
- * (cosmology, weather), the unbiased march on dense data (microscopy), and
- * the march's best rate depends on the data too (Benchmarks/RESULTS.md, "The
- * unbiased march"). chooseEstimator() renders a small pilot image of the
- * scene with each candidate and keeps the one predicted to reach the target
- * error (35 dB by default) in the least time:
+ * The automatic estimator choice: the estimator that reaches a given error
+ * soonest, per scene. No estimator wins everywhere: the expected-value
+ * estimator reaches a target sooner on thin, sparse data (cosmology,
+ * weather), the unbiased march on dense data (microscopy), and the march's
+ * best rate depends on the data too (Documentation/performance.md).
+ * chooseEstimator() renders a small pilot image of the scene with each
+ * candidate and keeps the one predicted to reach the target error (35 dB by
+ * default) in the least time:
  *   frames = 1 if MSE(1) <= target; else, with checkpoints k = 1, 2, 4, ...,
  *   n (the pilot's samples) and a_k = log2(MSE(k/2) / MSE(k)) held to
  *   [1, 2] (log(MSE(k') / MSE(n)) / log(n / k') for a last step from k' to
@@ -29,23 +29,23 @@ namespace mcvol
  * from two replicates with independent scrambles (seeds): the squared
  * difference of their means is twice the MSE of one. The decay a is 1 for
  * independent samples; with Sobol' points a pixel's samples are negatively
- * correlated and the error falls faster (a = 1.3-1.6 for expected value on
- * the paper-sized sets), which a 1/N extrapolation from n samples missed by
- * up to 2.4x in frames (19 predicted where 8 were needed on NYX-like). Unlike the
- * image's half-buffer estimate (Accumulator::estimatedMSE), which overstates
- * the noise of Sobol'-sampled images by an amount that differs between
- * estimators (up to 4x for expected value), replicates measure the noise of
- * the very sequence the image uses. The frame count's floor of 1 matters:
- * the march's noise falls faster than its cost grows, so without a target
- * the highest rate would always win, while a rate that is clean in one frame
- * is all an image needs.
+ * correlated and the error falls faster, so a 1/N extrapolation from n
+ * samples would overstate the frames needed. Unlike the image's half-buffer
+ * estimate (Accumulator::estimatedMSE), which overstates the noise of
+ * Sobol'-sampled images by an amount that differs between estimators,
+ * replicates measure the noise of the very sequence the image uses. The
+ * frame count's floor of 1 matters: the march's noise falls faster than its
+ * cost grows, so without a target the highest rate would always win, while
+ * a rate that is clean in one frame is all an image needs.
  *
  * The cost is not the pilot's wall time but a linear model of the work
  * counters the render reports (CostModel), so that the choice, and with it
  * the image, is the same for a fixed seed whatever the machine's load or the
  * thread count (the rule for Monte Carlo output). The model's weights are
- * fitted per backend to measured frame times (defaultCostModel(),
- * Benchmarks/fit_cost_model.py).
+ * fitted per backend to measured frame times (defaultCostModel()).
+ *
+ * The implementation is a folder of its own, Rendering/Core/EstimatorChoice/:
+ * the candidates, their pilots, the cost model and the rate search.
  */
 struct EstimatorCandidate
 {
@@ -70,7 +70,9 @@ struct CostModel
 };
 
 /// The model fitted for the backend of that name (Renderer::name(): "cpu",
-/// "cuda"); the CPU's for any other.
+/// "cuda"); the CPU's for any other. Fitted by
+/// Benchmarks/studies/fit_cost_model.py to the frame times of
+/// `mcvol-bench --sections converge`.
 CostModel defaultCostModel(const std::string& backendName);
 
 /// The rates chooseEstimator() tries between the listed ones (refineRates)
@@ -85,10 +87,8 @@ struct EstimatorChoiceSettings
   /// which would add the image's variation across many pixels to every
   /// candidate's noise and hide their differences. The whole view, not
   /// tiles of the image: the march's noise sits in few pixels (thin features
-  /// across a stratum), and 9 tiles of 16^2 pixels missed them (on the CPU
-  /// at 256^2: 1 frame to 35 dB predicted where 6 were needed, 6 where 360
-  /// were; the whole view at 48^2: 1 and 127-391; Benchmarks/RESULTS.md,
-  /// "The automatic estimator").
+  /// across a stratum), which tiles miss, and then the prediction falls
+  /// far short.
   int pilotSize = 48;
   /// Samples per pixel of each of a candidate's two replicates (at least
   /// 2): the first alone decides whether one frame suffices, all of them
@@ -97,13 +97,9 @@ struct EstimatorChoiceSettings
   /// Samples per pixel of the expected-value candidate's replicates (the
   /// larger of this and pilotSamples), rendered in doublings: its Sobol'
   /// gain fades over the first samples, so its decay is measured between 4
-  /// and 8 rather than 1 and 2. The marches' gain does not fade as early:
-  /// their frames were predicted exactly from 2 (H100, every rate needing
-  /// up to 6 frames). With 2, expected value's frames to 35 dB were
-  /// predicted low in 6 of 8 cases (CPU and H100, by 1 to 8 frames); with
-  /// 8, exactly on NYX-, Hurricane- and Miranda-like (H100). Its pilots
-  /// cost little: 2 x 8 samples of a 48-pixel image. Benchmarks/RESULTS.md,
-  /// "The automatic estimator".
+  /// and 8 rather than 1 and 2; measured from 2 it predicts too few frames.
+  /// The marches' gain does not fade as early, and 2 samples predict their
+  /// frames. These pilots cost little: 2 x 8 samples of a 48-pixel image.
   int expectedValuePilotSamples = 8;
   /// The error the prediction aims at, as the MSE over premultiplied RGB
   /// (peak 1): 10^-3.5, i.e. 35 dB PSNR, by default. A mapper with a
@@ -122,17 +118,13 @@ struct EstimatorChoiceSettings
   /// prediction so far (a higher rate costs more per sample, and takes at
   /// least one). A prediction that rose does not stop it (see
   /// chooseEstimator()).
-  /// Rates 3 and 4 serve tight targets on dense data with the plain strata:
-  /// on the microscopy scene of the CPU target (256^2, pixel centres) one
-  /// sample at 2 per voxel reached 38.0 dB and at 3 per voxel 41.2 dB
-  /// (Benchmarks/RESULTS.md, "tenth session"). With the control variates
+  /// Rates 3 and 4 serve tight targets on dense data with the plain strata,
+  /// where one sample at 2 per voxel falls short. With the control variates
   /// (pixel centres, from kMarchControlVariateRate) the noise falls faster
   /// than the rate rises, and 1.25 and 1.5 per voxel fill the gap where 1 is
-  /// just short of a target: on that scene, through the VTK API, RMSE 0.01
-  /// took 1 sample at 1.25 per voxel (RMSE 0.0099, 306 ms), 1.5 (0.0088,
-  /// 351 ms) or 2 (0.0077, 453 ms), and 2 at 1 per voxel ("Eleventh
-  /// session"). Where a lower rate already wins the higher ones are never
-  /// rendered (the rules above).
+  /// just short of a target and 2 overshoots it
+  /// (Documentation/performance.md). Where a lower rate already wins the
+  /// higher ones are never rendered (the rules above).
   std::vector<float> marchRates = { 0.0625f, 0.125f, 0.25f, 0.5f, 1.f, 1.25f, 1.5f, 2.f, 3.f, 4.f };
   /// Try every rate (no early stop): the benchmark's --choice-all, to
   /// compare each prediction with the measured time.
@@ -147,10 +139,8 @@ struct EstimatorChoiceSettings
   /// The rate between aims at MSE(1) = refineMargin x the target, and counts
   /// as one frame only where its own pilot says so too (else two, so the
   /// listed rate above it, which takes one, stays ahead). The pilots are a
-  /// small image: on the H100 at pixel centres (Zebrafish-like, 35 dB) a
-  /// rate aimed at the target itself had pilot MSE(1) 6% under it and its
-  /// full image needed two frames (Benchmarks/RESULTS.md, "Fourteenth
-  /// session").
+  /// small image: a rate aimed at the target itself can meet it in the pilot
+  /// and still need two frames in the full image.
   double refineMargin = 0.75;
   /// Candidates to render in the first round where the backend renders a
   /// round at once (Renderer::rendersPilotsAtOnce), up to 16 with the
@@ -220,7 +210,7 @@ struct EstimatorChoice
   /// marchControlVariatesFrom 0 for control variates).
   RenderSettings settings;
   std::vector<EstimatorTrial> trials;
-  int chosen = -1; ///< index into trials
+  int chosen = -1;    ///< index into trials
   double seconds = 0; ///< wall time of the pilots (reported, not used)
   /// Renderer::renderPilots() calls (rounds) and the candidates rendered in
   /// them: more than trials.size() where a round rendered ahead a rate the
@@ -259,8 +249,7 @@ EstimatorChoice chooseEstimator(Renderer& renderer, const Scene& scene, const Ca
  * The image's first frames rendered while the pilots run, with the estimator
  * the choice will most likely pick again (after a transfer-function edit,
  * the previous choice's: EstimatorChoice::chosenCandidate()). A pilot round
- * is a few thousand long rays, bound by the slowest one's latency (on the
- * H100 the Zebrafish-like hinted round's kernels took 2.2-3.8 ms), while a
+ * is a few thousand long rays, bound by the slowest one's latency, while a
  * frame fills the GPU: a device backend runs both at once (CUDARenderer:
  * the frames on the default stream, the pilots on streams of higher
  * priority that never wait for it). Where the choice is `candidate`, the
