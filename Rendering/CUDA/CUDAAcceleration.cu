@@ -6,7 +6,7 @@
 // build (Acceleration.h).
 #include "CUDAInternal.h"
 
-#include "mcvol/Acceleration.h"
+#include "mcvol/ray/Acceleration.h"
 
 #include <vector>
 
@@ -205,8 +205,9 @@ void CUDARenderer::Internal::buildRanges(int macrocell, int apron)
       }
       else
       {
-        classifiedRangeKernel<<<blocks, threads>>>(ArrayClassified{ reinterpret_cast<const float*>(dc.bytes.ptr), dims },
-          dims, gd, M, apron, N, n, cells, this->Ranges.ptr);
+        classifiedRangeKernel<<<blocks, threads>>>(
+          ArrayClassified{ reinterpret_cast<const float*>(dc.bytes.ptr), dims }, dims, gd, M, apron, N, n, cells,
+          this->Ranges.ptr);
       }
       MCVOL_CUDA(cudaGetLastError());
       continue;
@@ -267,9 +268,8 @@ void CUDARenderer::Internal::buildMajorants(const Scene& scene, const bool* whic
     float* dst = this->Sparse.ptr + size_t(n) * size_t(levels) * size_t(K);
     MCVOL_CUDA(cudaMemcpyAsync(dst, sparse.data(), sparse.size() * sizeof(float), cudaMemcpyHostToDevice));
     MCVOL_CUDA(cudaMemsetAsync(this->ChannelMax.ptr + n, 0, sizeof(unsigned)));
-    majorantKernel<<<blocks, threads>>>(
-      tv, n, N, cells, this->Ranges.ptr, dst, this->Majorants.ptr, this->ChannelMax.ptr,
-      this->Channels[n].format == ChannelFormat::Extinction);
+    majorantKernel<<<blocks, threads>>>(tv, n, N, cells, this->Ranges.ptr, dst, this->Majorants.ptr,
+      this->ChannelMax.ptr, this->Channels[n].format == ChannelFormat::Extinction);
     MCVOL_CUDA(cudaGetLastError());
     ++rebuilt;
     ++this->Updates.majorantChannelBuilds;

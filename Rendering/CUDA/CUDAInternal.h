@@ -1,14 +1,13 @@
 // SPDX-License-Identifier: BSD-3-Clause
 //
 // Internal to the CUDA backend: the renderer's state (CUDARenderer::Internal)
-// and the helpers every part of it uses. Host code only; each .cu file keeps
-// its kernels next to their launchers, so no relocatable device code is
-// needed.
+// and the helpers every part of it uses. No kernels: each .cu file keeps its
+// kernels next to their launchers, so no relocatable device code is needed.
 #pragma once
 
 #include "mcvol/CUDARenderer.h"
 
-#include "mcvol/SceneView.h"
+#include "mcvol/ray/SceneView.h"
 
 #include <cuda_runtime.h>
 
@@ -32,6 +31,66 @@ inline void check(cudaError_t e, const char* what)
   }
 }
 #define MCVOL_CUDA(call) check((call), #call)
+
+/// A warp's sum of `v` with shuffles (any architecture from sm_70), 64-bit so
+/// that high sample counts cannot wrap: the kernels add their work counters
+/// with one atomic per warp.
+__device__ MCVOL_FORCE_INLINE unsigned long long warpSumU64(unsigned long long v)
+{
+  for (int o = 16; o > 0; o >>= 1)
+  {
+    v += __shfl_xor_sync(0xffffffffu, v, o);
+  }
+  return v;
+}
+
+/**
+ * Calls f(std::integral_constant<BlendMode, M>()) with M the blend mode
+ * known at run time (Density for any other value), so that a kernel
+ * templated on the mode is launched from one piece of code.
+ */
+template <typename F>
+void withBlendMode(BlendMode mode, F&& f)
+{
+  switch (mode)
+  {
+    case BlendMode::Max:
+      f(std::integral_constant<BlendMode, BlendMode::Max>());
+      break;
+    case BlendMode::Mix:
+      f(std::integral_constant<BlendMode, BlendMode::Mix>());
+      break;
+    case BlendMode::Composite:
+      f(std::integral_constant<BlendMode, BlendMode::Composite>());
+      break;
+    case BlendMode::Density:
+    default:
+      f(std::integral_constant<BlendMode, BlendMode::Density>());
+      break;
+  }
+}
+
+/// Calls f(std::true_type()) or f(std::false_type()) for a flag known at run
+/// time, the kernels' template switch (counters, lighting).
+template <typename F>
+void withFlag(bool flag, F&& f)
+{
+  if (flag)
+  {
+    f(std::true_type());
+  }
+  else
+  {
+    f(std::false_type());
+  }
+}
+
+/// Blocks of `block` threads covering an image of width x height pixels,
+/// one thread per pixel.
+inline dim3 imageGrid(dim3 block, int width, int height)
+{
+  return dim3((unsigned(width) + block.x - 1) / block.x, (unsigned(height) + block.y - 1) / block.y);
+}
 
 /// Owning device array (no copies).
 template <typename T>
@@ -80,7 +139,9 @@ using DeviceScalar = std::conditional_t<std::is_same<T, double>::value, float, T
 /// and point objects) or as a dense array (bytes), never both.
 struct DeviceChannel
 {
-  DeviceBuffer<uint8_t> bytes; ///< dense array, native type (float64 converted to float32 on upload); empty when texture-held
+  /// Dense array in the native type (float64 converted to float32 on
+  /// upload); empty when texture-held.
+  DeviceBuffer<uint8_t> bytes;
   ScalarType type = ScalarType::Float32;
   /// Extinction: 4 floats per voxel, a float4 texture of the sanitised voxels
   /// (texture sampling, NaN-free channels) or packed (stride 4) in `bytes`.
@@ -133,6 +194,17 @@ struct LevelInput
   DeviceBuffer<uint8_t> data;
 };
 
+/// What the visibility optimization's kernel reads besides a render's
+/// buffers (CUDALaunch.cu): the per-pixel importance segment lists and the
+/// refining pass of this render (-1: none, the lists are final).
+struct ImportanceLaunch
+{
+  ImportanceSegment* segments = nullptr;
+  uint8_t* counts = nullptr;
+  float* totals = nullptr;
+  int refinePass = -1;
+};
+
 /**
  * Everything the renderer keeps on the device, and the versions it was made
  * from. The members are defined where their work is done:
@@ -178,8 +250,8 @@ struct CUDARenderer::Internal
   DeviceBuffer<float4> Even;
   bool AccumEven = false;
   bool SkipEvenReadBack = false; ///< set by render() for RenderSettings::readBackEven off
-  bool PlainKernels = true; ///< setPlainKernels()
-  bool DeviceLevels = false; ///< setDeviceLevels()
+  bool PlainKernels = true;      ///< setPlainKernels()
+  bool DeviceLevels = true;      ///< setDeviceLevels()
   /// displayImage(): the 8-bit image on the device and its page-locked host copy.
   DeviceBuffer<uchar4> Display;
   uint8_t* DisplayHost = nullptr;
@@ -278,6 +350,26 @@ struct CUDARenderer::Internal
   const float* deviceDepth(const float* depth, size_t pixels);
   /// The Scene's importance tables on the device (uploaded when they changed).
   const float* deviceImportanceTables(const Scene& scene);
+  /// render(): makes Accum (and Even, when `accum` keeps the error estimate)
+  /// hold `accum`'s image, continuing the device copy when it is current;
+  /// returns Even's pointer, or null.
+  float4* deviceAccumulation(Accumulator& accum, size_t pixels);
+  /// render() with the visibility optimization: the view's importance
+  /// fields, the device tables and segment lists of `accum` (restarted with
+  /// its image); returns its pool and fills `launch`.
+  Accumulator::ImportancePool& deviceImportance(const Scene& scene, const Camera& camera, Accumulator& accum,
+    SceneView& s, size_t pixels, ImportanceLaunch& launch);
+  /// renderPilots(): sizes the round's buffers and streams and clears the
+  /// images and counters on the first stream, which the others wait for.
+  /// Returns the pixels of images the buffers are reserved for.
+  size_t startPilotRound(size_t images, size_t pixels, size_t jobs);
+  /// renderPilots(): one launch per job, each on a pilot stream of its own;
+  /// the first stream then waits for the others.
+  void launchPilots(const Scene& scene, const Camera& camera, const std::vector<PilotJob>& jobs);
+  /// renderPilots(): copies `floats` floats of images and `counterItems`
+  /// counters to the page-locked host copies (grown to `reservedFloats`)
+  /// and waits for them.
+  void pilotsToHost(size_t floats, size_t reservedFloats, size_t counterItems);
   double elapsedMs()
   {
     float ms = 0.f;

@@ -2,28 +2,28 @@
 //
 // One render on the GPU: the per-render scene view, the device accumulation
 // image and depth buffer, the render kernel launch, the work counters and the
-// read-back. The kernel is a launcher: the per-pixel work is renderPixel<Mode>()
-// from the core (Integrator.h -> Tracking.h -> DDA.h, Sampling.h), the same
-// functions the OpenMP backend runs, compiled for the device through
-// MCVOL_HOST_DEVICE.
+// read-back; and a round of estimator pilots launched at once
+// (renderPilots()). The kernels are launchers: the per-pixel work is
+// renderPixel<Mode>() from the core (Integrator.h -> Tracking.h -> DDA.h,
+// Sampling.h), the same functions the OpenMP backend runs, compiled for the
+// device through MCVOL_HOST_DEVICE.
 #include "CUDARenderKernels.h"
 
 #include <algorithm>
-#include <chrono>
-#include <cstdio>
-#include <cstdlib>
 #include <cstring>
 #include <stdexcept>
+#include <vector>
 
 namespace mcvol
 {
 namespace
 {
 /**
- * The visibility optimization's kernel (paper 004): as renderKernel, with the
+ * The visibility optimization's kernel (Lerzer and Dachsbacher, the
+ * importance segments of their Algorithm 1): as renderKernel, with the
  * pixel's importance segment list refined first on the refining renders
- * (refinePass >= 0) and passed to the tracking. A kernel of its own, so
- * the unoptimized kernels stay exactly as they were.
+ * (refinePass >= 0) and passed to the tracking. A kernel of its own, so that
+ * the other kernels carry none of the importance code and its registers.
  */
 template <BlendMode Mode, bool Lit>
 __global__ void renderOptimizedKernel(const __grid_constant__ SceneView s, const __grid_constant__ CameraView cam,
@@ -88,85 +88,62 @@ __global__ void renderOptimizedKernel(const __grid_constant__ SceneView s, const
   }
 }
 
-/// Device copies of what the optimized kernel reads.
-struct OptimizedLaunch
+/// Launches the visibility optimization's kernel for the blend mode and
+/// lighting known at run time.
+void launchOptimized(BlendMode mode, bool lit, const SceneView& s, const CameraView& cam, const FrameParams& fp,
+  const RenderLaunch& k, const ImportanceLaunch& o)
 {
-  ImportanceSegment* segments = nullptr;
-  uint8_t* counts = nullptr;
-  float* totals = nullptr;
-  int refinePass = -1;
-};
-
-template <BlendMode Mode>
-void launchOptimized(bool lit, dim3 grid, dim3 block, const SceneView& s, const CameraView& cam, const FrameParams& fp,
-  const float* depth, float4* accum, float4* even, uint32_t previous, unsigned long long* counters,
-  const OptimizedLaunch& o)
-{
-  if (lit)
-  {
-    renderOptimizedKernel<Mode, true><<<grid, block>>>(
-      s, cam, fp, depth, accum, even, previous, counters, o.segments, o.counts, o.totals, o.refinePass);
-  }
-  else
-  {
-    renderOptimizedKernel<Mode, false><<<grid, block>>>(
-      s, cam, fp, depth, accum, even, previous, counters, o.segments, o.counts, o.totals, o.refinePass);
-  }
+  withBlendMode(mode,
+    [&](auto m)
+    {
+      withFlag(lit,
+        [&](auto l)
+        {
+          renderOptimizedKernel<decltype(m)::value, decltype(l)::value><<<k.grid, k.block, 0, k.stream>>>(
+            s, cam, fp, k.depth, k.accum, k.even, k.previous, k.counters, o.segments, o.counts, o.totals, o.refinePass);
+        });
+    });
 }
 
-template <BlendMode Mode>
-void launchRender(bool count, bool lit, bool plain, dim3 grid, dim3 block, const SceneView& s, const CameraView& cam,
-  const FrameParams& fp, const float* depth, float4* accum, float4* even, uint32_t previous,
-  unsigned long long* counters, cudaStream_t stream = 0)
+/// Launches the render kernel of a render or a pilot: the lit kernel, or the
+/// unlit one of the estimator's code (unlitEstimator()). The unlit kernels
+/// contain none of the lighting code and the collision kernels none of the
+/// expected-value estimator's, which saves registers; for plain scenes
+/// (`plain`) the unlit kernels come from CUDALaunchPlain.cu, compiled without
+/// the pre-classified and cubic sampling.
+void launchRender(BlendMode mode, bool count, bool lit, bool plain, const SceneView& s, const CameraView& cam,
+  const FrameParams& fp, const RenderLaunch& k)
 {
-  // The unlit kernels contain none of the lighting code, the collision
-  // kernels none of the expected-value estimator's (registers: ptxas); for
-  // plain scenes, none of the pre-classified or cubic sampling either
-  // (CUDALaunchPlain.cu).
-  const int unlit = unlitEstimator(fp.estimator, Mode, lit, false, s.marchControlVariates);
+  const int unlit = unlitEstimator(fp.estimator, mode, lit, false, s.marchControlVariates);
   if (plain && !lit)
   {
-    launchPlainUnlit(Mode, count, unlit, grid, block, s, cam, fp, depth, accum, even, previous, counters, stream);
+    launchPlainUnlit(mode, unlit, count, s, cam, fp, k);
+    return;
   }
-  else if (lit)
-  {
-    if (count)
+  withBlendMode(mode,
+    [&](auto m)
     {
-      renderKernel<Mode, true, true><<<grid, block, 0, stream>>>(s, cam, fp, depth, accum, even, previous, counters);
-    }
-    else
-    {
-      renderKernel<Mode, false, true><<<grid, block, 0, stream>>>(s, cam, fp, depth, accum, even, previous, counters);
-    }
-  }
-  else
-  {
-    launchUnlit<Mode>(unlit, count, grid, block, s, cam, fp, depth, accum, even, previous, counters, stream);
-  }
+      if (lit)
+      {
+        launchRenderKernel<decltype(m)::value, true, 0>(count, s, cam, fp, k);
+      }
+      else
+      {
+        launchUnlit<decltype(m)::value>(unlit, count, s, cam, fp, k);
+      }
+    });
 }
-/// launchRender() for the blend mode known at run time.
-void launchRenderFor(BlendMode mode, bool count, bool lit, bool plain, dim3 grid, dim3 block, const SceneView& s,
-  const CameraView& cam, const FrameParams& fp, const float* depth, float4* accum, float4* even, uint32_t previous,
-  unsigned long long* counters, cudaStream_t stream = 0)
+
+/// Whether the plain kernels can render `s`: scalar channels only, linear or
+/// nearest interpolation.
+bool plainScene(const SceneView& s)
 {
-  switch (mode)
+  bool plain = !s.volume.cubic;
+  for (int n = 0; n < s.volume.numChannels; ++n)
   {
-    case BlendMode::Max:
-      launchRender<BlendMode::Max>(count, lit, plain, grid, block, s, cam, fp, depth, accum, even, previous, counters, stream);
-      break;
-    case BlendMode::Mix:
-      launchRender<BlendMode::Mix>(count, lit, plain, grid, block, s, cam, fp, depth, accum, even, previous, counters, stream);
-      break;
-    case BlendMode::Composite:
-      launchRender<BlendMode::Composite>(
-        count, lit, plain, grid, block, s, cam, fp, depth, accum, even, previous, counters, stream);
-      break;
-    case BlendMode::Density:
-    default:
-      launchRender<BlendMode::Density>(
-        count, lit, plain, grid, block, s, cam, fp, depth, accum, even, previous, counters, stream);
-      break;
+    plain = plain && s.volume.channels[n].format == ChannelFormat::Scalar;
   }
+  return plain;
 }
 
 /// Adds the device's counters (`c`: DDA steps, tentative, real, channel
@@ -193,6 +170,82 @@ void setRenderRates(SceneView& s, const RenderSettings& settings, const Camera& 
   s.minRate = settings.minSamplesPerVoxel > 0.f ? settings.minSamplesPerVoxel * voxelRate(cam) : 0.f;
   s.marchRate = settings.marchSamplesPerVoxel * voxelRate(cam);
   s.marchControlVariates = marchControlVariates(settings, camera);
+}
+
+/// The pilot streams: one per job of the largest round chooseEstimator()
+/// makes (16 candidates), so that the jobs run side by side. Each job is one
+/// launch of all its one-sample images (FrameParams::batchSamples), since
+/// issuing a launch per image costs more host time than a small image takes
+/// to render.
+constexpr size_t kPilotStreams = 16;
+/// The images a round's buffers hold at least: the largest round
+/// chooseEstimator() makes at the default pilot size (expected value's
+/// 2 x 8 images and 15 marches' 2 x 2).
+constexpr size_t kReservedPilotImages = 96;
+
+/// renderPilots()'s argument checks (render()'s for each job); returns the
+/// one-sample images of the round (both replicates of every job).
+size_t checkPilotJobs(const Camera& camera, std::vector<PilotJob>& jobs)
+{
+  size_t images = 0;
+  for (PilotJob& job : jobs)
+  {
+    checkPilotCheckpoints(job);
+    RenderSettings st = job.settings;
+    st.samplesPerPixel = 1;
+    Accumulator probe; // the argument checks of render()
+    probe.setErrorEstimation(false);
+    checkRenderArguments(camera, st, probe);
+    images += 2 * size_t(job.checkpoints.back());
+  }
+  return images;
+}
+
+/// Each replicate's means at its checkpoints from the round's one-sample
+/// images (`host`, in launch order) and its counters (`c`, a block of 9 per
+/// job), folded as render() folds a chunk of samples into the running mean
+/// (accumulate()).
+void foldPilotMeans(std::vector<PilotJob>& jobs, const float* host, const unsigned long long* c, size_t pixels)
+{
+  const size_t P = pixels;
+  size_t image = 0;
+  std::vector<float> sums(4 * P);
+  for (size_t j = 0; j < jobs.size(); ++j)
+  {
+    PilotJob& job = jobs[j];
+    const int n = job.checkpoints.back();
+    for (int r = 0; r < 2; ++r)
+    {
+      job.means[r].clear();
+      std::vector<float> mean(4 * P, 0.f);
+      int done = 0;
+      for (int upTo : job.checkpoints)
+      {
+        // The samples summed image by image: each pixel's samples are added
+        // in the same order as pixel by pixel, but each image is read once,
+        // in memory order.
+        std::fill(sums.begin(), sums.end(), 0.f);
+        for (int k = done; k < upTo; ++k)
+        {
+          const float* v = host + 4 * (image + size_t(k)) * P;
+          for (size_t i = 0; i < 4 * P; ++i)
+          {
+            sums[i] += v[i];
+          }
+        }
+        for (size_t p = 0; p < P; ++p)
+        {
+          const Vec4f sum{ sums[4 * p], sums[4 * p + 1], sums[4 * p + 2], sums[4 * p + 3] };
+          accumulate(mean.data() + 4 * p, sum, uint32_t(done), upTo - done);
+        }
+        done = upTo;
+        job.means[r].push_back(mean);
+      }
+      image += size_t(n);
+    }
+    job.counters = RenderCounters();
+    addCounters(job.counters, c + 9 * j, uint64_t(P) * uint64_t(n));
+  }
 }
 } // namespace
 
@@ -262,6 +315,88 @@ const float* CUDARenderer::Internal::deviceImportanceTables(const Scene& scene)
   return this->ImportanceTables.ptr;
 }
 
+float4* CUDARenderer::Internal::deviceAccumulation(Accumulator& accum, size_t pixels)
+{
+  // Continue the device mean only if it is this Accumulator's, at its sample
+  // count; otherwise start from the host's. The even-sample mean of the
+  // error estimate goes with it, when the Accumulator keeps one (AccumEven:
+  // the device copy is in step).
+  const size_t P = pixels;
+  const bool wantEven = accum.hasEven();
+  if (accum.pendingOnDevice() && this->AccumId != accum.id())
+  {
+    throw std::logic_error("mcvol: this Accumulator's image was left on the device (RenderSettings::readBack = "
+                           "false) and has since been replaced by another Accumulator's; call readBack() before "
+                           "rendering another Accumulator");
+  }
+  if (this->Accum.count != P)
+  {
+    this->Accum.resize(P);
+    this->AccumId = 0;
+  }
+  if (wantEven && this->Even.count != P)
+  {
+    this->Even.resize(P);
+    this->AccumEven = false;
+  }
+  if (this->AccumId != accum.id() || this->AccumSamples != accum.samples() || (wantEven && !this->AccumEven))
+  {
+    if (accum.samples() == 0)
+    {
+      MCVOL_CUDA(cudaMemsetAsync(this->Accum.ptr, 0, this->Accum.bytes()));
+      if (wantEven)
+      {
+        MCVOL_CUDA(cudaMemsetAsync(this->Even.ptr, 0, this->Even.bytes()));
+      }
+    }
+    else
+    {
+      MCVOL_CUDA(cudaMemcpy(this->Accum.ptr, accum.rgba(), this->Accum.bytes(), cudaMemcpyHostToDevice));
+      if (wantEven)
+      {
+        MCVOL_CUDA(cudaMemcpy(this->Even.ptr, accum.evenRGBA(), this->Even.bytes(), cudaMemcpyHostToDevice));
+      }
+    }
+    this->AccumId = accum.id();
+  }
+  // Renders without the split leave the device's even image behind.
+  this->AccumEven = wantEven;
+  return wantEven ? this->Even.ptr : nullptr;
+}
+
+Accumulator::ImportancePool& CUDARenderer::Internal::deviceImportance(
+  const Scene& scene, const Camera& camera, Accumulator& accum, SceneView& s, size_t pixels, ImportanceLaunch& launch)
+{
+  // Tables uploaded when they change; the segment lists belong to one
+  // Accumulator's image and restart with it (or when another Accumulator
+  // rendered since: the lists of this one are gone).
+  const size_t P = pixels;
+  s.importance = scene.view().importance;
+  setImportanceFrame(s, camera);
+  s.importance.table = this->deviceImportanceTables(scene);
+  Accumulator::ImportancePool& pool = accum.importancePool(false);
+  if (this->Segments.count != P * size_t(kImportanceCapacity))
+  {
+    this->Segments.resize(P * size_t(kImportanceCapacity));
+    this->SegmentCounts.resize(P);
+    this->SegmentTotals.resize(P);
+    this->PoolId = 0;
+  }
+  if (this->PoolId != accum.id() || pool.passes == 0)
+  {
+    MCVOL_CUDA(cudaMemsetAsync(this->SegmentCounts.ptr, 0, P));
+    MCVOL_CUDA(cudaMemsetAsync(this->SegmentTotals.ptr, 0, P * sizeof(float)));
+    pool.passes = 0;
+    this->PoolId = accum.id();
+  }
+  pool.deviceBytes = this->Segments.bytes() + this->SegmentCounts.bytes() + this->SegmentTotals.bytes();
+  launch.segments = this->Segments.ptr;
+  launch.counts = this->SegmentCounts.ptr;
+  launch.totals = this->SegmentTotals.ptr;
+  launch.refinePass = pool.passes < s.importance.refinePasses ? pool.passes : -1;
+  return pool;
+}
+
 void CUDARenderer::render(const Scene& scene, const Camera& camera, const RenderSettings& settings, const float* depth,
   Accumulator& accum, RenderCounters* counters)
 {
@@ -271,7 +406,6 @@ void CUDARenderer::render(const Scene& scene, const Camera& camera, const Render
   in.sync(scene);
 
   SceneView s = in.renderView(scene, in.Sampling == CudaSampling::Texture);
-  const SceneView& hv = scene.view();
   const CameraView cam = toView(camera);
   setRenderRates(s, settings, camera, cam);
   const bool lit = s.lighting.enabled;
@@ -284,135 +418,37 @@ void CUDARenderer::render(const Scene& scene, const Camera& camera, const Render
     setLightingFrame(s, camera);
   }
 
-  // Accumulation buffer: continue the device mean only if it is this
-  // Accumulator's, at its sample count; otherwise start from the host's.
-  // The even-sample mean of the error estimate goes with it, when the
-  // Accumulator keeps one (AccumEven: the device copy is in step).
   const size_t P = size_t(camera.width) * size_t(camera.height);
-  const bool wantEven = accum.hasEven();
-  if (accum.pendingOnDevice() && in.AccumId != accum.id())
-  {
-    throw std::logic_error("mcvol: this Accumulator's image was left on the device (RenderSettings::readBack = "
-                           "false) and has since been replaced by another Accumulator's; call readBack() before "
-                           "rendering another Accumulator");
-  }
-  if (in.Accum.count != P)
-  {
-    in.Accum.resize(P);
-    in.AccumId = 0;
-  }
-  if (wantEven && in.Even.count != P)
-  {
-    in.Even.resize(P);
-    in.AccumEven = false;
-  }
-  if (in.AccumId != accum.id() || in.AccumSamples != accum.samples() || (wantEven && !in.AccumEven))
-  {
-    if (accum.samples() == 0)
-    {
-      MCVOL_CUDA(cudaMemsetAsync(in.Accum.ptr, 0, in.Accum.bytes()));
-      if (wantEven)
-      {
-        MCVOL_CUDA(cudaMemsetAsync(in.Even.ptr, 0, in.Even.bytes()));
-      }
-    }
-    else
-    {
-      MCVOL_CUDA(cudaMemcpy(in.Accum.ptr, accum.rgba(), in.Accum.bytes(), cudaMemcpyHostToDevice));
-      if (wantEven)
-      {
-        MCVOL_CUDA(cudaMemcpy(in.Even.ptr, accum.evenRGBA(), in.Even.bytes(), cudaMemcpyHostToDevice));
-      }
-    }
-    in.AccumId = accum.id();
-  }
-  // Renders without the split leave the device's even image behind.
-  in.AccumEven = wantEven;
-  float4* devEven = wantEven ? in.Even.ptr : nullptr;
-
-  const float* devDepth = in.deviceDepth(depth, P);
-
+  RenderLaunch k;
+  k.even = in.deviceAccumulation(accum, P);
+  k.accum = in.Accum.ptr;
+  k.depth = in.deviceDepth(depth, P);
+  k.previous = accum.samples();
+  k.counters = in.Counters.ptr;
+  k.block = in.Block;
+  k.grid = imageGrid(k.block, camera.width, camera.height);
   const FrameParams fp = frameParams(settings, accum.samples());
-  // Visibility optimization: tables uploaded when they change; the segment
-  // lists belong to one Accumulator's image and restart with it (or when
-  // another Accumulator rendered since: the lists of this one are gone).
-  const bool optimized = hv.importance.enabled;
-  OptimizedLaunch opt;
-  Accumulator::ImportancePool* pool = nullptr;
-  if (optimized)
-  {
-    s.importance = hv.importance;
-    setImportanceFrame(s, camera);
-    s.importance.table = in.deviceImportanceTables(scene);
-    pool = &accum.importancePool(false);
-    if (in.Segments.count != P * size_t(kImportanceCapacity))
-    {
-      in.Segments.resize(P * size_t(kImportanceCapacity));
-      in.SegmentCounts.resize(P);
-      in.SegmentTotals.resize(P);
-      in.PoolId = 0;
-    }
-    if (in.PoolId != accum.id() || pool->passes == 0)
-    {
-      MCVOL_CUDA(cudaMemsetAsync(in.SegmentCounts.ptr, 0, P));
-      MCVOL_CUDA(cudaMemsetAsync(in.SegmentTotals.ptr, 0, P * sizeof(float)));
-      pool->passes = 0;
-      in.PoolId = accum.id();
-    }
-    pool->deviceBytes = in.Segments.bytes() + in.SegmentCounts.bytes() + in.SegmentTotals.bytes();
-    opt.segments = in.Segments.ptr;
-    opt.counts = in.SegmentCounts.ptr;
-    opt.totals = in.SegmentTotals.ptr;
-    opt.refinePass = pool->passes < s.importance.refinePasses ? pool->passes : -1;
-  }
+  const bool optimized = scene.view().importance.enabled;
+  ImportanceLaunch opt;
+  Accumulator::ImportancePool* pool = optimized ? &in.deviceImportance(scene, camera, accum, s, P, opt) : nullptr;
+  // The optimized kernel always counts: its overflow count is needed.
   const bool count = counters != nullptr || optimized;
-  // Plain scenes (scalar channels, linear or nearest interpolation) take the
-  // kernels compiled without the pre-classified and cubic sampling.
-  bool plain = in.PlainKernels && !s.volume.cubic;
-  for (int n = 0; n < s.volume.numChannels; ++n)
-  {
-    plain = plain && s.volume.channels[n].format == ChannelFormat::Scalar;
-  }
   if (count)
   {
     MCVOL_CUDA(cudaMemsetAsync(in.Counters.ptr, 0, 9 * sizeof(unsigned long long)));
   }
-  const dim3 block = in.Block;
-  const dim3 grid((unsigned(camera.width) + block.x - 1) / block.x, (unsigned(camera.height) + block.y - 1) / block.y);
-  const uint32_t previous = accum.samples();
+  // Launched even with no active channel: the mean must still take the
+  // added (transparent) samples.
+  if (optimized)
   {
-    // Launched even with no active channel: the mean must still take the
-    // added (transparent) samples.
-    if (optimized)
-    {
-      switch (s.blend.mode)
-      {
-        case BlendMode::Max:
-          launchOptimized<BlendMode::Max>(
-            lit, grid, block, s, cam, fp, devDepth, in.Accum.ptr, devEven, previous, in.Counters.ptr, opt);
-          break;
-        case BlendMode::Mix:
-          launchOptimized<BlendMode::Mix>(
-            lit, grid, block, s, cam, fp, devDepth, in.Accum.ptr, devEven, previous, in.Counters.ptr, opt);
-          break;
-        case BlendMode::Composite:
-          launchOptimized<BlendMode::Composite>(
-            lit, grid, block, s, cam, fp, devDepth, in.Accum.ptr, devEven, previous, in.Counters.ptr, opt);
-          break;
-        case BlendMode::Density:
-        default:
-          launchOptimized<BlendMode::Density>(
-            lit, grid, block, s, cam, fp, devDepth, in.Accum.ptr, devEven, previous, in.Counters.ptr, opt);
-          break;
-      }
-    }
-    else
-    {
-      launchRenderFor(
-        s.blend.mode, count, lit, plain, grid, block, s, cam, fp, devDepth, in.Accum.ptr, devEven, previous, in.Counters.ptr);
-    }
-    MCVOL_CUDA(cudaGetLastError());
+    launchOptimized(s.blend.mode, lit, s, cam, fp, k, opt);
   }
+  else
+  {
+    launchRender(s.blend.mode, count, lit, in.PlainKernels && plainScene(s), s, cam, fp, k);
+  }
+  MCVOL_CUDA(cudaGetLastError());
+
   accum.addSamples(uint32_t(settings.samplesPerPixel));
   in.AccumSamples = accum.samples();
   accum.setPendingOnDevice(true);
@@ -451,6 +487,127 @@ bool CUDARenderer::concurrentPilots() const
   return this->In->ConcurrentPilots;
 }
 
+size_t CUDARenderer::Internal::startPilotRound(size_t images, size_t pixels, size_t jobs)
+{
+  const size_t P = pixels;
+  // Room for the largest round chooseEstimator() makes at the default pilot
+  // size from the first round on, so that no later round (e.g. the first
+  // with a hint, which holds more candidates) grows the buffers and the
+  // page-locked host copy: a reallocation costs more than the round.
+  const size_t reserved = std::max(images, kReservedPilotImages) * P;
+  this->PilotImages.resize(std::max(this->PilotImages.count, reserved));
+  const size_t counterItems = 9 * (std::max<size_t>(jobs, kPilotStreams) + 1);
+  this->PilotCounters.resize(std::max(this->PilotCounters.count, counterItems));
+  // The streams are non-blocking and of the device's highest priority, and a
+  // round uses no other stream: frames rendered ahead on the default stream
+  // (ChoiceAhead) run beside the pilots, and the block scheduler gives the
+  // pilots' blocks the SMs first as the frame's blocks finish, so the
+  // round's latency stays the pilots'.
+  if (this->PilotStreams.size() < kPilotStreams)
+  {
+    int least = 0, greatest = 0;
+    MCVOL_CUDA(cudaDeviceGetStreamPriorityRange(&least, &greatest));
+    while (this->PilotStreams.size() < kPilotStreams)
+    {
+      cudaStream_t st = nullptr;
+      MCVOL_CUDA(cudaStreamCreateWithPriority(&st, cudaStreamNonBlocking, greatest));
+      this->PilotStreams.push_back(st);
+      cudaEvent_t e = nullptr;
+      MCVOL_CUDA(cudaEventCreateWithFlags(&e, cudaEventDisableTiming));
+      this->PilotEvents.push_back(e);
+    }
+  }
+  const size_t streams = std::min(jobs, kPilotStreams);
+  cudaStream_t first = this->PilotStreams[0];
+  MCVOL_CUDA(cudaMemsetAsync(this->PilotImages.ptr, 0, images * P * sizeof(float4), first));
+  const size_t counterCount = 9 * (jobs + 1); // the jobs' blocks and replicate 1's
+  MCVOL_CUDA(cudaMemsetAsync(this->PilotCounters.ptr, 0, counterCount * sizeof(unsigned long long), first));
+  MCVOL_CUDA(cudaEventRecord(this->PilotEvents[0], first));
+  for (size_t k = 1; k < streams; ++k)
+  {
+    MCVOL_CUDA(cudaStreamWaitEvent(this->PilotStreams[k], this->PilotEvents[0], 0));
+  }
+  return reserved;
+}
+
+void CUDARenderer::Internal::launchPilots(const Scene& scene, const Camera& camera, const std::vector<PilotJob>& jobs)
+{
+  const size_t P = size_t(camera.width) * size_t(camera.height);
+  const CameraView cam = toView(camera);
+  const bool textures = this->Sampling == CudaSampling::Texture;
+  RenderLaunch k;
+  k.block = this->Block;
+  const dim3 grid = imageGrid(k.block, camera.width, camera.height);
+  size_t image = 0;
+  for (size_t j = 0; j < jobs.size(); ++j)
+  {
+    const PilotJob& job = jobs[j];
+    SceneView s = this->renderView(scene, textures);
+    setRenderRates(s, job.settings, camera, cam);
+    // One launch of all the job's one-sample images (FrameParams::
+    // batchSamples): replicate r's sample k is the job's image r x n + k
+    // (its seed job.seeds[r]), picked by blockIdx.z; replicate 0's counters
+    // go to the job's block of 9, replicate 1's to the last block (not read).
+    RenderSettings st = job.settings;
+    st.samplesPerPixel = 1;
+    st.seed = job.seeds[0];
+    FrameParams fp = frameParams(st, 0u);
+    const int n = job.checkpoints.back();
+    fp.batchSamples = n;
+    fp.batchSeed = job.seeds[1];
+    fp.batchCounterOffset = int(9 * (jobs.size() - j));
+    k.grid = dim3(grid.x, grid.y, unsigned(2 * n));
+    k.accum = this->PilotImages.ptr + image * P;
+    k.counters = this->PilotCounters.ptr + 9 * j;
+    k.stream = this->PilotStreams[j % kPilotStreams];
+    launchRender(scene.view().blend.mode, true, false, this->PlainKernels && plainScene(s), s, cam, fp, k);
+    MCVOL_CUDA(cudaGetLastError());
+    image += size_t(2 * n);
+  }
+  // The first stream waits for the others' launches, then copies back.
+  cudaStream_t first = this->PilotStreams[0];
+  for (size_t i = 1; i < std::min(jobs.size(), kPilotStreams); ++i)
+  {
+    MCVOL_CUDA(cudaEventRecord(this->PilotEvents[i], this->PilotStreams[i]));
+    MCVOL_CUDA(cudaStreamWaitEvent(first, this->PilotEvents[i], 0));
+  }
+}
+
+void CUDARenderer::Internal::pilotsToHost(size_t floats, size_t reservedFloats, size_t counterItems)
+{
+  // Page-locked host copies (a copy from pageable memory goes through a
+  // staging buffer of the driver), grown to the reserved size at once.
+  if (this->PilotHostCount < floats || this->PilotHostCount < reservedFloats)
+  {
+    if (this->PilotHost)
+    {
+      MCVOL_CUDA(cudaFreeHost(this->PilotHost));
+      this->PilotHost = nullptr;
+      this->PilotHostCount = 0;
+    }
+    MCVOL_CUDA(cudaMallocHost(reinterpret_cast<void**>(&this->PilotHost), reservedFloats * sizeof(float)));
+    this->PilotHostCount = reservedFloats;
+  }
+  if (this->PilotHostCounterCount < this->PilotCounters.count)
+  {
+    if (this->PilotHostCounters)
+    {
+      MCVOL_CUDA(cudaFreeHost(this->PilotHostCounters));
+      this->PilotHostCounters = nullptr;
+      this->PilotHostCounterCount = 0;
+    }
+    MCVOL_CUDA(cudaMallocHost(
+      reinterpret_cast<void**>(&this->PilotHostCounters), this->PilotCounters.count * sizeof(unsigned long long)));
+    this->PilotHostCounterCount = this->PilotCounters.count;
+  }
+  cudaStream_t first = this->PilotStreams[0];
+  MCVOL_CUDA(
+    cudaMemcpyAsync(this->PilotHost, this->PilotImages.ptr, floats * sizeof(float), cudaMemcpyDeviceToHost, first));
+  MCVOL_CUDA(cudaMemcpyAsync(this->PilotHostCounters, this->PilotCounters.ptr,
+    counterItems * sizeof(unsigned long long), cudaMemcpyDeviceToHost, first));
+  MCVOL_CUDA(cudaStreamSynchronize(first));
+}
+
 void CUDARenderer::renderPilots(const Scene& scene, const Camera& camera, std::vector<PilotJob>& jobs)
 {
   Internal& in = *this->In;
@@ -460,205 +617,18 @@ void CUDARenderer::renderPilots(const Scene& scene, const Camera& camera, std::v
     Renderer::renderPilots(scene, camera, jobs); // not what chooseEstimator() pilots: one after the other
     return;
   }
-  size_t images = 0;
-  for (PilotJob& job : jobs)
-  {
-    checkPilotCheckpoints(job);
-    RenderSettings st = job.settings;
-    st.samplesPerPixel = 1;
-    Accumulator probe; // the argument checks of render()
-    probe.setErrorEstimation(false);
-    checkRenderArguments(camera, st, probe);
-    images += 2 * size_t(job.checkpoints.back());
-  }
+  const size_t images = checkPilotJobs(camera, jobs);
   if (jobs.empty())
   {
     return;
   }
-  // MCVOL_PILOT_PROFILE set: each round's wall time split into its steps on
-  // stderr (the benchmark's question of where a round's time goes; one more
-  // synchronisation of the first pilot stream after the launches, so only
-  // while measuring).
-  static const bool profile = std::getenv("MCVOL_PILOT_PROFILE") != nullptr;
-  using PilotClock = std::chrono::steady_clock;
-  PilotClock::time_point tp[6];
-  tp[0] = PilotClock::now();
   MCVOL_CUDA(cudaSetDevice(in.Device));
   in.sync(scene);
   const size_t P = size_t(camera.width) * size_t(camera.height);
-  // Room for the largest round chooseEstimator() makes at the default pilot
-  // size (16 candidates: expected value's 2 x 8 images and 15 marches' 2 x
-  // 2) from the first round on, so that no later round (e.g. the first
-  // with a hint, which holds more candidates) grows the buffers and the
-  // page-locked host copy: on the H100 a round that grew them took 2-3 ms
-  // more (Benchmarks/RESULTS.md, eighteenth session).
-  constexpr size_t kReservedImages = 96;
-  const size_t reserved = std::max(images, kReservedImages) * P;
-  in.PilotImages.resize(std::max(in.PilotImages.count, reserved));
-  const size_t counterItems = 9 * (std::max<size_t>(jobs.size(), 16) + 1);
-  in.PilotCounters.resize(std::max(in.PilotCounters.count, counterItems));
-  // A stream per job of the largest round chooseEstimator() makes (16
-  // candidates), so that they run side by side; each job is one launch of
-  // all its one-sample images (FrameParams::batchSamples: blockIdx.z picks
-  // the replicate and the sample; before, one launch per image took 0.13-0.34
-  // ms a round on the H100 to issue). The streams are non-blocking and of
-  // the device's highest priority, and a round uses no other stream: frames
-  // rendered ahead on the default stream (ChoiceAhead) run beside the
-  // pilots, and the block scheduler gives the pilots' blocks the SMs first
-  // as the frame's blocks finish, so the round's latency stays the pilots'.
-  constexpr size_t kStreams = 16;
-  if (in.PilotStreams.size() < kStreams)
-  {
-    int least = 0, greatest = 0;
-    MCVOL_CUDA(cudaDeviceGetStreamPriorityRange(&least, &greatest));
-    while (in.PilotStreams.size() < kStreams)
-    {
-      cudaStream_t st = nullptr;
-      MCVOL_CUDA(cudaStreamCreateWithPriority(&st, cudaStreamNonBlocking, greatest));
-      in.PilotStreams.push_back(st);
-      cudaEvent_t e = nullptr;
-      MCVOL_CUDA(cudaEventCreateWithFlags(&e, cudaEventDisableTiming));
-      in.PilotEvents.push_back(e);
-    }
-  }
-  const size_t streams = std::min(jobs.size(), kStreams);
-  cudaStream_t first = in.PilotStreams[0];
-  MCVOL_CUDA(cudaMemsetAsync(in.PilotImages.ptr, 0, images * P * sizeof(float4), first));
-  const size_t counterCount = 9 * (jobs.size() + 1); // the jobs' blocks and replicate 1's
-  MCVOL_CUDA(cudaMemsetAsync(in.PilotCounters.ptr, 0, counterCount * sizeof(unsigned long long), first));
-  MCVOL_CUDA(cudaEventRecord(in.PilotEvents[0], first));
-  for (size_t k = 1; k < streams; ++k)
-  {
-    MCVOL_CUDA(cudaStreamWaitEvent(in.PilotStreams[k], in.PilotEvents[0], 0));
-  }
-
-  tp[1] = PilotClock::now();
-  const CameraView cam = toView(camera);
-  const dim3 block = in.Block;
-  const dim3 grid((unsigned(camera.width) + block.x - 1) / block.x, (unsigned(camera.height) + block.y - 1) / block.y);
-  const bool textures = in.Sampling == CudaSampling::Texture;
-  size_t image = 0;
-  for (size_t j = 0; j < jobs.size(); ++j)
-  {
-    const PilotJob& job = jobs[j];
-    SceneView s = in.renderView(scene, textures);
-    setRenderRates(s, job.settings, camera, cam);
-    bool plain = in.PlainKernels && !s.volume.cubic;
-    for (int n = 0; n < s.volume.numChannels; ++n)
-    {
-      plain = plain && s.volume.channels[n].format == ChannelFormat::Scalar;
-    }
-    // One launch: replicate r's sample k is the job's image r x n + k (its
-    // seed job.seeds[r]); replicate 0's counters go to the job's block of 9,
-    // replicate 1's to the last block (not read).
-    RenderSettings st = job.settings;
-    st.samplesPerPixel = 1;
-    st.seed = job.seeds[0];
-    FrameParams fp = frameParams(st, 0u);
-    const int n = job.checkpoints.back();
-    fp.batchSamples = n;
-    fp.batchSeed = job.seeds[1];
-    fp.batchCounterOffset = int(9 * (jobs.size() - j));
-    const dim3 batch(grid.x, grid.y, unsigned(2 * n));
-    launchRenderFor(hv.blend.mode, true, false, plain, batch, block, s, cam, fp, nullptr, in.PilotImages.ptr + image * P,
-      nullptr, 0u, in.PilotCounters.ptr + 9 * j, in.PilotStreams[j % kStreams]);
-    MCVOL_CUDA(cudaGetLastError());
-    image += size_t(2 * n);
-  }
-  // The first stream waits for the others' launches, then copies back.
-  for (size_t k = 1; k < streams; ++k)
-  {
-    MCVOL_CUDA(cudaEventRecord(in.PilotEvents[k], in.PilotStreams[k]));
-    MCVOL_CUDA(cudaStreamWaitEvent(first, in.PilotEvents[k], 0));
-  }
-  tp[2] = PilotClock::now();
-  if (profile)
-  {
-    MCVOL_CUDA(cudaStreamSynchronize(first)); // the kernels' end, for the split
-  }
-  tp[3] = PilotClock::now();
-  const size_t floats = images * P * 4;
-  if (in.PilotHostCount < floats || in.PilotHostCount < 4 * reserved)
-  {
-    if (in.PilotHost)
-    {
-      MCVOL_CUDA(cudaFreeHost(in.PilotHost));
-      in.PilotHost = nullptr;
-      in.PilotHostCount = 0;
-    }
-    MCVOL_CUDA(cudaMallocHost(reinterpret_cast<void**>(&in.PilotHost), 4 * reserved * sizeof(float)));
-    in.PilotHostCount = 4 * reserved;
-  }
-  if (in.PilotHostCounterCount < in.PilotCounters.count)
-  {
-    if (in.PilotHostCounters)
-    {
-      MCVOL_CUDA(cudaFreeHost(in.PilotHostCounters));
-      in.PilotHostCounters = nullptr;
-      in.PilotHostCounterCount = 0;
-    }
-    MCVOL_CUDA(cudaMallocHost(
-      reinterpret_cast<void**>(&in.PilotHostCounters), in.PilotCounters.count * sizeof(unsigned long long)));
-    in.PilotHostCounterCount = in.PilotCounters.count;
-  }
-  const float* host = in.PilotHost;
-  MCVOL_CUDA(cudaMemcpyAsync(in.PilotHost, in.PilotImages.ptr, floats * sizeof(float), cudaMemcpyDeviceToHost, first));
-  MCVOL_CUDA(cudaMemcpyAsync(in.PilotHostCounters, in.PilotCounters.ptr, counterCount * sizeof(unsigned long long),
-    cudaMemcpyDeviceToHost, first));
-  MCVOL_CUDA(cudaStreamSynchronize(first));
-  const unsigned long long* c = in.PilotHostCounters;
-
-  tp[4] = PilotClock::now();
-  // Each replicate's means at its checkpoints, folded as render() folds a
-  // chunk of samples into the running mean (accumulate()).
-  image = 0;
-  std::vector<float> sums(4 * P);
-  for (size_t j = 0; j < jobs.size(); ++j)
-  {
-    PilotJob& job = jobs[j];
-    const int n = job.checkpoints.back();
-    for (int r = 0; r < 2; ++r)
-    {
-      job.means[r].clear();
-      std::vector<float> mean(4 * P, 0.f);
-      int done = 0;
-      for (int upTo : job.checkpoints)
-      {
-        // The samples summed image by image: each pixel's samples are added
-        // in the same order as pixel by pixel, but each image is read once,
-        // in order (pixel by pixel, the fold of a 64-image round took 0.5
-        // ms on the H100 machine's host).
-        std::fill(sums.begin(), sums.end(), 0.f);
-        for (int k = done; k < upTo; ++k)
-        {
-          const float* v = host + 4 * (image + size_t(k)) * P;
-          for (size_t i = 0; i < 4 * P; ++i)
-          {
-            sums[i] += v[i];
-          }
-        }
-        for (size_t p = 0; p < P; ++p)
-        {
-          const Vec4f sum{ sums[4 * p], sums[4 * p + 1], sums[4 * p + 2], sums[4 * p + 3] };
-          accumulate(mean.data() + 4 * p, sum, uint32_t(done), upTo - done);
-        }
-        done = upTo;
-        job.means[r].push_back(mean);
-      }
-      image += size_t(n);
-    }
-    job.counters = RenderCounters();
-    addCounters(job.counters, c + 9 * j, uint64_t(P) * uint64_t(n));
-  }
-  if (profile)
-  {
-    tp[5] = PilotClock::now();
-    auto ms = [&](int a, int b) { return std::chrono::duration<double, std::milli>(tp[b] - tp[a]).count(); };
-    std::fprintf(stderr,
-      "mcvol pilot round: jobs %zu images %zu pixels %zu | setup %.3f issue %.3f kernels %.3f copy %.3f "
-      "fold %.3f total %.3f ms\n",
-      jobs.size(), images, P, ms(0, 1), ms(1, 2), ms(2, 3), ms(3, 4), ms(4, 5), ms(0, 5));
-  }
+  const size_t reserved = in.startPilotRound(images, P, jobs.size());
+  in.launchPilots(scene, camera, jobs);
+  in.pilotsToHost(images * P * 4, 4 * reserved, 9 * (jobs.size() + 1));
+  foldPilotMeans(jobs, in.PilotHost, in.PilotHostCounters, P);
 }
 
 void CUDARenderer::readBack(Accumulator& accum)

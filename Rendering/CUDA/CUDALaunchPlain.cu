@@ -10,25 +10,9 @@
 
 namespace mcvol
 {
-void launchPlainUnlit(BlendMode mode, bool count, int unlit, dim3 grid, dim3 block, const SceneView& s,
-  const CameraView& cam, const FrameParams& fp, const float* depth, float4* accum, float4* even, uint32_t previous,
-  unsigned long long* counters, cudaStream_t stream)
+void launchPlainUnlit(BlendMode mode, int unlit, bool count, const SceneView& s, const CameraView& cam,
+  const FrameParams& fp, const RenderLaunch& k)
 {
-  switch (mode)
-  {
-    case BlendMode::Max:
-      launchUnlit<BlendMode::Max>(unlit, count, grid, block, s, cam, fp, depth, accum, even, previous, counters, stream);
-      break;
-    case BlendMode::Mix:
-      launchUnlit<BlendMode::Mix>(unlit, count, grid, block, s, cam, fp, depth, accum, even, previous, counters, stream);
-      break;
-    case BlendMode::Composite:
-      launchUnlit<BlendMode::Composite>(unlit, count, grid, block, s, cam, fp, depth, accum, even, previous, counters, stream);
-      break;
-    case BlendMode::Density:
-    default:
-      launchUnlit<BlendMode::Density>(unlit, count, grid, block, s, cam, fp, depth, accum, even, previous, counters, stream);
-      break;
-  }
+  withBlendMode(mode, [&](auto m) { launchUnlit<decltype(m)::value>(unlit, count, s, cam, fp, k); });
 }
 } // namespace mcvol

@@ -15,15 +15,6 @@ namespace mcvol
 {
 namespace
 {
-__device__ MCVOL_FORCE_INLINE unsigned long long warpSum(unsigned long long v)
-{
-  for (int o = 16; o > 0; o >>= 1)
-  {
-    v += __shfl_xor_sync(0xffffffffu, v, o);
-  }
-  return v;
-}
-
 /// One thread per pixel: the pixel's reference value, written (not
 /// accumulated) to `image`. Count adds the march counters (warp sums, one
 /// atomic per warp and counter). Lit false compiles the lit march out.
@@ -44,9 +35,9 @@ __global__ void marchKernel(const __grid_constant__ SceneView s, const __grid_co
   }
   if (Count)
   {
-    const unsigned long long smp = warpSum(c.samples);
-    const unsigned long long skp = warpSum(c.skippedCells);
-    const unsigned long long trm = warpSum(c.terminated);
+    const unsigned long long smp = warpSumU64(c.samples);
+    const unsigned long long skp = warpSumU64(c.skippedCells);
+    const unsigned long long trm = warpSumU64(c.terminated);
     const unsigned lane = (threadIdx.y * blockDim.x + threadIdx.x) & 31u;
     if (lane == 0)
     {
@@ -57,32 +48,28 @@ __global__ void marchKernel(const __grid_constant__ SceneView s, const __grid_co
   }
 }
 
-template <BlendMode Mode>
-void launchMarch(bool lit, bool count, dim3 grid, dim3 block, const SceneView& s, const CameraView& cam,
+/// Launches the march kernel for the blend mode, lighting and counting
+/// known at run time. Post-render composite is never lit (prepareMarch()
+/// refuses it): no lit kernel is compiled for it.
+void launchMarch(BlendMode mode, bool lit, bool count, dim3 grid, dim3 block, const SceneView& s, const CameraView& cam,
   const MarchParams& mp, bool jitter, uint32_t seed, const float* depth, float4* image, unsigned long long* counters)
 {
-  // Post-render composite is never lit (prepareMarch() refuses it): no lit
-  // kernel is compiled for it.
-  constexpr bool CanBeLit = Mode != BlendMode::Composite;
-  if (lit && CanBeLit)
-  {
-    if (count)
+  withBlendMode(mode,
+    [&](auto m)
     {
-      marchKernel<Mode, CanBeLit, true><<<grid, block>>>(s, cam, mp, jitter, seed, depth, image, counters);
-    }
-    else
-    {
-      marchKernel<Mode, CanBeLit, false><<<grid, block>>>(s, cam, mp, jitter, seed, depth, image, counters);
-    }
-  }
-  else if (count)
-  {
-    marchKernel<Mode, false, true><<<grid, block>>>(s, cam, mp, jitter, seed, depth, image, counters);
-  }
-  else
-  {
-    marchKernel<Mode, false, false><<<grid, block>>>(s, cam, mp, jitter, seed, depth, image, counters);
-  }
+      constexpr BlendMode Mode = decltype(m)::value;
+      withFlag(lit,
+        [&](auto l)
+        {
+          withFlag(count,
+            [&](auto c)
+            {
+              constexpr bool Lit = decltype(l)::value && Mode != BlendMode::Composite;
+              marchKernel<Mode, Lit, decltype(c)::value>
+                <<<grid, block>>>(s, cam, mp, jitter, seed, depth, image, counters);
+            });
+        });
+    });
 }
 } // namespace
 
@@ -127,28 +114,9 @@ void CUDARenderer::march(const Scene& scene, const Camera& camera, const MarchSe
   }
   const bool lit = s.lighting.enabled;
   const dim3 block = in.Block;
-  const dim3 grid((unsigned(camera.width) + block.x - 1) / block.x, (unsigned(camera.height) + block.y - 1) / block.y);
-  float4* image = in.Accum.ptr;
-  switch (s.blend.mode)
-  {
-    case BlendMode::Max:
-      launchMarch<BlendMode::Max>(
-        lit, count, grid, block, s, cam, mp, settings.jitter, settings.seed, devDepth, image, in.Counters.ptr);
-      break;
-    case BlendMode::Mix:
-      launchMarch<BlendMode::Mix>(
-        lit, count, grid, block, s, cam, mp, settings.jitter, settings.seed, devDepth, image, in.Counters.ptr);
-      break;
-    case BlendMode::Composite:
-      launchMarch<BlendMode::Composite>(
-        lit, count, grid, block, s, cam, mp, settings.jitter, settings.seed, devDepth, image, in.Counters.ptr);
-      break;
-    case BlendMode::Density:
-    default:
-      launchMarch<BlendMode::Density>(
-        lit, count, grid, block, s, cam, mp, settings.jitter, settings.seed, devDepth, image, in.Counters.ptr);
-      break;
-  }
+  const dim3 grid = imageGrid(block, camera.width, camera.height);
+  launchMarch(s.blend.mode, lit, count, grid, block, s, cam, mp, settings.jitter, settings.seed, devDepth, in.Accum.ptr,
+    in.Counters.ptr);
   MCVOL_CUDA(cudaGetLastError());
   accum.addSamples(1);
   in.AccumId = accum.id();

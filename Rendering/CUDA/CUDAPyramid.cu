@@ -1,9 +1,9 @@
 // SPDX-License-Identifier: BSD-3-Clause
 //
-// CUDARenderer::classifyLevel (issue 13, item 2): a level of the
-// extinction-based pyramid built on the device from scalar channels, so that
-// a transfer-function edit at a coarse level rebuilds it at interactive
-// rates. The arithmetic is the host build's (Pyramid.cxx: classifyRangeOf,
+// CUDARenderer::classifyLevel: a level of the extinction-based pyramid
+// (Kraus and Buerger, extinction-based downsampling) built on the device from
+// scalar channels, so that a transfer-function edit at a coarse level
+// rebuilds it at interactive rates. The arithmetic is the host build's (Pyramid.cxx: classifyRangeOf,
 // SliceStage) operation for operation, with explicitly rounded intrinsics so
 // that nvcc contracts nothing into a fused multiply-add:
 // - classification: texel coordinate (s - scalarMin) * scale in double,
@@ -266,6 +266,191 @@ void filterAxes(Volume4& v, int first, const DeviceTaps& taps, DeviceMeter& mete
     moveVolume(next, v);
   }
 }
+
+/// The elements of `src` a device copy holds: the whole strided array from
+/// the first voxel's component to the last's.
+size_t copiedElements(const ChannelSource& src, size_t voxels)
+{
+  return (voxels - 1) * size_t(src.stride) + 1;
+}
+
+/// The kept copy of `src` under key `version` (nonzero), or null.
+const LevelInput* findKept(
+  const std::vector<std::unique_ptr<LevelInput>>& pool, const ChannelSource& src, uint64_t version, size_t voxels)
+{
+  for (const auto& li : pool)
+  {
+    if (version != 0 && li->host == src.data && li->type == src.type && li->stride == src.stride &&
+      li->elements == copiedElements(src, voxels) && li->version == version)
+    {
+      return li.get();
+    }
+  }
+  return nullptr;
+}
+
+bool isUsed(const std::vector<const LevelInput*>& used, const LevelInput* li)
+{
+  return std::find(used.begin(), used.end(), li) != used.end();
+}
+
+/**
+ * Frees the kept copies this build cannot use: those of the same host
+ * arrays as the inputs under another key (older data), then the least
+ * recently used others while the kept copies and the versioned inputs still
+ * to copy would exceed `cap` bytes. `used`: the kept copies the inputs take.
+ */
+void evictLevelInputs(std::vector<std::unique_ptr<LevelInput>>& pool, const std::vector<const LevelInput*>& used,
+  const ClassifyInput* inputs, int numInputs, size_t voxels, size_t cap)
+{
+  size_t needed = 0;
+  for (int n = 0; n < numInputs; ++n)
+  {
+    if (!used[size_t(n)] && inputs[n].dataVersion != 0)
+    {
+      needed += copiedElements(inputs[n].source, voxels) * size_t(scalarTypeSize(inputs[n].source.type));
+    }
+  }
+  auto stale = [&](const LevelInput& li)
+  {
+    for (int n = 0; n < numInputs; ++n)
+    {
+      if (li.host == inputs[n].source.data)
+      {
+        return true;
+      }
+    }
+    return false;
+  };
+  size_t keptBytes = 0;
+  for (auto it = pool.begin(); it != pool.end();)
+  {
+    if (!isUsed(used, it->get()) && stale(**it))
+    {
+      it = pool.erase(it);
+    }
+    else
+    {
+      keptBytes += (*it)->data.bytes();
+      ++it;
+    }
+  }
+  for (auto it = pool.begin(); it != pool.end() && keptBytes + needed > cap;)
+  {
+    if (!isUsed(used, it->get()))
+    {
+      keptBytes -= (*it)->data.bytes();
+      it = pool.erase(it); // the front is the least recently used
+    }
+    else
+    {
+      ++it;
+    }
+  }
+}
+
+/**
+ * The inputs on the device, one copy per input (null entries of `used`
+ * filled): a kept copy whose key matches, else a new copy of the whole
+ * strided array, kept in `pool` when the input has a key
+ * (ClassifyInput::dataVersion nonzero) and in `transient` for this build
+ * only when not. The copies this build uses move to the back of `pool` (most
+ * recently used).
+ */
+void copyLevelInputs(std::vector<std::unique_ptr<LevelInput>>& pool,
+  std::vector<std::unique_ptr<LevelInput>>& transient, std::vector<const LevelInput*>& used,
+  const ClassifyInput* inputs, int numInputs, size_t voxels, CudaUpdateCounters& updates)
+{
+  for (int n = 0; n < numInputs; ++n)
+  {
+    const ChannelSource& src = inputs[n].source;
+    const uint64_t version = inputs[n].dataVersion;
+    if (used[size_t(n)] ||
+      (used[size_t(n)] = findKept(pool, src, version, voxels)) != nullptr) // or copied for an earlier input
+    {
+      continue;
+    }
+    auto li = std::make_unique<LevelInput>();
+    li->host = src.data;
+    li->type = src.type;
+    li->stride = src.stride;
+    li->elements = copiedElements(src, voxels);
+    li->version = version;
+    const size_t bytes = li->elements * size_t(scalarTypeSize(src.type));
+    li->data.resize(bytes);
+    MCVOL_CUDA(cudaMemcpy(li->data.ptr, src.data, bytes, cudaMemcpyHostToDevice));
+    ++updates.levelInputUploads;
+    used[size_t(n)] = li.get();
+    (version != 0 ? pool : transient).push_back(std::move(li));
+  }
+  std::stable_partition(
+    pool.begin(), pool.end(), [&](const std::unique_ptr<LevelInput>& li) { return !isUsed(used, li.get()); });
+}
+
+/// The classification tables (`texels`, all inputs' in order) and the
+/// kernels' input descriptors on the device.
+void uploadClassifyInputs(const std::vector<ClassificationTable>& tables, const ClassifyInput* inputs, int numInputs,
+  const std::vector<const LevelInput*>& used, DeviceBuffer<float4>& texels,
+  DeviceBuffer<DeviceClassifyInput>& descriptors)
+{
+  size_t texelCount = 0;
+  for (const ClassificationTable& t : tables)
+  {
+    texelCount += t.K;
+  }
+  texels.resize(texelCount);
+  std::vector<DeviceClassifyInput> desc(static_cast<size_t>(numInputs));
+  std::vector<float> all;
+  all.reserve(texelCount * 4);
+  size_t at = 0;
+  for (int n = 0; n < numInputs; ++n)
+  {
+    const ClassificationTable& t = tables[size_t(n)];
+    all.insert(all.end(), t.texels.begin(), t.texels.end());
+    DeviceClassifyInput& d = desc[size_t(n)];
+    d.data = used[size_t(n)]->data.ptr;
+    d.type = int(inputs[n].source.type);
+    d.stride = (long long)inputs[n].source.stride;
+    d.scalarMin = t.scalarMin;
+    d.scale = t.scale;
+    d.K = int(t.K);
+    d.texels = texels.ptr + at;
+    at += t.K;
+  }
+  MCVOL_CUDA(cudaMemcpy(texels.ptr, all.data(), all.size() * sizeof(float), cudaMemcpyHostToDevice));
+  descriptors.resize(desc.size());
+  MCVOL_CUDA(
+    cudaMemcpy(descriptors.ptr, desc.data(), desc.size() * sizeof(DeviceClassifyInput), cudaMemcpyHostToDevice));
+}
+
+/// Level `level` of the classified inputs: level 1 from the classification
+/// fused with the x filter, then y and z; each further level the float4
+/// level downsampled again. The transient input copies are freed once the
+/// classification no longer needs them.
+void filterLevel(Volume4& v, const DeviceClassifyInput* descriptors, int numInputs, const int dims[3], int level,
+  const DeviceTaps& taps, std::vector<std::unique_ptr<LevelInput>>& transient, DeviceMeter& meter)
+{
+  {
+    const int mx = dims[0] > 1 ? (dims[0] + 1) / 2 : 1;
+    const int d[3] = { mx, dims[1], dims[2] };
+    v.allocate(d, meter);
+    const long long total = (long long)d[0] * d[1] * d[2];
+    classifyFilterXKernel<<<blocksFor(total), kThreads>>>(
+      descriptors, numInputs, dims[0], dims[1], dims[2], mx, taps, v.buf.ptr);
+    MCVOL_CUDA(cudaGetLastError());
+  }
+  // cudaFree waits for the kernel.
+  for (auto& li : transient)
+  {
+    meter.sub(li->data.bytes());
+  }
+  transient.clear();
+  filterAxes(v, 1, taps, meter);
+  for (int l = 2; l <= level; ++l)
+  {
+    filterAxes(v, 0, taps, meter);
+  }
+}
 } // namespace
 
 void CUDARenderer::releaseLevelInputs()
@@ -292,108 +477,18 @@ PyramidLevel CUDARenderer::classifyLevel(const ClassifyInput* inputs, int numInp
   const size_t voxels = size_t(dims[0]) * size_t(dims[1]) * size_t(dims[2]);
   DeviceMeter meter;
 
-  // The inputs. Copies kept from earlier builds (ClassifyInput::dataVersion
-  // nonzero) are reused when their key matches; a kept copy of the same host
-  // array under another key (older data) is freed, and so are the least
-  // recently used others while the kept copies would exceed half the
-  // device's memory. The rest is copied (whole: a strided array with its
-  // other components); unversioned inputs only for this build.
+  // The inputs: kept copies from earlier builds reused, stale ones and, past
+  // half the device's memory, the least recently used ones freed, the rest
+  // copied.
   std::vector<std::unique_ptr<LevelInput>>& pool = in.LevelInputs;
   std::vector<const LevelInput*> used(static_cast<size_t>(numInputs), nullptr);
+  for (int n = 0; n < numInputs; ++n)
+  {
+    used[size_t(n)] = findKept(pool, inputs[n].source, inputs[n].dataVersion, voxels);
+  }
+  evictLevelInputs(pool, used, inputs, numInputs, voxels, in.Props.totalGlobalMem / 2);
   std::vector<std::unique_ptr<LevelInput>> transient;
-  auto matches = [](const LevelInput& li, const ChannelSource& src, size_t elements, uint64_t version)
-  {
-    return version != 0 && li.host == src.data && li.type == src.type && li.stride == src.stride &&
-      li.elements == elements && li.version == version;
-  };
-  auto elementsOf = [voxels](const ChannelSource& src) { return (voxels - 1) * size_t(src.stride) + 1; };
-  auto usedNow = [&](const LevelInput* li) { return std::find(used.begin(), used.end(), li) != used.end(); };
-  auto find = [&](const ChannelSource& src, uint64_t version) -> const LevelInput*
-  {
-    for (const auto& li : pool)
-    {
-      if (matches(*li, src, elementsOf(src), version))
-      {
-        return li.get();
-      }
-    }
-    return nullptr;
-  };
-  for (int n = 0; n < numInputs; ++n)
-  {
-    used[size_t(n)] = find(inputs[n].source, inputs[n].dataVersion);
-  }
-  size_t needed = 0;
-  for (int n = 0; n < numInputs; ++n)
-  {
-    if (!used[size_t(n)] && inputs[n].dataVersion != 0)
-    {
-      needed += elementsOf(inputs[n].source) * size_t(scalarTypeSize(inputs[n].source.type));
-    }
-  }
-  {
-    auto stale = [&](const LevelInput& li)
-    {
-      for (int n = 0; n < numInputs; ++n)
-      {
-        if (li.host == inputs[n].source.data)
-        {
-          return true;
-        }
-      }
-      return false;
-    };
-    size_t keptBytes = 0;
-    for (auto it = pool.begin(); it != pool.end();)
-    {
-      if (!usedNow(it->get()) && stale(**it))
-      {
-        it = pool.erase(it);
-      }
-      else
-      {
-        keptBytes += (*it)->data.bytes();
-        ++it;
-      }
-    }
-    const size_t cap = in.Props.totalGlobalMem / 2;
-    for (auto it = pool.begin(); it != pool.end() && keptBytes + needed > cap;)
-    {
-      if (!usedNow(it->get()))
-      {
-        keptBytes -= (*it)->data.bytes();
-        it = pool.erase(it); // the front is the least recently used
-      }
-      else
-      {
-        ++it;
-      }
-    }
-  }
-  for (int n = 0; n < numInputs; ++n)
-  {
-    const ChannelSource& src = inputs[n].source;
-    const uint64_t version = inputs[n].dataVersion;
-    if (used[size_t(n)] || (used[size_t(n)] = find(src, version)) != nullptr) // or copied for an earlier input
-    {
-      continue;
-    }
-    auto li = std::make_unique<LevelInput>();
-    li->host = src.data;
-    li->type = src.type;
-    li->stride = src.stride;
-    li->elements = elementsOf(src);
-    li->version = version;
-    const size_t bytes = li->elements * size_t(scalarTypeSize(src.type));
-    li->data.resize(bytes);
-    MCVOL_CUDA(cudaMemcpy(li->data.ptr, src.data, bytes, cudaMemcpyHostToDevice));
-    ++in.Updates.levelInputUploads;
-    used[size_t(n)] = li.get();
-    (version != 0 ? pool : transient).push_back(std::move(li));
-  }
-  // The copies this build uses go to the back (most recently used).
-  std::stable_partition(
-    pool.begin(), pool.end(), [&](const std::unique_ptr<LevelInput>& li) { return !usedNow(li.get()); });
+  copyLevelInputs(pool, transient, used, inputs, numInputs, voxels, in.Updates);
   size_t inputBytes = 0;
   for (const auto& li : pool)
   {
@@ -405,65 +500,13 @@ PyramidLevel CUDARenderer::classifyLevel(const ClassifyInput* inputs, int numInp
   }
   meter.add(inputBytes);
 
-  // Tables and input descriptors.
-  size_t texelCount = 0;
-  for (const ClassificationTable& t : tables)
-  {
-    texelCount += t.K;
-  }
   DeviceBuffer<float4> texels;
-  texels.resize(texelCount);
-  std::vector<DeviceClassifyInput> desc(static_cast<size_t>(numInputs));
-  {
-    std::vector<float> all;
-    all.reserve(texelCount * 4);
-    size_t at = 0;
-    for (int n = 0; n < numInputs; ++n)
-    {
-      const ClassificationTable& t = tables[size_t(n)];
-      all.insert(all.end(), t.texels.begin(), t.texels.end());
-      DeviceClassifyInput& d = desc[size_t(n)];
-      d.data = used[size_t(n)]->data.ptr;
-      d.type = int(inputs[n].source.type);
-      d.stride = (long long)inputs[n].source.stride;
-      d.scalarMin = t.scalarMin;
-      d.scale = t.scale;
-      d.K = int(t.K);
-      d.texels = texels.ptr + at;
-      at += t.K;
-    }
-    MCVOL_CUDA(cudaMemcpy(texels.ptr, all.data(), all.size() * sizeof(float), cudaMemcpyHostToDevice));
-  }
   DeviceBuffer<DeviceClassifyInput> descriptors;
-  descriptors.resize(desc.size());
-  MCVOL_CUDA(
-    cudaMemcpy(descriptors.ptr, desc.data(), desc.size() * sizeof(DeviceClassifyInput), cudaMemcpyHostToDevice));
+  uploadClassifyInputs(tables, inputs, numInputs, used, texels, descriptors);
   meter.add(texels.bytes() + descriptors.bytes());
 
-  // Level 1: classification fused with x, then y and z.
   Volume4 v;
-  {
-    const int mx = dims[0] > 1 ? (dims[0] + 1) / 2 : 1;
-    const int d[3] = { mx, dims[1], dims[2] };
-    v.allocate(d, meter);
-    const long long total = (long long)d[0] * d[1] * d[2];
-    classifyFilterXKernel<<<blocksFor(total), kThreads>>>(
-      descriptors.ptr, numInputs, dims[0], dims[1], dims[2], mx, taps, v.buf.ptr);
-    MCVOL_CUDA(cudaGetLastError());
-  }
-  // The inputs are done with: transient copies go now (cudaFree waits for
-  // the kernel).
-  for (auto& li : transient)
-  {
-    meter.sub(li->data.bytes());
-  }
-  transient.clear();
-  filterAxes(v, 1, taps, meter);
-  // Levels 2 .. level: the float4 level downsampled again.
-  for (int l = 2; l <= level; ++l)
-  {
-    filterAxes(v, 0, taps, meter);
-  }
+  filterLevel(v, descriptors.ptr, numInputs, dims, level, taps, transient, meter);
   for (int a = 0; a < 3; ++a)
   {
     if (v.dims[a] != out.dims[a])

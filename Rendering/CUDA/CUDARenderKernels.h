@@ -1,20 +1,20 @@
 // SPDX-License-Identifier: BSD-3-Clause
 //
-// The render kernels' entry points and their per-pixel helpers, shared by
-// the two translation units that instantiate them:
+// The render kernels' entry points, their per-pixel helpers and their
+// launcher, shared by the two translation units that compile them:
 // - CUDALaunch.cu: every kernel, for every scene (pre-classified channels,
 //   cubic interpolation, lighting, the visibility optimization);
 // - CUDALaunchPlain.cu: the unlit kernels again, compiled with
 //   MCVOL_DEVICE_PLAIN_CHANNELS, for scenes of scalar channels with linear or
 //   nearest interpolation (the common case; CUDARenderer::setPlainKernels,
-//   on by default). There channelOptics() has no
-//   out-of-line call for pre-classified or cubic sampling, whose register
-//   needs otherwise weigh on every kernel that can make it (ptxas, sm_90:
-//   unlit kernels 72-80 instead of 116-124 registers; on the H100 an
-//   expected-value NYX-like frame took 1.05 ms with the pre-classified call
-//   alone, 1.24 ms with cubic sampling added and 0.86 ms with the plain
-//   kernels, Benchmarks/RESULTS.md).
-// Included once per translation unit, inside namespace mcvol.
+//   on by default). There channelOptics() has no out-of-line call for
+//   pre-classified or cubic sampling. On the GPU an out-of-line function
+//   shares the registers of every kernel that can call it, so without it the
+//   unlit kernels need far fewer registers per thread (ptxas
+//   --resource-usage), keep more rays in flight and finish a frame sooner
+//   (Documentation/performance.md).
+// Included once per translation unit: the kernels and launchUnlit() sit in
+// an anonymous namespace, so each unit has its own compilation of them.
 #pragma once
 
 #include "CUDAInternal.h"
@@ -23,19 +23,22 @@
 
 namespace mcvol
 {
+/// One launch of a render kernel: its blocks, its stream and the buffers the
+/// kernel takes after the frame's parameters.
+struct RenderLaunch
+{
+  dim3 grid;
+  dim3 block;
+  cudaStream_t stream = 0;                ///< 0: the legacy default stream
+  const float* depth = nullptr;           ///< window depth per pixel, or null
+  float4* accum = nullptr;                ///< running mean
+  float4* even = nullptr;                 ///< even-sample mean of the error estimate, or null
+  uint32_t previous = 0;                  ///< samples already in the mean
+  unsigned long long* counters = nullptr; ///< work counters (counting kernels)
+};
+
 namespace
 {
-// Warp sums with shuffles (any architecture from sm_70), 64-bit so that high
-// sample counts cannot wrap.
-__device__ MCVOL_FORCE_INLINE unsigned long long warpSumU64(unsigned long long v)
-{
-  for (int o = 16; o > 0; o >>= 1)
-  {
-    v += __shfl_xor_sync(0xffffffffu, v, o);
-  }
-  return v;
-}
-
 /// The core's running mean (accumulate()) on one pixel of the device image.
 __device__ MCVOL_FORCE_INLINE void accumulatePixel(float4* pixel, const Vec4f& sum, uint32_t previous, int added)
 {
@@ -62,7 +65,8 @@ __device__ MCVOL_FORCE_INLINE void accumulateEvenPixel(float4* pixel, const Vec4
 /// One thread per pixel: renderPixel() from the core, folded into the
 /// running mean in `accum` (and the even samples into `even`, when not
 /// null: the error estimate). Count adds the work counters (warp sums, one
-/// atomic per warp and counter).
+/// atomic per warp and counter). Lit false compiles the lighting out; Unlit
+/// is the unlit estimator's code (unlitEstimator(), Integrator.h).
 template <BlendMode Mode, bool Count, bool Lit, int Unlit>
 __device__ __forceinline__ void renderKernelBody(const SceneView& s, const CameraView& cam, const FrameParams& fp,
   const float* __restrict__ depth, float4* __restrict__ accum, float4* __restrict__ even, uint32_t previous,
@@ -74,10 +78,9 @@ __device__ __forceinline__ void renderKernelBody(const SceneView& s, const Camer
   // A batch of pilot images (FrameParams::batchSamples): this block's image,
   // sample and replicate from blockIdx.z. Only in the counting kernels, which
   // are what the pilots launch (CUDARenderer::renderPilots): the others,
-  // every render of the mapper, read the frame's parameters as before
-  // (their PTX is unchanged by the batch). Read in every kernel, the copy
-  // made the expected-value frame 7.5% slower on the H100 (NYX-like 0.75 ->
-  // 0.81 ms; Benchmarks/RESULTS.md, eighteenth session).
+  // every render of the mapper, read the frame's parameters directly and
+  // carry no code for the batch, since the copy of the parameters costs
+  // registers and frame time in every kernel that makes it.
   FrameParams batch = fp;
   if constexpr (Count)
   {
@@ -100,8 +103,7 @@ __device__ __forceinline__ void renderKernelBody(const SceneView& s, const Camer
     const size_t p = size_t(y) * size_t(cam.width) + size_t(x);
     const float z = depth ? depth[p] : 1.f;
     Vec4f evenSum;
-    const Vec4f sum =
-      renderPixel<Mode, Lit, false, Unlit>(s, cam, f, x, y, z, c, nullptr, even ? &evenSum : nullptr);
+    const Vec4f sum = renderPixel<Mode, Lit, false, Unlit>(s, cam, f, x, y, z, c, nullptr, even ? &evenSum : nullptr);
     accumulatePixel(accum + p, sum, previous, fp.samplesPerPixel);
     if (even)
     {
@@ -134,6 +136,7 @@ __device__ __forceinline__ void renderKernelBody(const SceneView& s, const Camer
   }
 }
 
+/// The render kernel: renderKernelBody() on the kernel's parameters.
 template <BlendMode Mode, bool Count, bool Lit, int Unlit = 0>
 __global__ void renderKernel(const __grid_constant__ SceneView s, const __grid_constant__ CameraView cam,
   const __grid_constant__ FrameParams fp, const float* __restrict__ depth, float4* __restrict__ accum,
@@ -142,76 +145,53 @@ __global__ void renderKernel(const __grid_constant__ SceneView s, const __grid_c
   renderKernelBody<Mode, Count, Lit, Unlit>(s, cam, fp, depth, accum, even, previous, counters);
 }
 
-/// The unlit kernels, a separate entry so that a build can cap their registers
-/// without touching the lit ones: -DMCVOL_UNLIT_MAXREG=N (off by default).
-/// Measured on the H100 (NYX-like, 1024^2; unlit kernels at 114-118
-/// registers): a cap of 96 (spilling 140-200 bytes) made the 1-DDA frame 0.83
-/// -> 0.77 ms and the expected-value one 1.24 -> 1.13 ms; 112 changed
-/// nothing; 80 spilled too much (1-DDA 1.37 ms). Without float4 texture reads
-/// in the kernels (the default build) they need 96-106 registers and
-/// the expected-value frame takes 1.05 ms uncapped.
-#if defined(MCVOL_UNLIT_MAXREG) && MCVOL_UNLIT_MAXREG > 0
-#define MCVOL_UNLIT_BOUNDS __maxnreg__(MCVOL_UNLIT_MAXREG)
-#else
-#define MCVOL_UNLIT_BOUNDS
-#endif
-template <BlendMode Mode, bool Count, int Unlit>
-__global__ void MCVOL_UNLIT_BOUNDS renderKernelUnlit(const __grid_constant__ SceneView s,
-  const __grid_constant__ CameraView cam, const __grid_constant__ FrameParams fp, const float* __restrict__ depth,
-  float4* __restrict__ accum, float4* __restrict__ even, uint32_t previous, unsigned long long* __restrict__ counters)
+/// Launches renderKernel<Mode, Count, Lit, Unlit> with `count` as Count.
+template <BlendMode Mode, bool Lit, int Unlit>
+void launchRenderKernel(
+  bool count, const SceneView& s, const CameraView& cam, const FrameParams& fp, const RenderLaunch& k)
 {
-  renderKernelBody<Mode, Count, false, Unlit>(s, cam, fp, depth, accum, even, previous, counters);
+  withFlag(count,
+    [&](auto counted)
+    {
+      renderKernel<Mode, decltype(counted)::value, Lit, Unlit>
+        <<<k.grid, k.block, 0, k.stream>>>(s, cam, fp, k.depth, k.accum, k.even, k.previous, k.counters);
+    });
 }
 
-/// Launches the unlit kernel of estimator code Unlit (unlitEstimator()),
-/// with or without counters. Composite is only ever launched with 0.
-template <BlendMode Mode, int Unlit>
-void launchUnlitKernel(bool count, dim3 grid, dim3 block, const SceneView& s, const CameraView& cam,
-  const FrameParams& fp, const float* depth, float4* accum, float4* even, uint32_t previous,
-  unsigned long long* counters, cudaStream_t stream)
-{
-  if constexpr (Unlit == 0 || Mode != BlendMode::Composite)
-  {
-    if (count)
-    {
-      renderKernelUnlit<Mode, true, Unlit><<<grid, block, 0, stream>>>(s, cam, fp, depth, accum, even, previous, counters);
-    }
-    else
-    {
-      renderKernelUnlit<Mode, false, Unlit><<<grid, block, 0, stream>>>(s, cam, fp, depth, accum, even, previous, counters);
-    }
-  }
-}
-
-/// The same for a runtime estimator code.
+/// Launches the unlit kernel of estimator code `unlit` (unlitEstimator(),
+/// Integrator.h), with or without counters. Post-render composite only ever
+/// takes code 0, so no other instance is compiled for it.
 template <BlendMode Mode>
-void launchUnlit(int unlit, bool count, dim3 grid, dim3 block, const SceneView& s, const CameraView& cam,
-  const FrameParams& fp, const float* depth, float4* accum, float4* even, uint32_t previous,
-  unsigned long long* counters, cudaStream_t stream)
+void launchUnlit(
+  int unlit, bool count, const SceneView& s, const CameraView& cam, const FrameParams& fp, const RenderLaunch& k)
 {
-  if (unlit == 3)
+  if constexpr (Mode == BlendMode::Composite)
   {
-    launchUnlitKernel<Mode, 3>(count, grid, block, s, cam, fp, depth, accum, even, previous, counters, stream);
-  }
-  else if (unlit == 2)
-  {
-    launchUnlitKernel<Mode, 2>(count, grid, block, s, cam, fp, depth, accum, even, previous, counters, stream);
-  }
-  else if (unlit == 1)
-  {
-    launchUnlitKernel<Mode, 1>(count, grid, block, s, cam, fp, depth, accum, even, previous, counters, stream);
+    launchRenderKernel<Mode, false, 0>(count, s, cam, fp, k);
   }
   else
   {
-    launchUnlitKernel<Mode, 0>(count, grid, block, s, cam, fp, depth, accum, even, previous, counters, stream);
+    switch (unlit)
+    {
+      case 3:
+        launchRenderKernel<Mode, false, 3>(count, s, cam, fp, k);
+        break;
+      case 2:
+        launchRenderKernel<Mode, false, 2>(count, s, cam, fp, k);
+        break;
+      case 1:
+        launchRenderKernel<Mode, false, 1>(count, s, cam, fp, k);
+        break;
+      default:
+        launchRenderKernel<Mode, false, 0>(count, s, cam, fp, k);
+        break;
+    }
   }
 }
-
 } // namespace
 
-/// CUDALaunchPlain.cu: launches the plain unlit kernel of `mode` (estimator
-/// code `unlit`, with or without counters) on `stream`.
-void launchPlainUnlit(BlendMode mode, bool count, int unlit, dim3 grid, dim3 block, const SceneView& s,
-  const CameraView& cam, const FrameParams& fp, const float* depth, float4* accum, float4* even, uint32_t previous,
-  unsigned long long* counters, cudaStream_t stream);
+/// CUDALaunchPlain.cu: launchUnlit() for the blend mode known at run time,
+/// with the plain compilation of the kernels.
+void launchPlainUnlit(BlendMode mode, int unlit, bool count, const SceneView& s, const CameraView& cam,
+  const FrameParams& fp, const RenderLaunch& k);
 } // namespace mcvol

@@ -5,16 +5,19 @@
 // The work is done in
 // - CUDAUpload.cu: channel arrays and 3D textures;
 // - CUDAAcceleration.cu: macrocell ranges, majorants, active channels;
-// - CUDALaunch.cu: the render kernel, accumulation image, depth, counters.
+// - CUDALaunch.cu: the render kernels, accumulation image, depth, counters,
+//   the concurrent pilots (CUDALaunchPlain.cu: the plain unlit kernels);
+// - CUDAMarch.cu: the ray-marching reference;
+// - CUDAPyramid.cu: levels of detail built on the device.
 // CUDAInternal.h holds the state they share (CUDARenderer::Internal).
 #include "CUDAInternal.h"
 
-#include "mcvol/Acceleration.h" // footprintApron
+#include "mcvol/ray/Acceleration.h" // footprintApron
 
 #include <algorithm>
+#include <cstdlib>
 #include <dlfcn.h>
 #include <iterator>
-#include <cstdlib>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -182,10 +185,6 @@ CUDARenderer::CUDARenderer(int device)
   this->In->ChannelMax.resize(kMaxChannels);
   this->In->NaNFlags.resize(kMaxChannels);
   std::fill(std::begin(this->In->ChannelTableVersion), std::end(this->In->ChannelTableVersion), ~0ull);
-  const char* plain = std::getenv("MCVOL_CUDA_PLAIN_KERNELS");
-  this->In->PlainKernels = !(plain && std::string(plain) == "0");
-  const char* levels = std::getenv("MCVOL_CUDA_DEVICE_LEVELS");
-  this->In->DeviceLevels = !(levels && std::string(levels) == "0");
 }
 
 CUDARenderer::~CUDARenderer() = default;

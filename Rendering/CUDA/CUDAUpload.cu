@@ -123,9 +123,10 @@ bool CUDARenderer::Internal::uploadTexture(DeviceChannel& dc, const void* host)
 
 void CUDARenderer::Internal::uploadChannels(const Scene& scene)
 {
-  // Each channel is held once on the device (issue 14, item 5): as a 3D
-  // texture when texture sampling is on and it fits (the faster path,
-  // RESULTS.md "Texture or global-memory sampling"), else as a dense array.
+  // Each channel is held once on the device, so that a channel costs its
+  // voxels once: as a 3D texture when texture sampling is on and it fits
+  // (hardware filtering, the faster path: Documentation/performance.md),
+  // else as a dense array.
   // Ranges are built from whichever holds it; a texture-held channel found
   // to hold NaN or Inf moves to an array afterwards (moveNonFiniteToArrays()).
   const int* d = scene.dims();

@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// Pyramid levels built on the GPU (CUDARenderer::classifyLevel, issue 13,
-// item 2) against the host build (classifyExtinctionLevel): every filter,
-// levels 1 and 2, odd dims and axes of one voxel, one channel and two summed,
+// Pyramid levels built on the GPU (CUDARenderer::classifyLevel;
+// Documentation/user-guide/levels-of-detail.md) against the host build
+// (classifyExtinctionLevel): every filter, levels 1 and 2, odd dims and axes
+// of one voxel, one channel and two summed,
 // every scalar type (float64 far from zero), a strided channel, scalars
 // outside the table's range and a NaN voxel; the kept inputs; bad input.
 // Needs a CUDA device (TestMain skips with 125 without one).
@@ -199,9 +200,7 @@ std::unique_ptr<CUDARenderer> device()
 TEST(CudaPyramid, LevelsEqualHostBuild)
 {
   const std::unique_ptr<CUDARenderer> r = device();
-  const char* env = std::getenv("MCVOL_CUDA_DEVICE_LEVELS");
-  // The default since the fourth session; MCVOL_CUDA_DEVICE_LEVELS=0 turns it off.
-  EXPECT_EQ(r->buildsLevelsOnDevice(), !(env && std::string(env) == "0"));
+  EXPECT_TRUE(r->buildsLevelsOnDevice()); // on by default
   r->setDeviceLevels(true);
   EXPECT_TRUE(r->buildsLevelsOnDevice());
   TestRand rnd(4242);

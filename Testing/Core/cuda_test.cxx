@@ -263,7 +263,7 @@ TEST(CudaAgreement, SameSeedGlobalSamplingNearlyIdentical)
       }
       const double frac = double(close) / double(a.size() / 4);
       std::printf("same seed, %s %s: %.4f of pixels within 1e-4\n", toString(mode), toString(t), frac);
-      EXPECT_GE(frac, 0.99) << toString(mode) << " " << toString(t); // measured: 1.0000 on an H200
+      EXPECT_GE(frac, 0.99) << toString(mode) << " " << toString(t); // typically 1.0000
     }
   }
 }
@@ -465,7 +465,8 @@ TEST(CudaGrid, UploadsAndRebuildsFollowChanges)
   EXPECT_LT(meanDiff, 2e-3) << "max difference " << maxDiff;
 }
 
-// Each channel is held once on the device (issue 14, item 5): as a texture
+// Each channel is held once on the device (Documentation/user-guide/
+// backends.md): as a texture
 // with texture sampling, as an array with global sampling, and as an array
 // when it holds NaN (the core's NaN rule needs unfiltered reads). Device
 // bytes equal the data (float64 stored as float32), whatever the type, and
@@ -508,7 +509,7 @@ TEST(CudaMemory, EachChannelHeldOnce)
   }
 }
 
-// Pre-classified (extinction-format) channels on the device (issue 13):
+// Pre-classified (extinction-format) channels on the device:
 // uploaded packed from an interleaved array (stride 5); holding a NaN voxel,
 // the channel stays an array even with CudaSampling::Texture (sampled in
 // software), so a classified-only scene gives the CPU's pixels for the same
@@ -834,8 +835,7 @@ TEST(CudaAccumulation, DisplayImageIsTheRoundedMean)
 // every blend mode, and are not taken for a cubic scene.
 TEST(CudaRender, PlainKernelsEqualGeneral)
 {
-  const char* env = std::getenv("MCVOL_CUDA_PLAIN_KERNELS");
-  EXPECT_EQ(CUDARenderer().plainKernels(), !(env && std::string(env) == "0")); // on by default
+  EXPECT_TRUE(CUDARenderer().plainKernels()); // on by default
   const TypedVolume v(ScalarType::UInt16, 3, 30, 28, 26);
   const Camera cam = orbitCamera(v.dims, std::array<double, 3>{ 1, 1, 1 }.data(), 24, 24, 30, 20);
   for (BlendMode mode : { BlendMode::Density, BlendMode::Max, BlendMode::Mix, BlendMode::Composite })
@@ -1100,7 +1100,7 @@ TEST(CudaRender, DepthAndCounters)
 }
 
 // Bad input gives errors, not crashes.
-TEST(CudaRender, Errors)
+TEST(CudaRender, BadInputIsAnError)
 {
   CUDARenderer g;
   EXPECT_THROW(g.setBlockSize(3, 5), std::invalid_argument);
@@ -1120,7 +1120,7 @@ TEST(CudaRender, Errors)
   EXPECT_STREQ(autoR->name(), "cuda") << choice;
 }
 
-// Cubic B-spline sampling on the device (issue 13, item 3). The device
+// Cubic B-spline sampling on the device. The device
 // builds the cubic ranges (apron 2) and majorants bit for bit as the host,
 // for every voxel type; switching interpolation to and from cubic rebuilds
 // the device ranges (and only that: no upload), also when the Scene skips

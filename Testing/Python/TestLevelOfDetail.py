@@ -1,5 +1,7 @@
-"""Levels of detail of vtkMultiChannelVolumeMapper (issue 13, item 4):
-- level 0 is the default and renders as before (no level is built);
+"""Levels of detail of vtkMultiChannelVolumeMapper
+(Documentation/user-guide/levels-of-detail.md):
+- level 0 is the default and renders the full-resolution volume (no level
+  is built);
 - a level-1 and a level-2 render of a smooth 3-channel volume are close to
   the level-0 render (ray-marching reference: deterministic images), and
   line up with it (the alpha centroid of an off-centre blob moves less than
@@ -233,7 +235,7 @@ ref.render()
 # the thread count: CMake runs this test with OMP_NUM_THREADS=2 (on 16
 # threads the 18 level-1 slices of this small volume are all in flight).
 full_classified = 16 * NX * NY * NZ
-if ref.mapper.GetActiveBackendName() == "cuda" and os.environ.get("MCVOL_CUDA_DEVICE_LEVELS") != "0":
+if ref.mapper.GetActiveBackendName() == "cuda":
     # Built on the GPU (the CUDA default): the device keeps its own copy of
     # the channels (3 float32 arrays) and works on whole filtered axes; it
     # never holds the full classified volume on top of that copy.
