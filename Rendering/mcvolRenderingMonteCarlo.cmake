@@ -12,11 +12,12 @@
 
 set(_mcvol_rendering_dir "${CMAKE_CURRENT_LIST_DIR}")
 
-# The VTK-free core and its CPU backend (static, position independent, linked
-# privately into the module library). The standalone build adds them from the
+# The VTK-free core, its CPU backend and the backend factory (static,
+# position independent, linked privately into the module library). The
+# standalone build adds them (and the CUDA backend, when it has one) from the
 # top level; inside a VTK build nobody has yet.
 set(CMAKE_POSITION_INDEPENDENT_CODE ON)
-foreach (_mcvol_part IN ITEMS Core CPU)
+foreach (_mcvol_part IN ITEMS Core CPU Backends)
   if (EXISTS "${_mcvol_rendering_dir}/${_mcvol_part}/CMakeLists.txt")
     string(TOLOWER "mcvol_${_mcvol_part}" _mcvol_part_target)
     if (NOT TARGET "${_mcvol_part_target}")
@@ -60,19 +61,18 @@ vtk_module_include(mcvol::RenderingMonteCarlo
   PUBLIC
     "$<BUILD_INTERFACE:${_mcvol_rendering_dir}>")
 
-foreach (_mcvol_core_target IN ITEMS mcvol_core mcvol_cpu)
+foreach (_mcvol_core_target IN ITEMS mcvol_core mcvol_cpu mcvol_backends)
   if (NOT TARGET "${_mcvol_core_target}")
     message(FATAL_ERROR
       "mcvol::RenderingMonteCarlo needs the target ${_mcvol_core_target} "
-      "(Rendering/Core and Rendering/CPU).")
+      "(Rendering/Core, Rendering/CPU and Rendering/Backends).")
   endif ()
   set_property(TARGET "${_mcvol_core_target}" PROPERTY POSITION_INDEPENDENT_CODE ON)
 endforeach ()
+# mcvol_backends brings the CPU backend and, when the build has one, the
+# CUDA backend.
 vtk_module_link(mcvol::RenderingMonteCarlo
   PRIVATE
+    mcvol_backends
     mcvol_cpu
     mcvol_core)
-# The CUDA backend, when the build has one.
-if (TARGET mcvol_cuda)
-  vtk_module_link(mcvol::RenderingMonteCarlo PRIVATE mcvol_cuda)
-endif ()

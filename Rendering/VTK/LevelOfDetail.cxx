@@ -196,7 +196,7 @@ void LevelOfDetailCache::DropIfStale(const Key& key)
 
 //------------------------------------------------------------------------------
 const LevelOfDetailCache::Level& LevelOfDetailCache::Get(const Key& key, int level, const BoundChannels& channels,
-  const std::vector<const TransferFunctionDesc*>& tables, Renderer* device)
+  const std::vector<const TransferFunctionDesc*>& tables, DeviceRenderer* device)
 {
   if (!this->HaveKey || !(key == this->Current))
   {

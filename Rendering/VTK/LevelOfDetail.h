@@ -6,7 +6,7 @@
 #include "ChannelBinding.h"
 
 #include "mcvol/Pyramid.h"
-#include "mcvol/Renderer.h"
+#include "mcvol/DeviceRenderer.h"
 #include "mcvol/Scene.h"
 
 #include <map>
@@ -18,13 +18,13 @@ namespace mcvol
 namespace adapter
 {
 /**
- * Stage 4b of vtkMultiChannelVolumeMapper::Render: levels of detail (issue
- * 13 item 4; Kraus and Buerger, Sec. 4). Which level this render uses (the
+ * Stage 4b of vtkMultiChannelVolumeMapper::Render: levels of detail (Kraus
+ * and Buerger, Sec. 4). Which level this render uses (the
  * one asked for, the automatic footprint rule, or the finest that fits the
  * memory budget), and that level's pre-classified channels, built by
  * streaming level 0 slice by slice (mcvol::classifyExtinctionLevel), or on
  * the render backend's device where it builds levels there
- * (Renderer::classifyLevel: CUDA), and kept until the data, a transfer-function table, the filter or the channel
+ * (DeviceRenderer::classifyLevel: CUDA), and kept until the data, a transfer-function table, the filter or the channel
  * grouping changes.
  *
  * A level's geometry is kept in level 0's continuous index space (level 0's
@@ -119,15 +119,15 @@ public:
    * `channels` (scalar channels through `tables`, one per channel; or the
    * one classified channel of dependent components). `summed` adds the
    * channels into one (Eq. 6/7). Scalar channels are built by `device`'s
-   * Renderer::classifyLevel when it builds levels on a device (CUDA: issue
-   * 13, item 2; the same level to float rounding, the channels kept on the
+   * DeviceRenderer::classifyLevel when it builds levels on the device (CUDA:
+   * the same level to float rounding, the channels kept on the
    * device under the key's DataMTime so that a transfer-function edit
    * copies nothing but the tables), otherwise by classifyExtinctionLevel on
    * the host, streamed. The dependent components' classified channel is
    * always streamed on the host. Throws what the core throws.
    */
   const Level& Get(const Key& key, int level, const BoundChannels& channels,
-    const std::vector<const TransferFunctionDesc*>& tables, Renderer* device = nullptr);
+    const std::vector<const TransferFunctionDesc*>& tables, DeviceRenderer* device = nullptr);
 
   /// Drops every level (the mapper's data went away).
   void Clear();

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "RenderBackend.h"
 
-#include "mcvol/Types.h"
+#include "mcvol/ray/Types.h"
 
 #include <cstdlib>
 #include <cstring>
@@ -163,7 +163,7 @@ const char* RenderBackend::PrintName(int backend) const
 //------------------------------------------------------------------------------
 bool RenderBackend::ReleaseDevice()
 {
-  if (this->Instance && this->Instance->buildsAccelerationOnDevice())
+  if (this->Instance && this->Instance->device()) // a device backend: it holds device memory
   {
     this->Instance.reset();
     this->InstanceBackend = -1;

@@ -5,9 +5,14 @@
 
 namespace mcvol
 {
-/// OpenMP backend: runs the core's per-pixel code over rows of the image.
-/// Threads never share random numbers, so the image does not depend on the
-/// thread count (OMP_NUM_THREADS or setThreads()).
+/**
+ * OpenMP backend: runs the core's per-pixel code over rows of the image.
+ * Threads never share random numbers, so the image does not depend on the
+ * thread count (OMP_NUM_THREADS or setThreads()). It renders on the host:
+ * every frame is finished when render() returns, it reads the Scene's host
+ * macrocells and majorants and the channels in place, and it has no
+ * GPU-level interface (device() is nullptr).
+ */
 class CPURenderer final : public Renderer
 {
 public:

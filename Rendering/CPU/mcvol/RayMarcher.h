@@ -2,7 +2,7 @@
 #pragma once
 
 #include "mcvol/MarchSetup.h"
-#include "mcvol/RayMarch.h"
+#include "mcvol/ray/RayMarch.h"
 #include "mcvol/Renderer.h"
 
 namespace mcvol

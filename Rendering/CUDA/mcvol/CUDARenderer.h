@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 
-#include "mcvol/Renderer.h"
+#include "mcvol/DeviceRenderer.h"
 
 #include <cstdint>
 #include <memory>
@@ -45,11 +45,12 @@ struct CudaUpdateCounters
 };
 
 /**
- * CUDA backend. Runs the core's per-pixel code (Integrator.h, Tracking.h: the
- * same functions as the CPU backend, compiled by nvcc) with one thread per
- * pixel. Keeps device copies of the channels, of the transfer-function
- * tables, of the macrocell ranges and majorants (built on the GPU from the
- * device copies; one channel's majorants rebuilt when its transfer function
+ * CUDA backend: the frame-level Renderer and the GPU-level DeviceRenderer.
+ * Runs the core's per-pixel code (Integrator.h, Tracking.h: the same
+ * functions as the CPU backend, compiled by nvcc) with one thread per pixel.
+ * Keeps device copies of the channels, of the transfer-function tables, of
+ * the macrocell ranges and majorants (built on the GPU from the device
+ * copies; one channel's majorants rebuilt when its transfer function
  * changes) and of the accumulated image.
  *
  * Uploads follow the Scene's versions: voxels when contentVersion() changes,
@@ -59,7 +60,7 @@ struct CudaUpdateCounters
  *
  * All errors throw std::runtime_error with the CUDA error text.
  */
-class CUDARenderer final : public Renderer
+class CUDARenderer final : public DeviceRenderer
 {
 public:
   /// Selects device `device`, or defaultDevice() when negative (throws if
@@ -81,39 +82,41 @@ public:
    * at once, each replicate's sample k a one-sample render of its own (first
    * sample index k) into an image of its own, on streams that run
    * concurrently; the means are folded on the host. One after the other, a
-   * 48-pixel pilot's renders are bound by a ray's latency (about 1 ms each
-   * on the H100, 40+ per choice: Benchmarks/RESULTS.md, "Sixteenth
-   * session"). setConcurrentPilots(false) renders them one after the other
-   * (Renderer::renderPilots), the benchmark's comparison.
+   * pilot of a few dozen pixels leaves the GPU nearly idle, each render
+   * bound by a ray's latency, and a choice takes dozens of them
+   * (Documentation/performance.md). setConcurrentPilots(false) renders them
+   * one after the other (Renderer::renderPilots), the benchmark's
+   * comparison.
    */
   void renderPilots(const Scene& scene, const Camera& camera, std::vector<PilotJob>& jobs) override;
   bool rendersPilotsAtOnce() const override { return this->concurrentPilots(); }
   void setConcurrentPilots(bool on);
   bool concurrentPilots() const;
+  void finish() override;
   void readBack(Accumulator& accum) override;
   void readBackEven(Accumulator& accum) override;
+
+  // DeviceRenderer
   const uint8_t* displayImage(Accumulator& accum) override;
   bool hasDisplayImage() const override { return true; }
-  void finish() override;
   bool buildsAccelerationOnDevice() const override { return true; }
   size_t deviceBytes() const override;
   uint64_t dataUploads() const override { return this->updateCounters().dataUploads; }
   /**
    * Whether the mapper builds levels of detail with classifyLevel() on the
-   * device (the default: on the H100 it rebuilds a 4 x 512^3 volume's
-   * level 1 after an edit 6.9 times faster than the host, level 2 41 times,
-   * Benchmarks/RESULTS.md). setDeviceLevels(false) or
-   * MCVOL_CUDA_DEVICE_LEVELS=0 in the environment (read when the renderer is
-   * made) builds them on the host instead. classifyLevel() itself builds on
-   * the device whatever this says (its tests call it directly).
+   * device (the default: a rebuild after a transfer-function edit copies
+   * nothing but the tables and runs far faster than the host build,
+   * Documentation/performance.md). setDeviceLevels(false) builds them on the
+   * host instead. classifyLevel() itself builds on the device whatever this
+   * says (its tests call it directly).
    */
   bool buildsLevelsOnDevice() const override;
   void setDeviceLevels(bool on);
   /**
-   * A pyramid level built on the device (issue 13, item 2; CUDAPyramid.cu):
-   * the scalar channels are copied to the device as they are (strided
-   * arrays whole, float64 as float64: the renderer's own copies are
-   * converted or held as textures and not reused), classified there with
+   * A pyramid level built on the device (CUDAPyramid.cu): the scalar
+   * channels are copied to the device as they are (strided arrays whole,
+   * float64 as float64: the renderer's own copies are converted or held as
+   * textures and not reused), classified there with
    * classificationTable()'s tables and the host's arithmetic (the texel
    * coordinate in double, the interpolation in float, the inputs added in
    * order), and filtered along x (fused with the classification), y and z
@@ -145,12 +148,9 @@ public:
   /**
    * On by default: unlit renders of plain scenes (scalar channels, linear or
    * nearest interpolation) launch kernels compiled without the pre-classified
-   * and cubic sampling (CUDALaunchPlain.cu; ptxas sm_90: 72-78 registers
-   * instead of 116-122; on the H100 an expected-value NYX-like frame takes
-   * 0.86 ms instead of 1.24 ms). The image is the same either way
-   * (CudaRender.PlainKernelsEqualGeneral). MCVOL_CUDA_PLAIN_KERNELS=0 in the
-   * environment (read when the renderer is made) turns them off, for
-   * comparisons.
+   * and cubic sampling (CUDALaunchPlain.cu): fewer registers per thread, so
+   * more rays in flight and shorter frames. The image is the same either way
+   * (CudaRender.PlainKernelsEqualGeneral). Off, for comparisons.
    */
   void setPlainKernels(bool on);
   bool plainKernels() const;
@@ -159,7 +159,8 @@ public:
 
   CudaMemoryStats memory() const;
   const CudaUpdateCounters& updateCounters() const;
-  /// "NVIDIA H100 80GB HBM3, driver 12.8, runtime 13.0, 132 SMs".
+  /// The device's name, driver and runtime versions and SM count, e.g.
+  /// "<name>, driver 12.8, runtime 13.0, 132 SMs".
   std::string deviceDescription() const;
   /// Copies channel n's device majorant grid (cells x 1) to the host, for tests.
   std::vector<float> downloadMajorants(int channel) const;

@@ -1,10 +1,10 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 
-#include "mcvol/Importance.h"
+#include "mcvol/ray/Importance.h"
 #include "mcvol/Pyramid.h"
 #include "mcvol/Scene.h"
-#include "mcvol/Types.h"
+#include "mcvol/ray/Types.h"
 
 #include <cstdint>
 #include <memory>
@@ -44,11 +44,11 @@ struct RenderSettings
   bool jitterPixels = true; ///< sub-pixel jitter (anti-aliasing)
   /// Where the samples' leading decisions draw their numbers (Types.h,
   /// Sequence.h). Sobol by default: lower error at every sample count
-  /// measured (Benchmarks/RESULTS.md, "Sample sequences").
+  /// (Documentation/performance.md).
   Sampler sampler = Sampler::Sobol;
   /// What an unlit camera ray scores (Types.h). ExpectedValue by default:
-  /// less time to a given error on every dataset measured
-  /// (Benchmarks/RESULTS.md, "Estimators").
+  /// less time to a given error on every benchmark dataset
+  /// (Documentation/performance.md).
   Estimator estimator = Estimator::ExpectedValue;
   /// Expected-value estimator: tentative collisions at least this many per
   /// voxel length along a ray (voxelRate()) in every macrocell that is not
@@ -220,10 +220,11 @@ public:
   void setEvenPendingOnDevice(bool pending) { this->EvenPending = pending; }
 
   /**
-   * The visibility optimization's per-pixel segment lists (paper 004, Sec.
-   * 5.1), kept across renders with the image and cleared with it by reset()
-   * and resize(): a pool of kImportanceCapacity segments per pixel, a count
-   * and the ray's integral K(z) per pixel. Allocated on first use only.
+   * The visibility optimization's per-pixel segment lists (Sec. 5.1,
+   * Lerzer and Dachsbacher), kept across renders with the image and cleared
+   * with it by reset() and resize(): a pool of kImportanceCapacity segments
+   * per pixel, a count and the ray's integral K(z) per pixel. Allocated on
+   * first use only.
    */
   struct ImportancePool
   {
@@ -272,10 +273,6 @@ private:
 };
 
 /**
- * A backend renders a Scene into an Accumulator. create() picks one:
- * Auto takes CUDA when a usable device exists, otherwise the CPU.
- */
-/**
  * One candidate's pilot images for chooseEstimator() (EstimatorChoice.h):
  * two replicates of the view with independent scrambles (seeds), each
  * rendered to checkpoints.back() samples per pixel, and each replicate's
@@ -295,10 +292,28 @@ struct PilotJob
   RenderCounters counters;
 };
 
+class DeviceRenderer; // DeviceRenderer.h
+
+/**
+ * A backend: renders a Scene into an Accumulator, frame by frame. This is
+ * the frame-level interface, what every backend does; a backend that
+ * renders on a device (CUDA) adds the GPU-level interface, DeviceRenderer,
+ * reached through device().
+ *
+ * A frame may still be running when render() returns (a device backend with
+ * RenderSettings::readBack off): finish() waits for it and readBack() brings
+ * its image to the host. A backend that renders on the host finishes every
+ * frame before render() returns, and both calls return at once.
+ *
+ * The per-ray work is the core's (Integrator.h, RayMarch.h); the virtual
+ * calls here are made once a frame, never per ray.
+ */
 class Renderer
 {
 public:
   virtual ~Renderer() = default;
+
+  virtual const char* name() const = 0;
 
   /// Adds settings.samplesPerPixel samples to every pixel of `accum` (which
   /// must be sized to the camera). depth: optional window depth in [0,1] per
@@ -306,7 +321,17 @@ public:
   /// that depth (opaque geometry already drawn). 1 means no geometry.
   virtual void render(const Scene& scene, const Camera& camera, const RenderSettings& settings, const float* depth,
     Accumulator& accum, RenderCounters* counters = nullptr) = 0;
-  virtual const char* name() const = 0;
+
+  /**
+   * The deterministic ray-marching reference (RayMarch.h) on this backend:
+   * one ray through each pixel centre, the same per-ray code on every
+   * backend. Replaces `accum`'s image (sized to the camera; its sample count
+   * becomes 1) and copies it to the host before returning. Throws
+   * std::invalid_argument for settings the reference does not render (the
+   * same refusals on every backend: prepareMarch()).
+   */
+  virtual void march(const Scene& scene, const Camera& camera, const MarchSettings& settings, const float* depth,
+    Accumulator& accum, MarchCounters* counters = nullptr) = 0;
 
   /**
    * Renders every job's pilot (PilotJob) into its `means` and `counters`.
@@ -326,83 +351,37 @@ public:
   /// then renders ahead the candidates it will most likely reach).
   virtual bool rendersPilotsAtOnce() const { return false; }
 
-  /**
-   * The deterministic ray-marching reference (RayMarch.h) on this backend:
-   * one ray through each pixel centre, the same per-ray code on every
-   * backend. Replaces `accum`'s image (sized to the camera; its sample count
-   * becomes 1) and copies it to the host before returning. Throws
-   * std::invalid_argument for settings the reference does not render (the
-   * same refusals on every backend: prepareMarch()).
-   */
-  virtual void march(const Scene& scene, const Camera& camera, const MarchSettings& settings, const float* depth,
-    Accumulator& accum, MarchCounters* counters = nullptr) = 0;
-
-  /// Device backends: waits for the renders issued so far and copies the
-  /// accumulated image into `accum` (see RenderSettings::readBack).
-  virtual void readBack(Accumulator& accum) { (void)accum; }
-  /// Device backends: copies the error estimate's even half of the image
-  /// last rendered into `accum` (see RenderSettings::readBackEven).
-  virtual void readBackEven(Accumulator& accum) { (void)accum; }
-  /**
-   * Device backends: the accumulated image of `accum` (the one this renderer
-   * rendered last, read back or not) as premultiplied RGBA with 8 bits per
-   * component, for display: each component clamped to [0, 1] and rounded to
-   * the nearest of 256 levels, converted on the device so that a quarter of
-   * the float image's bytes cross the bus, into page-locked host memory.
-   * `accum` keeps its state (pendingOnDevice() stays as it was). The pointer
-   * is valid until the next call or the renderer's destruction. nullptr
-   * where the backend has no such path (the CPU, whose image is on the
-   * host: draw accum.rgba()). Throws std::logic_error if `accum`'s image is
-   * not the one on the device.
-   */
-  virtual const uint8_t* displayImage(Accumulator& accum)
-  {
-    (void)accum;
-    return nullptr;
-  }
-  /// True if displayImage() serves this backend's images: a caller that only
-  /// draws them can then render with RenderSettings::readBack off.
-  virtual bool hasDisplayImage() const { return false; }
   /// Waits until every render issued so far has finished.
   virtual void finish() {}
-  /// True if the backend builds macrocells and majorants itself (on the
-  /// device), so the Scene can skip its host build (Scene::setHostAcceleration).
-  virtual bool buildsAccelerationOnDevice() const { return false; }
-  /// Device backends: bytes this renderer holds in device memory (channels,
-  /// textures, grids, tables, images); 0 for the CPU.
-  virtual size_t deviceBytes() const { return 0; }
-  /// Device backends: channel copies to the device so far (one per channel
-  /// per data change); 0 for the CPU, which reads the data in place.
-  virtual uint64_t dataUploads() const { return 0; }
+  /// Waits for the renders issued so far and copies the accumulated image
+  /// into `accum` (see RenderSettings::readBack).
+  virtual void readBack(Accumulator& accum) { (void)accum; }
+  /// Copies the error estimate's even half of the image last rendered into
+  /// `accum` (see RenderSettings::readBackEven).
+  virtual void readBackEven(Accumulator& accum) { (void)accum; }
 
-  /// True if classifyLevel() builds levels on a device (CUDA); false where
-  /// it is classifyExtinctionLevel on the host (the CPU).
-  virtual bool buildsLevelsOnDevice() const { return false; }
+  /// The GPU-level interface (device residency, the display path, levels
+  /// of detail built on the device), or nullptr for a backend that renders
+  /// on the host (the CPU).
+  virtual DeviceRenderer* device() { return nullptr; }
+  virtual const DeviceRenderer* device() const { return nullptr; }
+
   /**
-   * Level `level` of the extinction-based pyramid over scalar channels
-   * classified through their tables (issue 13, item 2: rebuilt when a
-   * transfer function changes): classifyExtinctionLevel's arguments, result
-   * (a host PyramidLevel, 4 floats per voxel) and errors. The default is
-   * classifyExtinctionLevel itself; a device backend builds the level there
-   * and copies it back, equal to the host build to float rounding.
-   * `peakWorkBytes` (optional): the build's working memory at its peak, the
-   * host's for the default (classifyExtinctionLevel's), the device's for a
-   * device backend (the level's own buffer and any inputs it keeps
-   * included).
+   * The backend `requested`: Auto takes CUDA when a usable device exists,
+   * otherwise the CPU. Throws std::runtime_error naming the cause if the
+   * requested backend is unavailable. `why` (optional) receives a sentence
+   * on the choice made. `cudaDevice`: the CUDA device to use, or -1 for the
+   * default (the process's local MPI rank modulo the visible devices; see
+   * CUDARenderer::defaultDevice()).
+   *
+   * create() and cudaAvailable() are defined by the Backends layer
+   * (Rendering/Backends, library mcvol::backends), the one place that knows
+   * every backend.
    */
-  virtual PyramidLevel classifyLevel(const ClassifyInput* inputs, int numInputs, const int dims[3],
-    const double spacing[3], const double origin[3], int level, DownsampleFilter filter,
-    size_t* peakWorkBytes = nullptr)
-  {
-    return classifyExtinctionLevel(inputs, numInputs, dims, spacing, origin, level, filter, peakWorkBytes);
-  }
-
-  /// Throws std::runtime_error naming the cause if the requested backend is
-  /// unavailable. `why` (optional) receives a sentence on the choice made.
-  /// `cudaDevice`: the CUDA device to use, or -1 for the default (the
-  /// process's local MPI rank modulo the visible devices; see
-  /// CUDARenderer::defaultDevice()).
   static std::unique_ptr<Renderer> create(Backend requested, std::string* why = nullptr, int cudaDevice = -1);
+  /// True if this build has the CUDA backend and CUDA device `cudaDevice`
+  /// (-1: the default, as for create()) can run its kernels. `why`
+  /// (optional) receives the reason when not, or the device when it can.
   static bool cudaAvailable(std::string* why = nullptr, int cudaDevice = -1);
 };
 } // namespace mcvol

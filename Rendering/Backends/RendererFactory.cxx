@@ -1,4 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
+// The backend factory (Renderer::create, Renderer::cudaAvailable): the only
+// code that names every backend, so the backends do not depend on each other.
 #include "mcvol/CPURenderer.h"
 #include "mcvol/Renderer.h"
 
