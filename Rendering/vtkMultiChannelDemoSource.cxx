@@ -18,7 +18,7 @@
 #include "VTK/ScalarTypeMap.h"
 
 #include "mcvol/DemoData.h"
-#include "mcvol/Types.h"
+#include "mcvol/ray/Types.h"
 
 #include <algorithm>
 #include <array>

@@ -80,7 +80,7 @@ public:
   /**
    * Number of channels (0..32). 0 (default) means the dataset's own count;
    * fewer drops the last channels; more repeats the channels with other
-   * colours and opacity bands (as in the paper's channel-count study).
+   * colours and opacity bands (as in Sahistan et al.'s channel-count study).
    */
   vtkSetClampMacro(NumberOfChannels, int, 0, 32);
   vtkGetMacro(NumberOfChannels, int);

@@ -4,7 +4,7 @@
 #include "vtkObjectFactory.h"
 
 #include "mcvol/MarchSetup.h"
-#include "mcvol/RayMarch.h"
+#include "mcvol/ray/RayMarch.h"
 #include "mcvol/Renderer.h"
 #include "mcvol/Scene.h"
 

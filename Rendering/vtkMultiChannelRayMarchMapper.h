@@ -10,7 +10,7 @@
  * Monte Carlo tracking. Each Monte Carlo blend mode
  * converges to the image this mapper gives for the same mode as its step
  * goes to zero, which makes it the reference of the image-regression tests
- * and of the accuracy-versus-time study (Benchmarks/RESULTS.md). Pre-classified
+ * and of the accuracy-versus-time benchmark (Documentation/performance.md). Pre-classified
  * RGBA input (vtkVolumeProperty::IndependentComponentsOff) is classified by
  * the inherited stage exactly as for the Monte Carlo mapper.
  *

@@ -29,6 +29,7 @@
 #include "VTK/View.h"
 
 #include "mcvol/RenderSetup.h"
+#include "mcvol/DeviceRenderer.h"
 #include "mcvol/Renderer.h"
 #include "mcvol/Scene.h"
 
@@ -68,7 +69,8 @@ mcvol::adapter::LevelOfDetailCache::Key LevelKey(const mcvol::adapter::BoundChan
 
 /**
  * The mapper's state: the user's per-channel settings, and one object per
- * stage of Render() (each in Rendering/VTK/, see Documentation/architecture.md).
+ * stage of Render() (each in Rendering/VTK/; Documentation/design.md, "Render()
+ * as a pipeline").
  */
 struct vtkMultiChannelVolumeMapper::vtkInternals
 {
@@ -362,7 +364,7 @@ mcvol::RenderSettings vtkMultiChannelVolumeMapper::MakeRenderSettings(const mcvo
   // A device backend keeps the image on the device: DrawImage() copies an
   // 8-bit display image (a quarter of the float image), and the float image
   // comes back only when asked (GetAccumulatedImage, GetEstimatedError).
-  settings.readBack = !renderer.hasDisplayImage();
+  settings.readBack = !(renderer.device() && renderer.device()->hasDisplayImage());
   settings.sampler = this->SampleSequence == INDEPENDENT_SEQUENCE ? mcvol::Sampler::Independent : mcvol::Sampler::Sobol;
   // AUTOMATIC_ESTIMATOR: expected value until the choice is made.
   settings.estimator = this->Estimator == COLLISION_ESTIMATOR ? mcvol::Estimator::Collision
@@ -555,14 +557,14 @@ double vtkMultiChannelVolumeMapper::GetImportanceOverflows()
 double vtkMultiChannelVolumeMapper::GetDeviceMemory()
 {
   const mcvol::Renderer* renderer = this->Internals->Backend.Get();
-  return renderer ? static_cast<double>(renderer->deviceBytes()) : 0.0;
+  return renderer && renderer->device() ? static_cast<double>(renderer->device()->deviceBytes()) : 0.0;
 }
 
 //------------------------------------------------------------------------------
 int vtkMultiChannelVolumeMapper::GetNumberOfDataUploads()
 {
   const mcvol::Renderer* renderer = this->Internals->Backend.Get();
-  return renderer ? static_cast<int>(renderer->dataUploads()) : 0;
+  return renderer && renderer->device() ? static_cast<int>(renderer->device()->dataUploads()) : 0;
 }
 
 //------------------------------------------------------------------------------
@@ -1148,7 +1150,8 @@ bool vtkMultiChannelVolumeMapper::UpdateScene(RenderPass& pass)
     // A device backend builds macrocells and majorants itself from its own
     // copy of the data; the host then spends neither time nor memory on them.
     mcvol::Renderer* renderer = in.Backend.Get();
-    const bool hostAcceleration = !renderer || !renderer->buildsAccelerationOnDevice();
+    const bool hostAcceleration =
+      !renderer || !renderer->device() || !renderer->device()->buildsAccelerationOnDevice();
     in.Scene.setHostAcceleration(hostAcceleration);
     in.Data.Update(in.Scene, pass.Image, pass.Channels, [&in] { in.Tables.Forget(); });
     if (pass.Classified)
@@ -1386,7 +1389,7 @@ bool vtkMultiChannelVolumeMapper::UpdateLevelScene(RenderPass& pass)
   // builds them there (CUDA), so that editing a function at a coarse level
   // stays interactive; on the host otherwise.
   const mcvol::adapter::LevelOfDetailCache::Level& level =
-    in.Levels.Get(key, pass.Level, pass.Channels, tables, in.Backend.Get());
+    in.Levels.Get(key, pass.Level, pass.Channels, tables, in.Backend.Get() ? in.Backend.Get()->device() : nullptr);
   pass.LevelData = &level;
   if (level.Version != in.LevelSceneVersion)
   {
@@ -1667,11 +1670,11 @@ void vtkMultiChannelVolumeMapper::DrawImage(RenderPass& pass)
   // A device backend's image is drawn from its 8-bit display copy; the
   // float image is drawn where it is on the host (the CPU, or read back).
   const unsigned char* display = nullptr;
-  if (in.Accum.pendingOnDevice() && in.Backend.Get())
+  if (in.Accum.pendingOnDevice() && in.Backend.Get() && in.Backend.Get()->device())
   {
     try
     {
-      display = in.Backend.Get()->displayImage(in.Accum);
+      display = in.Backend.Get()->device()->displayImage(in.Accum);
     }
     catch (const std::exception& e)
     {

@@ -70,8 +70,8 @@
  * This is separate from, and ignores, vtkVolumeMapper::SetBlendMode.
  * The vtkVolumeProperty's interpolation type (nearest, linear, or cubic
  * with SetInterpolationTypeToCubic) selects the sampling, and ShadeOn()
- * lights the volume with the renderer's lights (the user guide's
- * "Lighting"). Cropping, clipping planes, gradient opacity, 2D transfer
+ * lights the volume with the renderer's lights
+ * (Documentation/user-guide/lighting.md). Cropping, clipping planes, gradient opacity, 2D transfer
  * functions and vtkVolumeMapper::SetBlendMode are not used: a render with
  * any of them set warns once, naming them (GetIgnoredSettings()).
  *
@@ -190,14 +190,13 @@ public:
    * 1-DDA or N-DDA). UNBIASED_MARCH_ESTIMATOR marches each non-empty
    * macrocell in jittered strata (MarchSamplesPerVoxel per voxel) and
    * weights the emission by an unbiased power-series transmittance
-   * (Kettunen et al. 2021): about 2x a ray march's samples per frame and far
-   * less noise per frame; 2.2x sooner than expected value to RMSE 0.01 on
-   * the dense microscopy scene on the CPU, slower on sparse, thin scenes
-   * (Benchmarks/RESULTS.md, "The unbiased march"). Its samples are not
-   * bounded (a sample may be negative), their mean is. All three are
-   * unbiased; the expected-value estimator reaches a given error several
-   * times sooner than the collision estimator on every dataset measured
-   * (Benchmarks/RESULTS.md, "Estimators"). Lit volumes (ShadeOn), the
+   * (Kettunen et al. 2021): about twice a ray march's samples per frame and
+   * far less noise per frame; sooner than expected value to a given error on
+   * dense data such as microscopy stacks, later on sparse, thin data
+   * (Documentation/performance.md). Its samples are not bounded (a sample
+   * may be negative), their mean is. All three are unbiased; the
+   * expected-value estimator reaches a given error several times sooner than
+   * the collision estimator (Documentation/performance.md). Lit volumes (ShadeOn), the
    * composite blend mode and the visibility optimization always use the
    * collision estimator. A change restarts the progressive image.
    *
@@ -217,8 +216,8 @@ public:
    * and made again when the data, a transfer function, the blend mode, the
    * lighting, the backend, the seed, MinimumSamplesPerVoxel, TargetError,
    * PixelJitter or MarchControlVariates changes. The pilots cost about a
-   * frame or two once per choice (Benchmarks/RESULTS.md, "The automatic
-   * estimator"). GetChosenEstimatorAsString() says what was chosen and
+   * frame or two once per choice (Documentation/performance.md).
+   * GetChosenEstimatorAsString() says what was chosen and
    * GetEstimatorReport() why. When a choice is made again (after an edit)
    * on the CUDA backend, the render's first batch is rendered with the
    * previous choice's estimator while the pilots run, and kept where the
@@ -254,11 +253,11 @@ public:
    *
    * What changes: under AUTOMATIC_ESTIMATOR, an interactive render takes the
    * expected-value estimator where the choice's sample is predicted to cost
-   * more than expected value's (the unbiased march: one sample of it cost
-   * 3 to 9 expected-value samples on the H100 sets), so the camera moves at expected
+   * more than expected value's (one sample of the unbiased march costs
+   * several expected-value samples), so the camera moves at expected
    * value's frame rate; the first still render restarts the image with the
-   * choice, which then converges at its own speed (Benchmarks/RESULTS.md,
-   * "Fourteenth session"). Nothing changes for an estimator set by hand.
+   * choice, which then converges at its own speed. Nothing changes for an
+   * estimator set by hand.
    * Setting InteractiveRendering does not restart the image by itself.
    */
   void SetInteractiveRendering(int mode) { this->InteractiveRendering = mode < -1 ? -1 : (mode > 1 ? 1 : mode); }
@@ -295,8 +294,8 @@ public:
    * many as the majorant gives). Any value keeps the image unbiased (ratio
    * tracking needs only a collision rate at least the extinction); more
    * collisions in optically thin cells sample thin, faint structures more
-   * often, at more cost per sample (Benchmarks/RESULTS.md, "Minimum
-   * samples per voxel"). No effect on the collision estimator. A change
+   * often, at more cost per sample (Documentation/performance.md). No
+   * effect on the collision estimator. A change
    * restarts the progressive image.
    */
   vtkSetClampMacro(MinimumSamplesPerVoxel, double, 0.0, 1e6);
@@ -307,8 +306,9 @@ public:
   /**
    * Unbiased-march estimator: strata per voxel length along a ray in every
    * macrocell that is not empty (default 2, the ray marcher's default step
-   * of half a voxel; 1 and 3 took longer to the same error on the
-   * microscopy scene). Clamped to [0.01, 1024]. No effect on the other
+   * of half a voxel; 1 and 3 reach a given error later on the microscopy
+   * scene, Documentation/performance.md). Clamped to [0.01, 1024]. No effect
+   * on the other
    * estimators. A change restarts the progressive image.
    */
   vtkSetClampMacro(MarchSamplesPerVoxel, double, 0.01, 1024.0);
@@ -327,9 +327,8 @@ public:
    * Unbiased-march estimator with PixelJitter off (rays through the pixel
    * centres): whether it takes control variates (a trapezoid march through
    * every stratum's ends composited exactly, chance left only the residual;
-   * about 1.4x the time per sample for 4-21 dB less noise after one sample
-   * on the sets measured; Benchmarks/RESULTS.md, "Eleventh session" and
-   * "Twelfth session"). BY_RATE (default): from 1 stratum per voxel
+   * more time per sample for much less noise after one sample;
+   * Documentation/performance.md). BY_RATE (default): from 1 stratum per voxel
    * (mcvol::kMarchControlVariateRate), the plain strata below. NEVER: the
    * plain strata at every rate. ALWAYS: control variates at every rate.
    * With jittered pixels the march always takes the plain strata.
@@ -460,7 +459,7 @@ public:
    * is no estimate: fewer than 2 samples, no image yet, or the ray-marching
    * subclass (its image is traced once, deterministically). The mapper always
    * keeps the halves: one more float RGBA image and a few additions per
-   * sample (see Benchmarks/RESULTS.md for the measured cost).
+   * sample (Documentation/performance.md gives the cost).
    * GetEstimatedPSNR() is 20 log10(1 / RMSE) in dB (peak 1), 300 when the
    * estimate is exactly 0 (nothing visible), -1 when there is none.
    */
@@ -562,7 +561,7 @@ public:
 
   /**
    * A sentence on the backend choice, e.g. "CUDA backend (auto: CUDA device
-   * NVIDIA H100 80GB HBM3)" or "CPU backend (auto: no usable CUDA device
+   * <device name>)" or "CPU backend (auto: no usable CUDA device
    * (...))", or the error when the requested backend is not available.
    */
   const char* GetBackendReport();
@@ -592,14 +591,14 @@ public:
   {
     NO_SHADOWS = 0,
     RATIO_TRACKING_SHADOWS = 1, ///< smooth transmittance (default)
-    DELTA_TRACKING_SHADOWS = 2  ///< binary, as the paper's viewer
+    DELTA_TRACKING_SHADOWS = 2  ///< binary, as Sahistan et al.'s viewer
   };
   vtkSetClampMacro(ShadowMode, int, NO_SHADOWS, DELTA_TRACKING_SHADOWS);
   vtkGetMacro(ShadowMode, int);
   /// Scattering events per path: 1 is single scattering (default).
   vtkSetClampMacro(MaxScatteringDepth, int, 1, 1024);
   vtkGetMacro(MaxScatteringDepth, int);
-  /// The Blinn-Phong term on the extinction gradient (paper 004), default off.
+  /// The Blinn-Phong term on the extinction gradient (Lerzer and Dachsbacher), default off.
   vtkSetMacro(GradientShading, bool);
   vtkGetMacro(GradientShading, bool);
   vtkBooleanMacro(GradientShading, bool);
@@ -644,7 +643,7 @@ public:
 
   ///@{
   /**
-   * Reconstruction between voxels (issue 13, item 3):
+   * Reconstruction between voxels:
    * - -1 (default): the vtkVolumeProperty's interpolation type, as VTK's own
    *   mappers use it;
    * - VTK_NEAREST_INTERPOLATION, VTK_LINEAR_INTERPOLATION: override it;
@@ -715,7 +714,7 @@ public:
   vtkGetMacro(OptimizeLightRays, bool);
   vtkBooleanMacro(OptimizeLightRays, bool);
   /// Stratified importance samples of each light ray's list (2-4096,
-  /// default 200, the paper's).
+  /// default 200, Lerzer and Dachsbacher's).
   vtkSetClampMacro(LightRayImportanceSamples, int, 2, 4096);
   vtkGetMacro(LightRayImportanceSamples, int);
   /// Bytes of the per-pixel segment lists (16 segments of 16 bytes per
@@ -752,7 +751,7 @@ public:
 
   ///@{
   /**
-   * Levels of detail (issue 13; Kraus and Buerger, "Interpolating and
+   * Levels of detail (Kraus and Buerger, "Interpolating and
    * Downsampling RGBA Volume Data", Sec. 4). Level 0 (the default) renders
    * the data as they are. Level L > 0 renders a pre-classified copy of the
    * volume with every axis halved L times: each scalar channel goes through
@@ -815,7 +814,8 @@ public:
    * The downsampling filter of the levels (Kraus and Buerger, Sec. 4.2):
    * LOD_FILTER_BOX4 (default), the 4-tap box, the paper's recommended
    * compromise for trilinear sampling; LOD_FILTER_BOX2, the 2x2x2 box of
-   * mipmaps; LOD_FILTER_BSPLINE, (13 19 19 13)/64 for B-spline sampling. A
+   * mipmaps; LOD_FILTER_BSPLINE, (13 19 19 13)/64, the paper's filter for
+   * quadratic B-spline sampling. A
    * change rebuilds the levels.
    */
   vtkSetClampMacro(LevelOfDetailFilter, int, LOD_FILTER_BOX2, LOD_FILTER_BSPLINE);
@@ -831,8 +831,7 @@ public:
    * Levels L > 0 in half precision (default on): each pre-classified voxel
    * as 4 binary16 values times a power-of-two scale per level, 8 bytes
    * instead of 16 (relative error at most 2^-11 per value; the images
-   * differ from float32 levels by far less than one 8-bit step:
-   * Benchmarks/RESULTS.md, "Thirteenth session: half-precision levels"). Halves the levels'
+   * differ from float32 levels by far less than one 8-bit step). Halves the levels'
    * host memory on the CPU backend; the CUDA backend keeps float32 levels
    * whatever the setting (it holds float32 on the device). Level 0 is never
    * converted. A change rebuilds the levels (CPU).

@@ -5,7 +5,7 @@ set -euo pipefail
 
 MCVOL_PACKAGES=(
   cmake make g++ pkg-config
-  # ParaView 5.11 and its own VTK 9.2 (DESIGN.md: we build against it)
+  # ParaView 5.11 and its own VTK 9.2 (we build against it: Documentation/design.md)
   paraview paraview-dev python3-paraview
   # find_package(ParaView) needs these Qt development packages
   qtbase5-dev qttools5-dev libqt5svg5-dev libqt5x11extras5-dev libqt5opengl5-dev

@@ -35,8 +35,8 @@ void Accumulator::reset()
 {
   // The zeros are written on the first host access (settle()): with a device
   // backend the image starts on the device, and clearing two float images on
-  // the host at every camera move cost 3.8 ms of a 7.3 ms frame at 1024^2
-  // (H100, VTK render window; Benchmarks/RESULTS.md, issue 15).
+  // the host at every camera move would take about half of a GPU frame at
+  // 1024^2.
   this->ClearRGBA = true;
   if (this->EstimateError)
   {

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "mcvol/DemoData.h"
 
-#include "mcvol/Random.h"
+#include "mcvol/ray/Random.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Scene: importance functions and weights of the visibility optimization
-// (paper 004) into the ImportanceView.
-#include "mcvol/Importance.h"
+// (Lerzer and Dachsbacher) into the ImportanceView.
+#include "mcvol/ray/Importance.h"
 #include "mcvol/Scene.h"
 
 #include "SceneInternal.h"

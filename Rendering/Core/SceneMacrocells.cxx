@@ -2,7 +2,7 @@
 // Scene: the macrocell grid's layout and its per-channel scalar ranges.
 #include "mcvol/Scene.h"
 
-#include "mcvol/Acceleration.h"
+#include "mcvol/ray/Acceleration.h"
 
 #include "SceneInternal.h"
 

@@ -3,7 +3,7 @@
 // transfer-function tables, and which channels they leave active.
 #include "mcvol/Scene.h"
 
-#include "mcvol/Acceleration.h"
+#include "mcvol/ray/Acceleration.h"
 
 #include "SceneInternal.h"
 

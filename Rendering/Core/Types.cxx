@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-#include "mcvol/Types.h"
+#include "mcvol/ray/Types.h"
 
 #include <cmath>
 #include <cstring>

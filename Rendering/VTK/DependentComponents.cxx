@@ -238,13 +238,11 @@ void Classify(const T* data, const Work& w)
     o[3] = sigma * rgb[2];
   }
 }
-} // namespace
 
-//------------------------------------------------------------------------------
-bool DependentClassifier::Update(
-  vtkImageData* image, const ChannelFunctions& functions, BoundChannels& channels, std::string& error)
+/// The one array whose components are the dependent components, or nullptr
+/// (and `error`) when the input or channel 0's functions do not fit.
+vtkDataArray* DependentArray(const ChannelFunctions& functions, const BoundChannels& channels, std::string& error)
 {
-  this->Classified = false;
   const int nc = channels.Count;
   vtkDataArray* array = channels.Arrays.empty() ? nullptr : channels.Arrays[0];
   if ((nc != 2 && nc != 4) || !array || array->GetNumberOfComponents() != nc)
@@ -255,23 +253,145 @@ bool DependentClassifier::Update(
         << nc << " channel" << (nc == 1 ? "" : "s") << ". Use IndependentComponentsOn to render the components "
         << "as independent channels.";
     error = msg.str();
-    return false;
+    return nullptr;
   }
   for (int c = 1; c < nc; ++c)
   {
     if (channels.Arrays[size_t(c)] != array)
     {
       error = "IndependentComponentsOff needs the components of one scalar array, not separate channel arrays.";
-      return false;
+      return nullptr;
     }
   }
   if (!functions.Color || !functions.Opacity || !(functions.UnitDistance > 0.0))
   {
     error = "IndependentComponentsOff: component 0 of the volume property has no colour or scalar opacity function.";
+    return nullptr;
+  }
+  return array;
+}
+
+/// The functions sampled over the components' finite ranges: what a
+/// classification reads besides the voxels.
+struct SampledFunctions
+{
+  Table Opacity;                                      // of the last component
+  Table Color;                                        // 2 components: of component 0
+  std::array<std::array<double, 2>, 3> ColorRanges{}; // 4 components, not unsigned char
+};
+
+SampledFunctions SampleFunctions(vtkDataArray* array, const ChannelFunctions& functions, int nc, int type)
+{
+  SampledFunctions f;
+  const std::array<double, 2> alphaRange = FiniteRange(array, nc - 1);
+  f.Opacity = SampleOpacity(functions.Opacity, alphaRange[0], alphaRange[1], type);
+  if (nc == 2)
+  {
+    const std::array<double, 2> r = FiniteRange(array, 0);
+    f.Color = SampleColor(functions.Color, functions.Gray, r[0], r[1], type);
+  }
+  else if (type != VTK_UNSIGNED_CHAR)
+  {
+    for (int k = 0; k < 3; ++k)
+    {
+      f.ColorRanges[size_t(k)] = FiniteRange(array, k);
+    }
+  }
+  return f;
+}
+
+/// Sizes `buffer` for w.Voxels voxels (4 floats each) and classifies the
+/// array into it. On failure (no memory, a scalar type without a
+/// classification) returns false and sets `error`.
+bool ClassifyInto(vtkDataArray* array, Work w, std::vector<float>& buffer, std::string& error)
+{
+  try
+  {
+    buffer.resize(4 * size_t(w.Voxels));
+  }
+  catch (const std::exception& e)
+  {
+    std::ostringstream msg;
+    msg << "IndependentComponentsOff: could not allocate the classified copy (" << 16.0 * double(w.Voxels) / 1048576.0
+        << " MiB, 16 bytes a voxel): " << e.what();
+    error = msg.str();
     return false;
   }
-  const int type = array->GetDataType();
+  w.Out = buffer.data();
+  const void* data = array->GetVoidPointer(0);
+  switch (array->GetDataType())
+  {
+    case VTK_UNSIGNED_CHAR:
+      Classify(static_cast<const unsigned char*>(data), w);
+      return true;
+    case VTK_SHORT:
+      Classify(static_cast<const short*>(data), w);
+      return true;
+    case VTK_UNSIGNED_SHORT:
+      Classify(static_cast<const unsigned short*>(data), w);
+      return true;
+    case VTK_FLOAT:
+      Classify(static_cast<const float*>(data), w);
+      return true;
+    case VTK_DOUBLE:
+      Classify(static_cast<const double*>(data), w);
+      return true;
+    default:
+      error = std::string("IndependentComponentsOff: unsupported scalar type ") + array->GetDataTypeAsString() +
+        " (unsigned char, short, unsigned short, float and double are).";
+      return false;
+  }
+}
 
+/// Replaces the bound components with the one classified channel (the
+/// buffer, ChannelFormat::Extinction) whose values changed at `time`.
+void BindClassified(BoundChannels& channels, vtkDataArray* array, const float* buffer, vtkMTimeType time)
+{
+  ChannelSource source;
+  source.data = buffer;
+  source.type = ScalarType::Float32;
+  source.stride = 4;
+  source.offset = 0.0;
+  source.format = ChannelFormat::Extinction;
+  channels.Count = 1;
+  channels.Arrays.assign(1, array);
+  channels.Components.assign(1, 0);
+  channels.Sources = {};
+  channels.Sources[0] = source;
+  channels.DataMTime = time;
+}
+} // namespace
+
+//------------------------------------------------------------------------------
+bool DependentClassifier::Update(
+  vtkImageData* image, const ChannelFunctions& functions, BoundChannels& channels, std::string& error)
+{
+  this->Classified = false;
+  vtkDataArray* array = DependentArray(functions, channels, error);
+  if (!array)
+  {
+    return false;
+  }
+  this->NoteInPlaceWrites(image, channels, array);
+  const Key key = KeyOf(array, functions, channels);
+  if (!this->Valid || !(key == this->LastKey))
+  {
+    if (!this->Reclassify(key, array, functions, error))
+    {
+      return false;
+    }
+    this->LastKey = key;
+    this->Valid = true;
+  }
+  // The one classified channel. Its time is the classification's: the Scene
+  // is told of new values, and the image restarts, only when it changed.
+  BindClassified(channels, array, this->Buffer.data(), this->ClassifiedTime.GetMTime());
+  return true;
+}
+
+//------------------------------------------------------------------------------
+void DependentClassifier::NoteInPlaceWrites(vtkImageData* image, const BoundChannels& channels, vtkDataArray* array)
+{
   // Values written in place with only the image marked modified (the same
   // image, the same geometry): mark the array, as ChannelData does, so that
   // its time and its cached ranges follow.
@@ -284,12 +404,17 @@ bool DependentClassifier::Update(
   this->LastImage = image;
   this->ImageMTime = channels.ImageMTime;
   this->Geometry = channels.Geometry;
+}
 
+//------------------------------------------------------------------------------
+DependentClassifier::Key DependentClassifier::KeyOf(
+  vtkDataArray* array, const ChannelFunctions& functions, const BoundChannels& channels)
+{
   Key key;
   key.Array = array;
   key.ArrayMTime = array->GetMTime();
-  key.Components = nc;
-  key.Type = type;
+  key.Components = channels.Count;
+  key.Type = array->GetDataType();
   std::copy(channels.Dims, channels.Dims + 3, key.Dims);
   key.Color = functions.Color;
   key.ColorMTime = functions.ColorMTime;
@@ -297,108 +422,44 @@ bool DependentClassifier::Update(
   key.Opacity = functions.Opacity;
   key.OpacityMTime = functions.OpacityMTime;
   key.UnitDistance = functions.UnitDistance;
+  return key;
+}
 
-  if (!this->Valid || !(key == this->LastKey))
+//------------------------------------------------------------------------------
+bool DependentClassifier::Reclassify(
+  const Key& key, vtkDataArray* array, const ChannelFunctions& functions, std::string& error)
+{
+  const int nc = key.Components;
+  const int type = key.Type;
+  const bool sameData = this->Valid && key.Array == this->LastKey.Array && key.ArrayMTime == this->LastKey.ArrayMTime &&
+    key.Components == this->LastKey.Components && key.Type == this->LastKey.Type &&
+    std::equal(key.Dims, key.Dims + 3, this->LastKey.Dims) && key.UnitDistance == this->LastKey.UnitDistance;
+  SampledFunctions f = SampleFunctions(array, functions, nc, type);
+  // Only the functions' times moved (ParaView touches its lookup tables on
+  // every render) and their values did not: keep the buffer.
+  if (sameData && f.Opacity == this->OpacityTable && f.Color == this->ColorTable && f.ColorRanges == this->ColorRanges)
   {
-    const bool sameData = this->Valid && key.Array == this->LastKey.Array &&
-      key.ArrayMTime == this->LastKey.ArrayMTime && key.Components == this->LastKey.Components &&
-      key.Type == this->LastKey.Type && std::equal(key.Dims, key.Dims + 3, this->LastKey.Dims) &&
-      key.UnitDistance == this->LastKey.UnitDistance;
-    // The tables of the functions over the components' finite ranges.
-    const std::array<double, 2> alphaRange = FiniteRange(array, nc - 1);
-    Table opacity = SampleOpacity(functions.Opacity, alphaRange[0], alphaRange[1], type);
-    Table color;
-    std::array<std::array<double, 2>, 3> colorRanges{};
-    if (nc == 2)
-    {
-      const std::array<double, 2> r = FiniteRange(array, 0);
-      color = SampleColor(functions.Color, functions.Gray, r[0], r[1], type);
-    }
-    else if (type != VTK_UNSIGNED_CHAR)
-    {
-      for (int k = 0; k < 3; ++k)
-      {
-        colorRanges[size_t(k)] = FiniteRange(array, k);
-      }
-    }
-    // Only the functions' times moved (ParaView touches its lookup tables on
-    // every render) and their values did not: keep the buffer.
-    const bool sameTables =
-      sameData && opacity == this->OpacityTable && color == this->ColorTable && colorRanges == this->ColorRanges;
-    if (!sameTables)
-    {
-      const vtkIdType tuples = array->GetNumberOfTuples();
-      Work w;
-      w.Voxels = static_cast<int64_t>(tuples);
-      w.Components = nc;
-      w.UnsignedChar = type == VTK_UNSIGNED_CHAR;
-      w.Color = &color;
-      w.Opacity = &opacity;
-      w.ColorRanges = colorRanges;
-      w.UnitDistance = static_cast<float>(functions.UnitDistance);
-      try
-      {
-        this->Buffer.resize(4 * size_t(tuples));
-      }
-      catch (const std::exception& e)
-      {
-        this->Release();
-        std::ostringstream msg;
-        msg << "IndependentComponentsOff: could not allocate the classified copy (" << 16.0 * double(tuples) / 1048576.0
-            << " MiB, 16 bytes a voxel): " << e.what();
-        error = msg.str();
-        return false;
-      }
-      w.Out = this->Buffer.data();
-      const void* data = array->GetVoidPointer(0);
-      switch (type)
-      {
-        case VTK_UNSIGNED_CHAR:
-          Classify(static_cast<const unsigned char*>(data), w);
-          break;
-        case VTK_SHORT:
-          Classify(static_cast<const short*>(data), w);
-          break;
-        case VTK_UNSIGNED_SHORT:
-          Classify(static_cast<const unsigned short*>(data), w);
-          break;
-        case VTK_FLOAT:
-          Classify(static_cast<const float*>(data), w);
-          break;
-        case VTK_DOUBLE:
-          Classify(static_cast<const double*>(data), w);
-          break;
-        default:
-          this->Release();
-          error = std::string("IndependentComponentsOff: unsupported scalar type ") + array->GetDataTypeAsString() +
-            " (unsigned char, short, unsigned short, float and double are).";
-          return false;
-      }
-      this->OpacityTable = std::move(opacity);
-      this->ColorTable = std::move(color);
-      this->ColorRanges = colorRanges;
-      this->ClassifiedTime.Modified();
-      this->Classified = true;
-      ++this->Count;
-    }
-    this->LastKey = key;
-    this->Valid = true;
+    return true;
   }
-
-  // The one classified channel. Its time is the classification's: the Scene
-  // is told of new values, and the image restarts, only when it changed.
-  ChannelSource source;
-  source.data = this->Buffer.data();
-  source.type = ScalarType::Float32;
-  source.stride = 4;
-  source.offset = 0.0;
-  source.format = ChannelFormat::Extinction;
-  channels.Count = 1;
-  channels.Arrays.assign(1, array);
-  channels.Components.assign(1, 0);
-  channels.Sources = {};
-  channels.Sources[0] = source;
-  channels.DataMTime = this->ClassifiedTime.GetMTime();
+  Work w;
+  w.Voxels = static_cast<int64_t>(array->GetNumberOfTuples());
+  w.Components = nc;
+  w.UnsignedChar = type == VTK_UNSIGNED_CHAR;
+  w.Color = &f.Color;
+  w.Opacity = &f.Opacity;
+  w.ColorRanges = f.ColorRanges;
+  w.UnitDistance = static_cast<float>(functions.UnitDistance);
+  if (!ClassifyInto(array, w, this->Buffer, error))
+  {
+    this->Release();
+    return false;
+  }
+  this->OpacityTable = std::move(f.Opacity);
+  this->ColorTable = std::move(f.Color);
+  this->ColorRanges = f.ColorRanges;
+  this->ClassifiedTime.Modified();
+  this->Classified = true;
+  ++this->Count;
   return true;
 }
 

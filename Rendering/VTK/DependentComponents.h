@@ -95,6 +95,16 @@ private:
     }
   };
 
+  /// What the classification of `array` depends on.
+  static Key KeyOf(vtkDataArray* array, const ChannelFunctions& functions, const BoundChannels& channels);
+  /// Marks the array modified when only the image's time moved (values
+  /// written in place), and remembers the image.
+  void NoteInPlaceWrites(vtkImageData* image, const BoundChannels& channels, vtkDataArray* array);
+  /// Samples the functions and classifies the voxels into Buffer unless only
+  /// the functions' times moved. On failure releases the buffer, returns
+  /// false and sets `error`.
+  bool Reclassify(const Key& key, vtkDataArray* array, const ChannelFunctions& functions, std::string& error);
+
   std::vector<float> Buffer;
   bool Valid = false; // Buffer holds the classification of LastKey
   Key LastKey;

@@ -3,7 +3,7 @@
 
 #include "vtkType.h" // For VTK_UNSIGNED_CHAR and friends
 
-#include "mcvol/Types.h"
+#include "mcvol/ray/Types.h"
 
 namespace mcvol
 {

@@ -125,8 +125,8 @@ bool HasOpaqueGeometry(vtkRenderer* ren)
     }
     // A prop with no geometry (uninitialized bounds: ParaView keeps visible
     // actors with empty inputs in every render view) cannot occlude anything,
-    // and reading the depth buffer back costs 4-12 ms a frame at 512x512
-    // with software OpenGL.
+    // and reading the depth buffer back is slow with software OpenGL (a
+    // large share of a frame).
     const double* bounds = prop->GetBounds();
     if (bounds && !(bounds[0] <= bounds[1] && bounds[2] <= bounds[3] && bounds[4] <= bounds[5]))
     {

@@ -2,7 +2,7 @@
 #pragma once
 
 #include "mcvol/Scene.h"
-#include "mcvol/Types.h"
+#include "mcvol/ray/Types.h"
 
 #include <array>
 #include <cstdint>

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 
-#include "mcvol/RayMarch.h"
+#include "mcvol/ray/RayMarch.h"
 #include "mcvol/Renderer.h"
 
 #include <cstdint>
@@ -11,7 +11,7 @@ namespace mcvol
 /// What one reference render asks for (Renderer::march, RayMarcher::render).
 struct MarchSettings
 {
-  /// Step in world units; 0 = the paper's Nyquist rate, half the smallest
+  /// Step in world units; 0 = Sahistan et al.'s Nyquist rate, half the smallest
   /// voxel spacing (marchNyquistStep()).
   double step = 0.0;
   /// Early ray termination: a ray stops once its transmittance is below this

@@ -11,7 +11,7 @@
 namespace mcvol
 {
 /**
- * Extinction-based pyramids of pre-classified volumes (issue 13; Kraus and
+ * Extinction-based pyramids of pre-classified volumes (Kraus and
  * Buerger, "Interpolating and Downsampling RGBA Volume Data", Section 4).
  *
  * A pre-classified volume holds per voxel (sigma, sigma r, sigma g, sigma b)
@@ -91,8 +91,8 @@ struct PyramidLevel
   /// origin.
   ChannelSource source() const;
   /**
-   * Converts the level to half precision (8 bytes a voxel instead of 16;
-   * issue 13's memory budget) and frees the float32 voxels. Every value v is
+   * Converts the level to half precision (8 bytes a voxel instead of 16,
+   * for the memory budget) and frees the float32 voxels. Every value v is
    * stored as binary16(v / halfScale), rounded to nearest, with halfScale
    * the power of two that puts the level's largest value between 2^13 and
    * 2^14 (binary16's largest finite value is 65504): each value keeps a
@@ -251,7 +251,7 @@ std::vector<ClassificationTable> classificationTables(const ClassifyInput* input
 PyramidLevel pyramidLevelGeometry(const int dims[3], const double spacing[3], const double origin[3], int level);
 
 /**
- * The automatic level of detail (issue 13 item 4): the level whose voxels
+ * The automatic level of detail: the level whose voxels
  * are about one pixel, L = floor(log2(pixelFootprintWorld / min(spacing))),
  * clamped to [0, levels]. `pixelFootprintWorld` is the world size of one
  * pixel where the volume is (perspective: 2 d tan(viewAngle / 2) / height

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 
-#include "mcvol/Integrator.h"
+#include "mcvol/ray/Integrator.h"
 #include "mcvol/Renderer.h"
 
 #include <cmath>

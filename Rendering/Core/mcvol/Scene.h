@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 
-#include "mcvol/SceneView.h"
-#include "mcvol/Types.h"
+#include "mcvol/ray/SceneView.h"
+#include "mcvol/ray/Types.h"
 
 #include <array>
 #include <cstddef>
@@ -14,7 +14,7 @@ namespace mcvol
 /**
  * Where one channel's voxels live: value of voxel v is data[v * stride].
  *
- * format Extinction (pre-classified, issue 13): voxel v is the 4 float32
+ * format Extinction (pre-classified): voxel v is the 4 float32
  * values data[v * stride + 0..3] = (sigma, sigma r, sigma g, sigma b), sigma
  * the extinction per world unit (as a transfer-function table holds it) and
  * (r, g, b) linear RGB in [0, 1]. type must be Float32, stride (in floats) at
@@ -83,7 +83,7 @@ struct LightDesc
 };
 
 /**
- * What the scene asks of lighting (issue 6). With no light and no ambient,
+ * What the scene asks of lighting. With no light and no ambient,
  * rendering is pure emission-absorption and none of it costs anything.
  */
 struct LightingDesc
@@ -100,7 +100,7 @@ struct LightingDesc
 };
 
 /**
- * Visibility optimization (paper 004). Each channel's importance function is
+ * Visibility optimization (Lerzer and Dachsbacher). Each channel's importance function is
  * a table over the same value range as its transfer-function table (same
  * size); an empty table means the channel carries no importance. Values are
  * clamped to [0, 1] and snapped to the levels 0, 1/4, 1/2, 3/4, 1: the paper's

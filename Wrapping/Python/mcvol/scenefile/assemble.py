@@ -10,10 +10,9 @@ import math
 import os
 
 from .errors import RenderError, SceneError
-from .schema import MAX_CHANNELS, join_key
+from .readers import read_inputs
+from .schema import MAX_CHANNELS, SUPPORTED_TYPES, join_key
 
-# Types the mapper reads in place (VTK type names as GetDataTypeAsString gives them).
-SUPPORTED_TYPES = ("unsigned char", "short", "unsigned short", "float", "double")
 VTK_MAX_VRCOMP = 4
 
 
@@ -34,8 +33,6 @@ def load_input(spec, errors, need_arrays=True):
         if errors.messages:
             raise SceneError("input", "cannot generate the demo: %s" % errors.messages[-1])
         return src.GetOutput(), src
-    from .readers import read_inputs
-
     return read_inputs(spec, errors), None
 
 

@@ -233,7 +233,7 @@ def parse_lighting(v):
 
 def parse_visibility(v):
     """The "visibility" object: the view-dependent visibility optimization
-    (paper 004) and its weights. Its presence turns it on unless "enabled" is
+    (Lerzer and Dachsbacher) and its weights. Its presence turns it on unless "enabled" is
     false; the channels' "importance" functions say what is important."""
     if not isinstance(v, dict):
         raise SceneError("visibility", "expected an object, got %s" % json.dumps(v))

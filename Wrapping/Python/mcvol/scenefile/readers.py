@@ -31,8 +31,8 @@ import logging
 import os
 import struct
 
-from .assemble import SUPPORTED_TYPES
 from .errors import RenderError, SceneError
+from .schema import SUPPORTED_TYPES
 
 # Two grids match when their dimensions are equal, their spacings agree to
 # this relative tolerance, their direction matrices entry by entry to

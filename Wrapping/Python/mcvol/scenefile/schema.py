@@ -27,6 +27,9 @@ COMPOSITING = ("extinction", "opacity")
 LOD_FILTERS = ("box4", "box2", "bspline")  # the first is the default
 SHADOWS = ("ratio", "delta", "none")
 MAX_CHANNELS = 32
+# Array types the mapper reads in place (VTK type names as GetDataTypeAsString
+# gives them): what a channel's array may hold.
+SUPPORTED_TYPES = ("unsigned char", "short", "unsigned short", "float", "double")
 
 # Input files by extension (readers.py reads them); ".nii.gz" counts as one.
 FILE_FORMATS = {

@@ -1,18 +1,18 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 
-#include "mcvol/Blend.h"
-#include "mcvol/DDA.h"
-#include "mcvol/Importance.h"
-#include "mcvol/Random.h"
-#include "mcvol/Tracking.h"
+#include "mcvol/ray/Blend.h"
+#include "mcvol/ray/DDA.h"
+#include "mcvol/ray/Importance.h"
+#include "mcvol/ray/Random.h"
+#include "mcvol/ray/Tracking.h"
 
 #include <cmath>
 
 namespace mcvol
 {
 /**
- * Building blocks of lighting (issue 6): the Henyey-Greenstein phase
+ * Building blocks of lighting: the Henyey-Greenstein phase
  * function and transmittance estimators for shadow rays. Per-ray code, shared
  * by the backends like the trackers.
  */
@@ -61,7 +61,7 @@ MCVOL_FUNC Vec3f directionAround(Vec3f d, float mu, float v)
 enum class ShadowEstimator : int
 {
   Ratio = 0, ///< ratio tracking: a smooth estimate in [0, 1]
-  Delta = 1  ///< delta tracking: 0 or 1 (the paper's viewer)
+  Delta = 1  ///< delta tracking: 0 or 1 (Sahistan et al.'s viewer)
 };
 
 /// Shadow-ray work (tests and the benchmark read it).
@@ -130,7 +130,7 @@ MCVOL_HOT float shadowTransmittance(const SceneView& s, const int* channels, int
         float sigma = blendedOptics<Mode>(s, channels, count, o + d * t).sigma;
         if (imp && sigma > 0.f)
         {
-          // Ratio or delta tracking through mu' (paper 004, Sec. 5.3).
+          // Ratio or delta tracking through mu' (Lerzer and Dachsbacher, Sec. 5.3).
           ++c.importance;
           sigma *= importanceFactor(s.importance, *imp, t, importanceAt(s, o + d * t));
         }
@@ -160,8 +160,8 @@ MCVOL_HOT float shadowTransmittance(const SceneView& s, const int* channels, int
 
 /**
  * The transmittance of a ray to a light: optimized through a fresh segment
- * list when the visibility optimization covers light rays (paper 004, Sec.
- * 5.3; every connection to a light, at every scattering vertex: Sec. 5.4,
+ * list when the visibility optimization covers light rays (Lerzer and
+ * Dachsbacher, Sec. 5.3; every connection to a light, at every scattering vertex: Sec. 5.4,
  * option 2), else the plain estimate. A list that would overflow leaves that
  * ray unoptimized, counted (the mapper reports it with the camera rays'
  * overflows).
@@ -228,9 +228,9 @@ MCVOL_HOT Vec3f extinctionGradient(const SceneView& s, const int* channels, int 
 
 /**
  * Scattering function at a scattering vertex: Henyey-Greenstein plus, with
- * gradient shading, the Blinn-Phong term of paper 004 Section 3 scaled by
- * the gradient magnitude: |grad| (H . N)^n (N . wl)_+, with N = -grad / |grad|
- * (pointing out of denser material) and H the half vector of the light
+ * gradient shading, the Blinn-Phong term of Lerzer and Dachsbacher,
+ * Section 3, scaled by the gradient magnitude: |grad| (H . N)^n (N . wl)_+,
+ * with N = -grad / |grad| (pointing out of denser material) and H the half vector of the light
  * direction wl and the direction back to the viewer -w.
  */
 MCVOL_HOT float scatterFunction(

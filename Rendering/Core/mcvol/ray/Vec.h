@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 
-#include "mcvol/Macros.h"
+#include "mcvol/ray/Macros.h"
 
 #include <cmath>
 

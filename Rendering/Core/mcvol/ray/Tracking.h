@@ -1,11 +1,11 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 
-#include "mcvol/Blend.h"
-#include "mcvol/DDA.h"
-#include "mcvol/Importance.h"
-#include "mcvol/Random.h"
-#include "mcvol/Sampling.h"
+#include "mcvol/ray/Blend.h"
+#include "mcvol/ray/DDA.h"
+#include "mcvol/ray/Importance.h"
+#include "mcvol/ray/Random.h"
+#include "mcvol/ray/Sampling.h"
 
 #include <cfloat>
 #include <cstdint>
@@ -45,7 +45,7 @@ struct Hit
  * channel's effective extinction. On a real collision `rgb` gets L_e.
  */
 /// The visibility optimization's test at a collision that passed without it:
-/// still real under mu' = f mu (paper 004, Eq. 8)? The factor f <= 1 scales
+/// still real under mu' = f mu (Lerzer and Dachsbacher, Eq. 8)? The factor f <= 1 scales
 /// the blend's extinction and so every channel's alike (colours keep their
 /// proportions); `sigma` is the extinction the unoptimized test used.
 MCVOL_OUTLINE bool optimizedCollision(
@@ -428,12 +428,12 @@ constexpr float kMarchOrderContinue = 0.25f;
 /// order, kMarchOrderContinue after. To first order in the marches' errors, the
 /// series replaces the pivot march's error by the first correction march's,
 /// and a first order taken with probability q adds (2 / q - 2) times that
-/// variance: with q = 0.5 (the sixth session's rule, 0.5 for every order) the
-/// transmittance's variance was about 3x that of one march; with q = 1 it is
-/// about 1x, for 1.33 correction marches per ray on average instead of 1
-/// (with kMarchOrderContinue 0.25). The higher orders are
-/// second order in the errors, so a low kMarchOrderContinue costs little
-/// variance (0.1, 0.25 and 0.5 gave the same error on the microscopy scene).
+/// variance: with q = 0.5 for every order the transmittance's variance is
+/// about 3x that of one march; with q = 1 it is about 1x, for 1.33
+/// correction marches per ray on average instead of 1 (with
+/// kMarchOrderContinue 0.25). The higher orders are second order in the
+/// errors, so a low kMarchOrderContinue costs little variance (0.1, 0.25
+/// and 0.5 give the same error on the microscopy scene).
 MCVOL_HOST_DEVICE inline float marchOrderProbability(int k)
 {
   return k == 0 ? 1.f : kMarchOrderContinue;
@@ -499,11 +499,10 @@ MCVOL_HOT bool marchRoulette(float& logW, float tau, Rng& rng, float threshold)
 /// than kRouletteThreshold: once the control variates have taken out the
 /// strata's noise, the roulette's is what is left. A ray that survives it
 /// carries its weight raised to the threshold, so its variance is up to
-/// about threshold times the emission still ahead. On the CPU target's
-/// microscopy scene (256^2, pixel centres, one sample) going from 0.05 to
-/// 0.005 took one sample's MSE at 1 stratum per voxel from 1.35e-4 to
-/// 0.91e-4, for about 6% more strata per ray (Benchmarks/RESULTS.md,
-/// "Twelfth session").
+/// about threshold times the emission still ahead. On the microscopy scene
+/// (pixel centres, one sample, 1 stratum per voxel) 0.005 instead of 0.05
+/// lowers one sample's MSE by about a third, for about 6% more strata per
+/// ray.
 constexpr float kControlRouletteThreshold = 0.005f;
 
 /// Walks the unbiased march's macrocells along the ray (one DDA): for every

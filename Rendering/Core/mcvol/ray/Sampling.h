@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 
-#include "mcvol/SceneView.h"
+#include "mcvol/ray/SceneView.h"
 
 #include <algorithm>
 #include <cstdint>
@@ -73,8 +73,8 @@ inline bool classifiedVoxelAt(const void* data, ScalarType type, double scale, i
       // pyramid level holds but NaN): the bits shifted into a float's are
       // the value times 2^-112, exactly (subnormals included), so the
       // decode is a shift and two exact multiplications, without
-      // halfToFloat's branches (which made the CPU's level-1 frames 25%
-      // slower on 16 cores).
+      // halfToFloat's branches (which made the CPU's level-1 frames markedly
+      // slower).
       for (int e = 0; e < 4; ++e)
       {
         const uint32_t bits = uint32_t(h[e]) << 13;
@@ -285,8 +285,8 @@ MCVOL_HOT float fetchVoxelAt(const VolumeView& vol, const ChannelView& c, int i,
 
 /**
  * Uniform cubic B-spline weight of tap k (0..3: voxel floor(x) - 1 + k) at
- * fraction t in [0, 1) past voxel floor(x) (Kraus and Buerger Sec. 4's
- * B-spline reconstruction filter): B(d) at the tap's distance d = |t - k + 1|.
+ * fraction t in [0, 1) past voxel floor(x) (the cubic B-spline of Sigg and
+ * Hadwiger, GPU Gems 2 ch. 20): B(d) at the tap's distance d = |t - k + 1|.
  * The four are >= 0 and sum to 1, so a sample is a convex combination of
  * the voxels it reads.
  */
@@ -432,8 +432,8 @@ MCVOL_COLD float sampleChannelCubic(const VolumeView& vol, int n, Vec3f p)
  * It ignores vol.cubic: channelOptics() sends cubic sampling to
  * sampleChannelCubic() on its out-of-line path, so that this inlined code
  * (and the render kernels around it) stays as it is. A check and call here
- * made the render kernels spill registers (ptxas -warn-spills, sm_90: up to
- * 176 bytes in the max and mix kernels).
+ * made the render kernels spill registers (ptxas -warn-spills: the max and
+ * mix kernels).
  */
 MCVOL_HOT float sampleChannel(const VolumeView& vol, int n, Vec3f p)
 {
@@ -487,9 +487,8 @@ MCVOL_HOT float sampleChannel(const VolumeView& vol, int n, Vec3f p)
  * voxels shares a cache line but for one in 4; of float16 voxels, but for
  * one in 8). On large levels every corner
  * misses the caches; issuing the rows' loads together, before the corners
- * are read and checked one by one, overlaps their latency (ParaView, 4 x
- * 512^3 float at level 1, 512^2: frames 11% faster in an A/B run,
- * Benchmarks/RESULTS.md). Not compiled into device code.
+ * are read and checked one by one, overlaps their latency (faster frames on
+ * large levels). Not compiled into device code.
  */
 inline void prefetchClassifiedRows(const ChannelView& c, const int dims[3], const int i0[3], const int i1[3])
 {
@@ -598,9 +597,8 @@ MCVOL_COLD TFSample sampleClassifiedCubic(const VolumeView& vol, int n, Vec3f p)
  * hardware's trilinear (or point) filter of a float4 texture of the
  * sanitised voxels where the CUDA backend holds one (a NaN-free channel
  * under texture sampling). It walks the corners itself rather than through
- * cornersOf(): built on cornersOf()'s arrays, it made the expected-value render kernel 17% slower
- * on scalar-only scenes, which never call it (H100, NYX-like, 1.06 -> 1.24
- * ms per frame).
+ * cornersOf(): built on cornersOf()'s arrays, it made the expected-value
+ * render kernel markedly slower on scalar-only scenes, which never call it.
  */
 MCVOL_COLD TFSample sampleClassified(const VolumeView& vol, int n, Vec3f p)
 {

@@ -1,16 +1,16 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 
-#include "mcvol/Random.h"
-#include "mcvol/Sampling.h"
-#include "mcvol/SceneView.h"
+#include "mcvol/ray/Random.h"
+#include "mcvol/ray/Sampling.h"
+#include "mcvol/ray/SceneView.h"
 
 #include <cmath>
 #include <cstdint>
 
 /**
- * View-dependent visibility optimization (Lerzer and Dachsbacher, EG 2025,
- * "paper 004"): the extinction at a point y of a camera ray becomes
+ * View-dependent visibility optimization (Lerzer and Dachsbacher, EG 2025):
+ * the extinction at a point y of a camera ray becomes
  *
  *   mu'(y) = p mu(y) / (p + (1 - g(y))^(2 lambda) h(y))                (Eq. 8)
  *   h(y)   = (r - q) K(y) + q K(z),   K(y) = int_x^y k(s)^2 ds         (Eq. 7)

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 
-#include "mcvol/Sampling.h"
+#include "mcvol/ray/Sampling.h"
 
 namespace mcvol
 {

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 
-#include "mcvol/SceneView.h"
+#include "mcvol/ray/SceneView.h"
 
 #include <cfloat>
 #include <cmath>

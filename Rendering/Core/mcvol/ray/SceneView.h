@@ -1,9 +1,9 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 
-#include "mcvol/Macros.h"
-#include "mcvol/Types.h"
-#include "mcvol/Vec.h"
+#include "mcvol/ray/Macros.h"
+#include "mcvol/ray/Types.h"
+#include "mcvol/ray/Vec.h"
 
 #include <cstdint>
 
@@ -92,7 +92,7 @@ struct BlendView
 constexpr int kMaxLights = 8;
 
 /**
- * Lighting (issue 6). enabled is false for pure emission-absorption, and
+ * Lighting. enabled is false for pure emission-absorption, and
  * then nothing below is read: the backends run the unlit kernels.
  */
 struct LightingView
@@ -108,7 +108,7 @@ struct LightingView
   bool shadows = true;             ///< trace shadow rays (else transmittance 1)
   int shadowEstimator = 0;         ///< ShadowEstimator: 0 ratio, 1 delta
   int maxDepth = 1;                ///< scattering events per path (1: single scattering)
-  bool gradientShading = false;    ///< Blinn-Phong on the extinction gradient (paper 004)
+  bool gradientShading = false;    ///< Blinn-Phong on the extinction gradient (Lerzer and Dachsbacher)
   float shininess = 32.f;
   /// Set per render by the backend from the camera: world-to-index linear
   /// part (row-major), its inverse, and the translation.
@@ -118,7 +118,7 @@ struct LightingView
 };
 
 /**
- * Visibility optimization (paper 004; mcvol/Importance.h). enabled is false
+ * Visibility optimization (Lerzer and Dachsbacher; mcvol/ray/Importance.h). enabled is false
  * when the optimization is off or no channel carries importance anywhere,
  * and then nothing below is read: tracking is exactly the unoptimized code.
  */
@@ -147,24 +147,17 @@ struct ImportanceView
 /// rays go through the pixel centres (RenderSettings::jitterPixels off).
 /// Where strata resolve the voxels, a trapezoid march through their
 /// boundaries is close to the integral and the residual left to chance is
-/// small: on the CPU target's microscopy scene (256^2, pixel centres, one
-/// sample) 1 per voxel reached 38.2 dB where the plain strata reached
-/// 31.8 dB, for 1.4x the time. With jittered pixels the noise of the pixel
-/// footprint, which the control variates leave alone, dominates: on the
-/// H100 the Zebrafish-like set's 1 per voxel got 1.5x less noise for 1.4x
-/// the frame time, and took 13.3 ms to 35 dB instead of 9.6 (Benchmarks/
-/// RESULTS.md, "Eleventh session"). At pixel centres on the GPU (H100,
-/// 1024^2) the frames cost 1.33-1.45x the plain strata's: Zebrafish-like
-/// reached 35 dB in one 6.8 ms frame at 1 per voxel instead of 9.4 ms.
-/// Below 1 per voxel, a trial on the CPU scene (0.25-0.75 per voxel) also
-/// needed fewer samples to 35 dB, but the thin sets' low rates (0.0625-
-/// 0.125 per voxel) already reach 35 dB in one plain frame, where the
-/// control variates would only add cost; so the rule for a rate set by
-/// hand starts at 1 ("Twelfth session"). The automatic choice offers every
-/// rate both ways at pixel centres (RenderSettings::marchControlVariatesFrom
-/// 0 for a chosen control-variate rate below 1): on the H100 it took the
-/// control variates at 0.75 per voxel on the Zebrafish-like set, 5.45 ms to
-/// 35 dB ("Fourteenth session").
+/// small: at 1 per voxel one sample at pixel centres has several dB less
+/// noise than with the plain strata, for about 1.4x the time. With jittered
+/// pixels the noise of the pixel footprint, which the control variates leave
+/// alone, dominates, and they take longer to a given error than the plain
+/// strata. Below 1 per voxel they can still need fewer samples, but the thin
+/// data sets' low rates (1/16 to 1/8 per voxel) reach 35 dB in one plain
+/// frame, where the control variates would only add cost; so the rule for a
+/// rate set by hand starts at 1. The automatic choice offers every rate both
+/// ways at pixel centres (RenderSettings::marchControlVariatesFrom 0 for a
+/// chosen control-variate rate below 1) and takes them below 1 where they
+/// pay (Documentation/performance.md gives the figures).
 constexpr float kMarchControlVariateRate = 1.f;
 
 struct SceneView

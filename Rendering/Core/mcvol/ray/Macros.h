@@ -30,8 +30,8 @@
 #define MCVOL_HOT MCVOL_HOST_DEVICE MCVOL_FORCE_INLINE
 /// Per-ray code of a path most scenes never take (pre-classified channels):
 /// a call on both compilers, so that its registers do not weigh on the hot
-/// kernels (inlined, it raised the unlit render kernel from 83 to 100
-/// registers and the lit one from 122 to 254, with spills; ptxas -v).
+/// kernels (inlined, it raises the render kernels' register counts, the lit
+/// one's to twice and with spills; ptxas -v).
 #if defined(__CUDACC__)
 #define MCVOL_COLD __host__ __device__ __noinline__ inline
 #elif defined(__GNUC__)

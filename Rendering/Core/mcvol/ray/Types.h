@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 
-#include "mcvol/Macros.h"
+#include "mcvol/ray/Macros.h"
 
 #include <cstdint>
 #include <cstring>
@@ -17,13 +17,13 @@ enum class ScalarType : int
   Float32 = 3,
   Float64 = 4,
   /// IEEE binary16, for pre-classified (Extinction) channels only: the
-  /// pyramid levels' half-precision layout (8 bytes a voxel instead of 16;
-  /// issue 13). Scene::setVolume rejects it for scalar channels.
+  /// pyramid levels' half-precision layout (8 bytes a voxel instead of
+  /// 16). Scene::setVolume rejects it for scalar channels.
   Float16 = 5
 };
 
 /**
- * What a channel's voxels hold (issue 13; Kraus and Buerger, Sec. 3.3).
+ * What a channel's voxels hold (Kraus and Buerger, Sec. 3.3).
  * - Scalar: one value per voxel, classified after interpolation through the
  *   channel's transfer-function table (post-classification).
  * - Extinction: pre-classified voxels of 4 float32 values (sigma, sigma r,
@@ -81,7 +81,7 @@ enum class Sampler : int
 };
 
 /**
- * What an unlit camera ray scores (issue 14, item 1). Both are unbiased
+ * What an unlit camera ray scores. All three are unbiased
  * estimates of the same emission-absorption integral.
  * - Collision: Woodcock tracking to the first real collision, which scores
  *   its colour with alpha 1 (the papers' estimator; the trackers choose
@@ -117,8 +117,9 @@ enum class Estimator : int
  * - Nearest: the nearest voxel.
  * - Linear: trilinear interpolation of the 8 surrounding voxels.
  * - Cubic: the uniform cubic B-spline over the 64 surrounding voxels
- *   (issue 13 item 3; Kraus and Buerger's third reconstruction filter). It
- *   approximates rather than interpolates (a sample at a voxel centre is
+ *   (Sigg and Hadwiger, GPU Gems 2 ch. 20; not Kraus and Buerger's B-spline
+ *   sampling, which is quadratic). It approximates rather than interpolates
+ *   (a sample at a voxel centre is
  *   (v_-1 + 4 v_0 + v_+1) / 6 per axis) and is C2 smooth. Its weights are
  *   non-negative and sum to 1, so a sample stays within the range of the
  *   voxels it reads, which keeps the macrocell majorants valid (the

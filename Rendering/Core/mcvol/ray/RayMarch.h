@@ -1,12 +1,12 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 
-#include "mcvol/Blend.h"
-#include "mcvol/DDA.h"
-#include "mcvol/Importance.h"
-#include "mcvol/Lighting.h"
-#include "mcvol/Random.h"
-#include "mcvol/RayGen.h"
+#include "mcvol/ray/Blend.h"
+#include "mcvol/ray/DDA.h"
+#include "mcvol/ray/Importance.h"
+#include "mcvol/ray/Lighting.h"
+#include "mcvol/ray/Random.h"
+#include "mcvol/ray/RayGen.h"
 
 #include <cstdint>
 
@@ -176,9 +176,9 @@ MCVOL_HOT StepOptics stepOptics(const SceneView& s, const MarchParams& mp, const
 }
 
 /**
- * The visibility optimization as a march (paper 004 Sec. 6.2, after Ament et
- * al.): the integrals of Eq. 7 become sums over the lattice, K(t_k) =
- * sum_{j<k} g_j^2 dx + g_k^2 phase dx (the sample's share of its own
+ * The visibility optimization as a march (Lerzer and Dachsbacher, Sec. 6.2,
+ * after Ament et al.): the integrals of Eq. 7 become sums over the lattice,
+ * K(t_k) = sum_{j<k} g_j^2 dx + g_k^2 phase dx (the sample's share of its own
  * interval), and K(z) the sum over the whole ray. `dx` is the step in
  * normalised ray units.
  */
@@ -376,25 +376,6 @@ MCVOL_HOT float marchTransmittanceOptimized(
   return expf(-tau);
 }
 
-/**
- * Lit reference (issue 6): single scattering with shadows, extinction model.
- * At each sample the source is sum_n sigma_n [(1 - a_n) c_n + a_n c_n S_n]
- * (density; max and mix: the winning channel with the blend's colour), S_n
- * the light each channel scatters towards the eye: sum over lights of the
- * scattering function (Henyey-Greenstein of g_n, plus the gradient term
- * when on) times the marched transmittance to the light times its radiance.
- * Ambient radiance (an environment of constant radiance L_a) adds
- * L_a sum_k q_k T(x, w_k) to S_n: a fixed quadrature over kAmbientDirections
- * spherical-Fibonacci directions w_k, weighted by the channel's phase
- * function (q_k = p(w, w_k) / sum_j p(w, w_j), so without shadows the term is
- * exactly L_a), each transmittance marched with the camera step. This is the
- * expectation of the Monte Carlo mapper's lit samples with one scattering
- * event (maxDepth 1), which estimates the same integral with one
- * phase-sampled direction per vertex, up to the quadrature's error (measured
- * in Testing/Python/TestLitDefaults.py). It costs kAmbientDirections
- * transmittance marches per visible sample: set the ambient radiance to 0 for
- * a fast lit reference.
- */
 /// Directions of the ray marcher's ambient quadrature (marchLit).
 constexpr int kAmbientDirections = 32;
 
@@ -408,6 +389,191 @@ MCVOL_FUNC Vec3f ambientDirection(int k)
   return Vec3f(r * cosf(phi), r * sinf(phi), z);
 }
 
+/// What marchLit fixes once per ray.
+struct LitRay
+{
+  Vec3f w;                  ///< the camera ray's world direction
+  float step;               ///< lattice step (world units), also of the light rays
+  bool optimized;           ///< visibility optimization on (importance.enabled)
+  bool ambient;             ///< ambient radiance non-zero
+  const Vec3f* ambientDirs; ///< kAmbientDirections world directions, when ambient
+};
+
+/**
+ * The light at one lattice point x, gathered before the channels ask for it.
+ * The arrays are marchLit's locals and the struct points to them, so that
+ * its scalars stay in registers on the device (a struct that held the arrays
+ * would keep x and the gradient in local memory).
+ */
+struct LitSample
+{
+  Vec3f x;            ///< the point (index space)
+  Vec3f grad;         ///< extinction gradient (gradient shading)
+  float gradLen;      ///< its length
+  Vec3f* wl;          ///< [numLights] unit world direction towards each light
+  Vec3f* arriving;    ///< [numLights] each light's radiance * transmittance * falloff at x
+  float* ambientT;    ///< [kAmbientDirections] transmittance towards each quadrature direction
+  bool* haveAmbientT; ///< ambientT marched (on first use: only where a channel scatters)
+};
+
+/// Transmittance of a light ray from x along index direction dl over
+/// [0, tmax]: through the optimized extinction when the optimization covers
+/// light rays (importance.lightRays), else the plain one.
+template <BlendMode Mode>
+MCVOL_HOT float marchLightRay(const SceneView& s, bool optimized, Vec3f x, Vec3f dl, float tmax, float step)
+{
+  return optimized && s.importance.lightRays
+    ? marchTransmittanceOptimized<Mode>(s, s.active, s.numActive, x, dl, tmax, step)
+    : marchTransmittance<Mode>(s, s.active, s.numActive, x, dl, tmax, step);
+}
+
+/// Direction towards each light and the light arriving at ls.x from it
+/// (radiance times marched transmittance, times 1/dist^2 for a point light).
+template <BlendMode Mode>
+MCVOL_HOT void gatherLights(const SceneView& s, const LitRay& r, const LitSample& ls)
+{
+  const LightingView& L = s.lighting;
+  for (int l = 0; l < L.numLights; ++l)
+  {
+    Vec3f dl;
+    float dist = 3.4e38f, falloff = 1.f;
+    if (L.lightType[l] == 0)
+    {
+      ls.wl[l] = L.lightVector[l];
+      dl = mul3(L.toIndex, ls.wl[l]);
+    }
+    else
+    {
+      const Vec3f toLight = mul3(L.toIndex, L.lightVector[l]) + L.indexOffset - ls.x;
+      const Vec3f worldVec = mul3(L.toWorld, toLight);
+      dist = length(worldVec);
+      ls.wl[l] = worldVec * (1.f / dist);
+      dl = toLight * (1.f / dist);
+      falloff = 1.f / (dist * dist);
+    }
+    const float tl = minf(boxExit(s.volume, ls.x, dl), dist);
+    float Tl = 1.f;
+    if (L.shadows)
+    {
+      Tl = marchLightRay<Mode>(s, r.optimized, ls.x, dl, tl, r.step);
+    }
+    ls.arriving[l] = L.lightRadiance[l] * (Tl * falloff);
+  }
+}
+
+/// sum_k q_k T(x, w_k) for channel n: the transmittance towards the ambient
+/// quadrature's directions, weighted by the channel's phase function. The
+/// transmittances are marched on the first call at a sample and then reused.
+template <BlendMode Mode>
+MCVOL_HOT float ambientTransmittance(const SceneView& s, const LitRay& r, int n, const LitSample& ls)
+{
+  const LightingView& L = s.lighting;
+  if (!*ls.haveAmbientT)
+  {
+    for (int k = 0; k < kAmbientDirections; ++k)
+    {
+      float Tk = 1.f;
+      if (L.shadows)
+      {
+        const Vec3f dk = mul3(L.toIndex, r.ambientDirs[k]);
+        const float tk = boxExit(s.volume, ls.x, dk);
+        Tk = marchLightRay<Mode>(s, r.optimized, ls.x, dk, tk, r.step);
+      }
+      ls.ambientT[k] = Tk;
+    }
+    *ls.haveAmbientT = true;
+  }
+  float num = 0.f, den = 0.f;
+  for (int k = 0; k < kAmbientDirections; ++k)
+  {
+    const float p = hgPhase(dot(r.w, r.ambientDirs[k]), L.anisotropy[n]);
+    num += p * ls.ambientT[k];
+    den += p;
+  }
+  return den > 0.f ? num / den : 0.f;
+}
+
+/// S_n: the light channel n scatters towards the eye at ls.x.
+template <BlendMode Mode>
+MCVOL_HOT Vec3f scatteredLight(const SceneView& s, const LitRay& r, int n, const LitSample& ls)
+{
+  const LightingView& L = s.lighting;
+  Vec3f S;
+  for (int l = 0; l < L.numLights; ++l)
+  {
+    S += ls.arriving[l] * scatterFunction(L, L.anisotropy[n], r.w, ls.wl[l], L.gradientShading, ls.grad, ls.gradLen);
+  }
+  if (r.ambient && L.albedo[n] > 0.f)
+  {
+    S += L.ambient * ambientTransmittance<Mode>(s, r, n, ls);
+  }
+  return S;
+}
+
+/// The combined extinction sigma at ls.x (returned) and the source term
+/// sigma times the emitted and scattered colour (`source`, left 0 where
+/// sigma is 0): density sums the channels; max and mix take the winning
+/// channel's albedo with the blend's colour.
+template <BlendMode Mode>
+MCVOL_HOT float litSource(const SceneView& s, const LitRay& r, const LitSample& ls, Vec3f& source)
+{
+  const LightingView& L = s.lighting;
+  float sigma = 0.f;
+  if (Mode == BlendMode::Density)
+  {
+    for (int i = 0; i < s.numActive; ++i)
+    {
+      const int n = s.active[i];
+      const TFSample tf = channelOptics(s, n, ls.x);
+      if (tf.sigma > 0.f)
+      {
+        const float a = L.albedo[n];
+        source += (tf.rgb * (1.f - a) + tf.rgb * scatteredLight<Mode>(s, r, n, ls) * a) * tf.sigma;
+        sigma += tf.sigma;
+      }
+    }
+    return sigma;
+  }
+  const PointOptics po = blendedOptics<Mode>(s, s.active, s.numActive, ls.x);
+  int winner = -1;
+  float best = -1.f;
+  for (int i = 0; i < s.numActive; ++i)
+  {
+    const float sn = channelOptics(s, s.active[i], ls.x).sigma;
+    if (winner < 0 || outranks(sn, s.active[i], best, winner))
+    {
+      best = sn;
+      winner = s.active[i];
+    }
+  }
+  sigma = po.sigma;
+  if (sigma > 0.f)
+  {
+    const float a = L.albedo[winner];
+    source = (po.emission * (1.f - a) + po.emission * scatteredLight<Mode>(s, r, winner, ls) * a) * sigma;
+  }
+  return sigma;
+}
+
+/**
+ * Lit reference: single scattering with shadows, extinction model.
+ * At each sample the source is sum_n sigma_n [(1 - a_n) c_n + a_n c_n S_n]
+ * (density; max and mix: the winning channel with the blend's colour), S_n
+ * the light each channel scatters towards the eye: sum over lights of the
+ * scattering function (Henyey-Greenstein of g_n, plus the gradient term
+ * when on) times the marched transmittance to the light times its radiance.
+ * Ambient radiance (an environment of constant radiance L_a) adds
+ * L_a sum_k q_k T(x, w_k) to S_n: a fixed quadrature over kAmbientDirections
+ * spherical-Fibonacci directions w_k, weighted by the channel's phase
+ * function (q_k = p(w, w_k) / sum_j p(w, w_j), so without shadows the term is
+ * exactly L_a), each transmittance marched with the camera step. This is the
+ * expectation of the Monte Carlo mapper's lit samples with one scattering
+ * event (maxDepth 1), which estimates the same integral with one
+ * phase-sampled direction per vertex, up to the quadrature's error
+ * (Testing/Python/TestLitDefaults.py measures it). It costs kAmbientDirections
+ * transmittance marches per visible sample: set the ambient radiance to 0 for
+ * a fast lit reference.
+ */
 template <BlendMode Mode>
 MCVOL_HOT Vec4f marchLit(
   const SceneView& s, const MarchParams& mp, Vec3f o, Vec3f d, Vec3f w, float tmax, float phase, MarchCounters& mc)
@@ -416,24 +582,28 @@ MCVOL_HOT Vec4f marchLit(
   Vec3f C;
   float T = 1.f;
   RayCounters rc;
+  LitRay r;
+  r.w = w;
+  r.step = mp.step;
   // The optimization scales the camera ray's extinction (as the Monte Carlo
-  // camera ray); shadow rays stay unoptimized.
-  const bool optimized = s.importance.enabled;
+  // camera ray); light rays only when importance.lightRays is on.
+  r.optimized = s.importance.enabled;
   MarchImportance mi;
-  if (optimized)
+  if (r.optimized)
   {
     mi = marchImportanceStart(s, mp, o, d, tmax, phase, mc);
   }
   // The ambient quadrature's directions (world), once per ray.
-  const bool ambient = L.ambient.x > 0.f || L.ambient.y > 0.f || L.ambient.z > 0.f;
+  r.ambient = L.ambient.x > 0.f || L.ambient.y > 0.f || L.ambient.z > 0.f;
   Vec3f ambientDirs[kAmbientDirections];
-  if (ambient)
+  if (r.ambient)
   {
     for (int k = 0; k < kAmbientDirections; ++k)
     {
       ambientDirs[k] = ambientDirection(k);
     }
   }
+  r.ambientDirs = ambientDirs;
   for (int64_t k = 0;; ++k)
   {
     const float t = float((double(k) + double(phase)) * double(mp.step));
@@ -441,129 +611,27 @@ MCVOL_HOT Vec4f marchLit(
     {
       break;
     }
-    const Vec3f x = o + d * t;
+    LitSample ls;
+    ls.x = o + d * t;
     ++mc.samples;
-    const float f = optimized ? marchImportanceFactor(s, mi, x) : 1.f;
-    // Light arriving at x from each light (direction, radiance * transmittance).
+    const float f = r.optimized ? marchImportanceFactor(s, mi, ls.x) : 1.f;
     Vec3f wl[kMaxLights];
     Vec3f arriving[kMaxLights];
-    for (int l = 0; l < L.numLights; ++l)
-    {
-      Vec3f dl;
-      float dist = 3.4e38f, falloff = 1.f;
-      if (L.lightType[l] == 0)
-      {
-        wl[l] = L.lightVector[l];
-        dl = mul3(L.toIndex, wl[l]);
-      }
-      else
-      {
-        const Vec3f toLight = mul3(L.toIndex, L.lightVector[l]) + L.indexOffset - x;
-        const Vec3f worldVec = mul3(L.toWorld, toLight);
-        dist = length(worldVec);
-        wl[l] = worldVec * (1.f / dist);
-        dl = toLight * (1.f / dist);
-        falloff = 1.f / (dist * dist);
-      }
-      const float tl = minf(boxExit(s.volume, x, dl), dist);
-      float Tl = 1.f;
-      if (L.shadows)
-      {
-        Tl = optimized && s.importance.lightRays
-          ? marchTransmittanceOptimized<Mode>(s, s.active, s.numActive, x, dl, tl, mp.step)
-          : marchTransmittance<Mode>(s, s.active, s.numActive, x, dl, tl, mp.step);
-      }
-      arriving[l] = L.lightRadiance[l] * (Tl * falloff);
-    }
-    Vec3f grad;
-    float gradLen = 0.f;
+    ls.wl = wl;
+    ls.arriving = arriving;
+    gatherLights<Mode>(s, r, ls);
+    ls.gradLen = 0.f;
     if (L.gradientShading)
     {
-      grad = extinctionGradient<Mode>(s, s.active, s.numActive, x, rc);
-      gradLen = length(grad);
+      ls.grad = extinctionGradient<Mode>(s, s.active, s.numActive, ls.x, rc);
+      ls.gradLen = length(ls.grad);
     }
-    // Ambient: the transmittance towards each quadrature direction, marched
-    // once per sample and only where a channel scatters.
     float ambientT[kAmbientDirections];
     bool haveAmbientT = false;
-    auto ambientIn = [&](int n)
-    {
-      if (!haveAmbientT)
-      {
-        for (int k = 0; k < kAmbientDirections; ++k)
-        {
-          float Tk = 1.f;
-          if (L.shadows)
-          {
-            const Vec3f dk = mul3(L.toIndex, ambientDirs[k]);
-            const float tk = boxExit(s.volume, x, dk);
-            Tk = optimized && s.importance.lightRays
-              ? marchTransmittanceOptimized<Mode>(s, s.active, s.numActive, x, dk, tk, mp.step)
-              : marchTransmittance<Mode>(s, s.active, s.numActive, x, dk, tk, mp.step);
-          }
-          ambientT[k] = Tk;
-        }
-        haveAmbientT = true;
-      }
-      float num = 0.f, den = 0.f;
-      for (int k = 0; k < kAmbientDirections; ++k)
-      {
-        const float p = hgPhase(dot(w, ambientDirs[k]), L.anisotropy[n]);
-        num += p * ambientT[k];
-        den += p;
-      }
-      return den > 0.f ? num / den : 0.f;
-    };
-    auto scattered = [&](int n)
-    {
-      Vec3f S;
-      for (int l = 0; l < L.numLights; ++l)
-      {
-        S += arriving[l] * scatterFunction(L, L.anisotropy[n], w, wl[l], L.gradientShading, grad, gradLen);
-      }
-      if (ambient && L.albedo[n] > 0.f)
-      {
-        S += L.ambient * ambientIn(n);
-      }
-      return S;
-    };
-    float sigma = 0.f;
+    ls.ambientT = ambientT;
+    ls.haveAmbientT = &haveAmbientT;
     Vec3f source;
-    if (Mode == BlendMode::Density)
-    {
-      for (int i = 0; i < s.numActive; ++i)
-      {
-        const int n = s.active[i];
-        const TFSample tf = channelOptics(s, n, x);
-        if (tf.sigma > 0.f)
-        {
-          const float a = L.albedo[n];
-          source += (tf.rgb * (1.f - a) + tf.rgb * scattered(n) * a) * tf.sigma;
-          sigma += tf.sigma;
-        }
-      }
-    }
-    else
-    {
-      const PointOptics po = blendedOptics<Mode>(s, s.active, s.numActive, x);
-      int winner = -1;
-      float best = -1.f;
-      for (int i = 0; i < s.numActive; ++i)
-      {
-        const float sn = channelOptics(s, s.active[i], x).sigma;
-        if (winner < 0 || outranks(sn, s.active[i], best, winner))
-        {
-          best = sn;
-          winner = s.active[i];
-        }
-      }
-      sigma = po.sigma;
-      if (sigma > 0.f)
-      {
-        const float a = L.albedo[winner];
-        source = (po.emission * (1.f - a) + po.emission * scattered(winner) * a) * sigma;
-      }
-    }
+    const float sigma = litSource<Mode>(s, r, ls, source);
     if (sigma > 0.f)
     {
       const float alpha = -expm1f(-sigma * f * mp.step);

@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 
-#include "mcvol/Macros.h"
-#include "mcvol/Sequence.h"
+#include "mcvol/ray/Macros.h"
+#include "mcvol/ray/Sequence.h"
 
 #include <cstdint>
 

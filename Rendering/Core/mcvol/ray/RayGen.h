@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 
-#include "mcvol/DDA.h"
-#include "mcvol/SceneView.h"
+#include "mcvol/ray/DDA.h"
+#include "mcvol/ray/SceneView.h"
 
 namespace mcvol
 {

@@ -1,9 +1,9 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 
-#include "mcvol/Lighting.h"
-#include "mcvol/RayGen.h"
-#include "mcvol/Tracking.h"
+#include "mcvol/ray/Lighting.h"
+#include "mcvol/ray/RayGen.h"
+#include "mcvol/ray/Tracking.h"
 
 #include <cstdint>
 
@@ -130,7 +130,7 @@ MCVOL_FUNC Vec4f renderPixel(const SceneView& s, const CameraView& cam, const Fr
 }
 
 /**
- * One refinement pass of pixel (x, y)'s importance segments (paper 004,
+ * One refinement pass of pixel (x, y)'s importance segments (Lerzer and Dachsbacher,
  * Sec. 5.1-5.2): stratified importance samples along the pixel's centre ray
  * (pass 0 uniform, later passes adaptive) merged into its list by Algorithm
  * 1. Samples draw from their own random stream (sample index `pass` of a
