@@ -9,7 +9,7 @@
 #include "mcvol/DemoData.h"
 #include "mcvol/Renderer.h"
 #include "mcvol/Scene.h"
-#include "mcvol/Tracking.h"
+#include "mcvol/ray/Tracking.h"
 
 #include <gtest/gtest.h>
 

@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// Cubic B-spline sampling (Interpolation::Cubic, issue 13 item 3): the
+// Cubic B-spline sampling (Interpolation::Cubic; Documentation/user-guide/
+// channels-and-blending.md): the
 // weights, the 64-tap sample against a reference written here in double,
 // pre-classified channels, the wider macrocell ranges that keep majorants
 // valid, the scene's rebuild on a switch, the ray marcher's refusal of the
@@ -11,10 +12,10 @@
 // deterministic (fixed seeds).
 #include "TestUtil.h"
 
-#include "mcvol/Acceleration.h"
-#include "mcvol/Blend.h"
+#include "mcvol/ray/Acceleration.h"
+#include "mcvol/ray/Blend.h"
 #include "mcvol/RayMarcher.h"
-#include "mcvol/Sampling.h"
+#include "mcvol/ray/Sampling.h"
 
 #include <cfloat>
 #include <limits>

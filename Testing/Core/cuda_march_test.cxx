@@ -306,8 +306,8 @@ TEST(CudaMarch, HardCasesEqualCPU)
   }
 }
 
-// The visibility-optimized march (paper 004 Sec. 6.2), unlit for every blend
-// mode and lit with optimized light rays.
+// The visibility-optimized march (Lerzer and Dachsbacher, Sec. 6.2), unlit
+// for every blend mode and lit with optimized light rays.
 TEST(CudaMarch, VisibilityOptimizedEqualsCPU)
 {
   CUDARenderer gpu;
@@ -445,7 +445,7 @@ TEST(CudaMarch, UnsupportedSettingsAreErrors)
   EXPECT_THROW(gpu.march(notUpdated, cam, MarchSettings(), nullptr, acc), std::logic_error);
 }
 
-// Cubic B-spline sampling (issue 13, item 3), extinction model: the device
+// Cubic B-spline sampling, extinction model: the device
 // march sums the 64 voxels as the CPU does (arrays with global sampling,
 // texture-held voxels read exactly through the point object with texture
 // sampling), so the images agree to kTol; a pre-classified channel too. With

@@ -1,10 +1,10 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// Test 1: the macrocell DDA (and intersectBox) against brute-force walking.
+// The macrocell DDA (and intersectBox) against brute-force walking.
 // Random grids (dims including 1, random anisotropic cell sizes, random
 // offsets), random rays of several kinds; fixed seeds.
 #include "TestUtil.h"
 
-#include "mcvol/DDA.h"
+#include "mcvol/ray/DDA.h"
 
 #include <cfloat>
 

@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// The error estimate of the progressive image (issue 14, item 4):
+// The error estimate of the progressive image
+// (Documentation/user-guide/accumulation-and-estimators.md):
 // Accumulator::estimatedMSE() from the even-sample half against the true
 // error measured with a reference. Backend-generic (testRenderer(): the CPU,
 // or the CUDA backend with MCVOL_TEST_BACKEND=cuda). Seeds are fixed; the
@@ -908,8 +909,8 @@ TEST(EstimatorChoice, FramesAheadAreKeptOnlyWhereTheChoiceIsTheirs)
 // (pixel centres) share one round. Synthetic noise with a fixed part in the
 // march's work (so the extrapolation in proportion to the rate is high):
 // the trials and the choice equal those of the pilots one after the other.
-// (Before, the round of 1/2 per voxel stopped at a rate whose own
-// extrapolated cost reached the best, and each variant's rate between had a
+// (A round that stopped at a rate whose own extrapolated cost reached the
+// best would leave 1/2 per voxel out, and give each variant's rate between a
 // round of its own.)
 TEST(EstimatorChoice, RendersAheadWhatTheSearchReaches)
 {

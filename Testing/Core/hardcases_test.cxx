@@ -1,14 +1,15 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// Test 9: the numerical hard cases of DESIGN.md, each asserting a finite and
+// The numerical hard cases (Documentation/design.md, "Numerical rules";
+// Documentation/user-guide/numerical-limits.md), each asserting a finite and
 // correct result. (The generator's u never being 1 is tested in
 // sampling_test.cxx, Rng.NeverReturnsOne.)
 // Significance: each TEST has a family-wise level kAlpha = 0.001, split evenly
 // (Bonferroni) over its statistical checks; seeds are fixed.
 #include "TestUtil.h"
 
-#include "mcvol/Acceleration.h"
+#include "mcvol/ray/Acceleration.h"
 
-#include "mcvol/Sampling.h"
+#include "mcvol/ray/Sampling.h"
 
 #include <cstring>
 #include <limits>
@@ -723,10 +724,10 @@ TEST(HardCases, HugeExtinctionStaysBounded)
 }
 
 // A transfer-function range of zero width at 1e8 (a constant channel) or of
-// 1e-37 (narrower than float resolution) used to give an infinite table
-// scale, NaN texel coordinates and an out-of-bounds read in the majorant
-// build. Now: finite majorants, and the voxels render with the table's
-// opacity (alpha > 0), for both cases.
+// 1e-37 (narrower than float resolution) would give an infinite table scale,
+// NaN texel coordinates and an out-of-bounds read in the majorant build if
+// taken as is. The majorants stay finite, and the voxels render with the
+// table's opacity (alpha > 0), for both cases.
 TEST(HardCases, DegenerateTransferFunctionRange)
 {
   struct Case

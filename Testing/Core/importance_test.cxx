@@ -1,12 +1,13 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// View-dependent visibility optimization (paper 004): the per-ray segment
-// structure (Algorithm 1, Sec. 5.1-5.2) and the optimized extinction (Eq. 7-8)
-// in Monte Carlo tracking and in the ray-marched baseline.
+// View-dependent visibility optimization (Lerzer and Dachsbacher): the
+// per-ray segment structure (Algorithm 1, Sec. 5.1-5.2) and the optimized
+// extinction (Eq. 7-8) in Monte Carlo tracking and in the ray-marched
+// baseline.
 #include "TestUtil.h"
 
 #include "mcvol/CPURenderer.h"
 #include "mcvol/DemoData.h"
-#include "mcvol/Importance.h"
+#include "mcvol/ray/Importance.h"
 #include "mcvol/RayMarcher.h"
 
 #include <cmath>

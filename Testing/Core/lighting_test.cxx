@@ -6,7 +6,7 @@
 // evenly (Bonferroni) over its statistical checks; seeds are fixed.
 #include "TestUtil.h"
 
-#include "mcvol/Lighting.h"
+#include "mcvol/ray/Lighting.h"
 #include "mcvol/RayMarcher.h"
 
 #include <cstring>

@@ -1,14 +1,14 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// Test 2: majorants are never below the true extinction, for all five scalar
+// Majorants are never below the true extinction, for all five scalar
 // types (random data with NaN and Inf for float types, random transfer
 // functions, random macrocell sizes, interleaved channels, trilinear and
 // nearest-voxel sampling).
-// Test 11: changing one channel's transfer function rebuilds only its
-// majorants. Deterministic (fixed seeds).
+// Changing one channel's transfer function rebuilds only its majorants
+// (Sahistan et al., Sec. 4.3). Deterministic (fixed seeds).
 #include "TestUtil.h"
 
-#include "mcvol/DDA.h"
-#include "mcvol/Sampling.h"
+#include "mcvol/ray/DDA.h"
+#include "mcvol/ray/Sampling.h"
 
 #include <cfloat>
 #include <cstring>
@@ -243,28 +243,28 @@ void checkType(ScalarType type, uint64_t seed, int scenes)
 }
 } // namespace
 
-TEST(Majorants, UInt8)
+TEST(Majorants, BoundTheExtinctionUInt8)
 {
   checkType<uint8_t>(ScalarType::UInt8, 11, 12);
 }
-TEST(Majorants, Int16)
+TEST(Majorants, BoundTheExtinctionInt16)
 {
   checkType<int16_t>(ScalarType::Int16, 12, 12);
 }
-TEST(Majorants, UInt16)
+TEST(Majorants, BoundTheExtinctionUInt16)
 {
   checkType<uint16_t>(ScalarType::UInt16, 13, 12);
 }
-TEST(Majorants, Float32WithNaNAndInf)
+TEST(Majorants, BoundTheExtinctionFloat32WithNaNAndInf)
 {
   checkType<float>(ScalarType::Float32, 14, 12);
 }
-TEST(Majorants, Float64WithNaNAndInf)
+TEST(Majorants, BoundTheExtinctionFloat64WithNaNAndInf)
 {
   checkType<double>(ScalarType::Float64, 15, 12);
 }
 
-// Test 11: majorant rebuild locality.
+// Majorant rebuild locality.
 TEST(Majorants, RebuildOnlyChangedChannel)
 {
   TestRand r(21);

@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// Pre-classified extinction channels and extinction-based pyramids (issue 13;
-// Kraus and Buerger, "Interpolating and Downsampling RGBA Volume Data",
-// Sections 3.3 and 4): extinction-weighted interpolation, analytic
+// Pre-classified extinction channels and extinction-based pyramids
+// (Documentation/user-guide/levels-of-detail.md; Kraus and Buerger,
+// "Interpolating and Downsampling RGBA Volume Data", Sections 3.3 and 4):
+// extinction-weighted interpolation, analytic
 // transmittance through classified data (Monte Carlo and ray marcher), the
 // paper's 8-voxel and one-voxel-wall examples, the filters, agreement with
 // scalar + transfer-function rendering, Monte Carlo against the ray marcher,
@@ -12,7 +13,8 @@
 // = 32 checks at kAlpha / 32 (Bonferroni). Seeds are fixed.
 #include "TestUtil.h"
 
-#include "mcvol/Acceleration.h"
+#include "mcvol/ray/Acceleration.h"
+#include "mcvol/DeviceRenderer.h"
 #include "mcvol/Pyramid.h"
 #include "mcvol/RayMarcher.h"
 
@@ -923,7 +925,7 @@ TEST(Classified, BadInputErrors)
   EXPECT_THROW(classifyScalars(ts, d.dims, tf, out.data()), std::invalid_argument);
 }
 
-// ------------------------------------------- streamed levels (issue 13 item 1)
+// ---------------------------------------------------------- streamed levels
 
 // The streamed builder gives exactly the level that buildExtinctionPyramid
 // builds from the whole level 0: every filter, every level, odd and
@@ -1074,11 +1076,12 @@ TEST(StreamedPyramid, BadInputErrors)
     classifyExtinctionLevel(noTable, 1, dims, spacing, origin, 1, DownsampleFilter::Box4), std::invalid_argument);
 }
 
-// The backend hook's default (the CPU backend) is the host build itself.
+// A backend without a device (the CPU) builds levels on the host:
+// classifyLevel() on it is the host build itself.
 TEST(StreamedPyramid, DefaultRendererClassifyLevel)
 {
   std::unique_ptr<Renderer> cpu = Renderer::create(Backend::CPU);
-  EXPECT_FALSE(cpu->buildsLevelsOnDevice());
+  EXPECT_EQ(cpu->device(), nullptr);
   TestRand r(5);
   const int dims[3] = { 13, 6, 9 };
   const std::vector<float> s0 = smoothField(dims, r), s1 = smoothField(dims, r);
@@ -1087,7 +1090,7 @@ TEST(StreamedPyramid, DefaultRendererClassifyLevel)
   const double spacing[3] = { 1, 2, 0.5 }, origin[3] = { 1, 0, -1 };
   for (int level : { 1, 2 })
   {
-    const PyramidLevel a = cpu->classifyLevel(inputs, 2, dims, spacing, origin, level, DownsampleFilter::BSpline);
+    const PyramidLevel a = classifyLevel(*cpu, inputs, 2, dims, spacing, origin, level, DownsampleFilter::BSpline);
     const PyramidLevel b = classifyExtinctionLevel(inputs, 2, dims, spacing, origin, level, DownsampleFilter::BSpline);
     EXPECT_EQ(a.voxels, b.voxels) << "level " << level;
     for (int ax = 0; ax < 3; ++ax)
@@ -1102,7 +1105,7 @@ TEST(StreamedPyramid, DefaultRendererClassifyLevel)
     EXPECT_TRUE(g.level == b.level && g.dims[0] == b.dims[0] && g.dims[1] == b.dims[1] && g.dims[2] == b.dims[2]);
     EXPECT_TRUE(g.origin[0] == b.origin[0] && g.spacing[2] == b.spacing[2]);
   }
-  EXPECT_THROW(cpu->classifyLevel(inputs, 2, dims, spacing, origin, 5, DownsampleFilter::Box4), std::invalid_argument);
+  EXPECT_THROW(classifyLevel(*cpu, inputs, 2, dims, spacing, origin, 5, DownsampleFilter::Box4), std::invalid_argument);
 }
 
 // The automatic level follows L = floor(log2(footprint / min spacing)),

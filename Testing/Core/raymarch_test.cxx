@@ -420,7 +420,8 @@ TEST(RayMarch, MonteCarloErrorFallsAsInverseSquareRoot)
   }
 }
 
-// The expected-value estimator's noise (issue 14, item 1): mean squared
+// The expected-value estimator's noise (Documentation/design.md, "The
+// default estimator"): mean squared
 // error against the fine-step reference at 16 spp, over 8 seeds, for each
 // estimator and blend mode it serves, on two semi-transparent scenes. The
 // expected-value estimator scores every tentative collision, so its error

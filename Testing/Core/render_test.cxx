@@ -1,8 +1,11 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// Test 6: N-DDA and 1-DDA render the same image (statistically).
-// Test 7: images do not depend on the thread count; progressive accumulation
-//         equals one render of all samples.
-// Test 8: blend modes (Max, Mix Eq. 10, post-render compositing).
+// Whole-image properties of the Monte Carlo renderer (Documentation/design.md,
+// "What the tests prove"):
+// - the N-DDA and 1-DDA trackers render the same image (statistically;
+//   Sahistan et al., Sec. 4);
+// - images do not depend on the thread count, and progressive accumulation
+//   equals one render of all samples;
+// - the blend modes (max, mix Eq. 10, post-render compositing).
 // Significance: each TEST has a family-wise level kAlpha = 0.001, split evenly
 // (Bonferroni) over its statistical checks; seeds are fixed.
 #include "TestUtil.h"
@@ -22,7 +25,7 @@ Camera demoCamera(const DemoVolume& v, int W, int H, double az = 30, double el =
 }
 } // namespace
 
-// ---------------------------------------------------------------- Test 6
+// ------------------------------------------------- N-DDA against 1-DDA
 
 // Per-pixel pooled two-sample z-scores of 64 independent samples per pixel
 // and tracker (different seeds): image-mean difference, sum of z^2
@@ -50,7 +53,7 @@ TEST(Trackers, NDDAMatches1DDA)
   }
 }
 
-// ---------------------------------------------------------------- Test 7
+// ------------------------------------------------------- reproducibility
 
 TEST(Reproducibility, ThreadCountDoesNotChangeImage)
 {
@@ -130,7 +133,7 @@ TEST(Reproducibility, ProgressiveEqualsOneRender)
   }
 }
 
-// ---------------------------------------------------------------- Test 8
+// ----------------------------------------------------------- blend modes
 
 namespace
 {

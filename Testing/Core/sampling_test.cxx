@@ -1,13 +1,14 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// Test 3: free-flight distances and the random generator.
-// Test 4: multi-density channel selection (Eq. 7) for both trackers.
-// Test 5: homogeneous slab transmittance for both trackers.
+// The sampling primitives of Woodcock tracking:
+// - free-flight distances and the random generator;
+// - multi-density channel selection (Eq. 7, Sahistan et al.) for both trackers;
+// - homogeneous slab transmittance for both trackers.
 // Significance: each TEST has a family-wise level kAlpha = 0.001; its k
 // statistical checks (two-sided z tests or upper-tail chi-square tests) each
 // use kAlpha / k (Bonferroni). Seeds are fixed, so a run is deterministic.
 #include "TestUtil.h"
 
-#include "mcvol/Tracking.h"
+#include "mcvol/ray/Tracking.h"
 
 #include <cfloat>
 
@@ -24,7 +25,7 @@ Hit track(const SceneView& s, Tracker tracker, const BoxRay& ray, Rng& rng, RayC
 }
 } // namespace
 
-// ---------------------------------------------------------------- Test 3
+// ------------------------------------------- free flights and the generator
 
 // Chi-square goodness of fit of the free flight sampleOpticalDepth / m to Exp(m) over 64 equiprobable
 // bins (63 dof) and a z test of the mean, for several majorants.
@@ -125,7 +126,7 @@ TEST(Rng, UniformMoments)
   EXPECT_NE(x, c.nextU32());
 }
 
-// ---------------------------------------------------------------- Test 4
+// ------------------------------------------------------- channel selection
 
 namespace
 {
@@ -218,7 +219,7 @@ TEST(ChannelSelection, ProportionalToExtinction)
   }
 }
 
-// ---------------------------------------------------------------- Test 5
+// ------------------------------------------------------ slab transmittance
 
 namespace
 {

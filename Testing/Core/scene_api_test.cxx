@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// Test 10: bad input to the Scene (and renderer) throws std::invalid_argument
+// Bad input to the Scene (and renderer) throws std::invalid_argument
 // whose message names the problem; the Scene stays usable afterwards.
 #include "TestUtil.h"
 

@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// Sample sequences (Sequence.h, Sampler::Sobol; issue 14, item 2):
+// Sample sequences (Sequence.h, Sampler::Sobol; Documentation/design.md,
+// "Random numbers and sequences"):
 // - the Sobol' coordinates match a textbook construction of the direction
 //   numbers; scrambled and shuffled, every power-of-two block of a pixel's
 //   samples is stratified (the (0, m, 2)-net property of dimensions 0-1,
@@ -14,7 +15,7 @@
 #include "TestUtil.h"
 
 #include "mcvol/RayMarcher.h"
-#include "mcvol/Sequence.h"
+#include "mcvol/ray/Sequence.h"
 
 #include <cstring>
 

@@ -1,4 +1,5 @@
-"""pvpython: the representation's level-of-detail properties (issue 13, item 4):
+"""pvpython: the representation's level-of-detail properties
+(Documentation/user-guide/levels-of-detail.md, paraview.md):
 - LevelOfDetail, InteractiveLevelOfDetail, LevelOfDetailFilter and
   MemoryBudget exist with their documented defaults (0, 1, Box 4, 0), round
   trip, and reach the mapper;

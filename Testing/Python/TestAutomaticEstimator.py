@@ -1,15 +1,17 @@
-"""The automatic estimator (issue 14, item 1; SetEstimatorToAutomatic):
+"""The automatic estimator (SetEstimatorToAutomatic;
+Documentation/user-guide/accumulation-and-estimators.md):
 - the choice is one of the candidates, is reported, and is made once per
   data and transfer functions: camera moves keep it (no new pilots), a
   transfer-function change makes it again;
 - the pilots do not touch the image: an automatic mapper's image equals, bit
   for bit, that of a mapper set to the chosen estimator and rate;
 - a fixed seed gives the same choice and image (two mappers);
-- the scene decides (CPU, measured in Benchmarks/RESULTS.md, "The automatic
-  estimator"): expected value at the default 35 dB with nearest-voxel
+- the scene decides (CPU; the figures are on Documentation/performance.md):
+  expected value at the default 35 dB with nearest-voxel
   sampling and pixel jitter (its sharp voxel edges are noisy for the march's
   strata), the march at 1 per voxel with control variates at RMSE 0.01 with
-  linear sampling at pixel centres (the protocol of issue 14's CPU target);
+  linear sampling at pixel centres (the CPU time-to-error protocol of the
+  performance page);
 - interactive renders (the window's DesiredUpdateRate at or above
   InteractiveUpdateRate, or SetInteractiveRendering(1)) keep expected value
   there, and the first still render restarts the image with the choice;
@@ -71,7 +73,8 @@ def make_property(linear=False):
     return prop
 
 
-# The choice aims at TargetError (RMSE 0.01, the CPU target of issue 14).
+# The choice aims at TargetError (RMSE 0.01, the CPU time-to-error target of
+# Documentation/performance.md).
 TARGET = 0.01
 
 
@@ -158,18 +161,18 @@ expect_equal(twin.GetChosenEstimatorAsString(), chosen, "same seed, same choice"
 expect(np.array_equal(auto_image, accumulated(twin)), "same seed, same image")
 
 # The scene decides (CPU: the cost model is the CPU's; another backend may
-# choose otherwise, the checks above hold for any choice). Measured on this
-# scene (Benchmarks/choice_truth.py, results/cpu-auto-s9; 2 threads, errors
-# against 512 samples of expected value):
+# choose otherwise, the checks above hold for any choice). Why the two
+# settings choose differently on this scene (errors against 512 samples of
+# expected value; the figures and the commands that measure them are on
+# Documentation/performance.md):
 # - nearest-voxel sampling, pixel jitter, 35 dB: expected value needs about
-#   10 samples of 42 ms, the march at 2 per voxel 4 of 120 ms;
-# - linear sampling at pixel centres, RMSE 0.01 (MSE 1e-4; the protocol of
-#   the issue's CPU target, Benchmarks/cpu_time_to_error.py; twelfth
-#   session, results/cpu-s12, the march with control variates at pixel
-#   centres and their roulette at 0.005): the march at 1 per voxel reaches
-#   MSE 0.90e-4 (clipped to [0, 1] as displayed; two seeds) in 1 sample of
-#   199 ms, at 1.25 per voxel 0.47e-4 in 1 of 239 ms, at 2 per voxel
-#   0.12e-4 in 1 of 366 ms; expected value needs 23 of 69 ms.
+#   10 samples, the march at 2 per voxel 4 samples of about 3 times the cost
+#   each, so expected value is cheaper;
+# - linear sampling at pixel centres, RMSE 0.01 (MSE 1e-4; the march with
+#   control variates at pixel centres and their roulette at 0.005): the march
+#   at 1 per voxel reaches MSE 0.90e-4 (clipped to [0, 1] as displayed; two
+#   seeds) in 1 sample, expected value needs about 23 samples of a third of
+#   that cost, so the march is cheaper.
 if mapper.GetActiveBackendName() == "cpu":
     plain, pwindow, _, _ = make_view()
     plain.SetTargetError(0.0)

@@ -1,4 +1,5 @@
-"""Cubic B-spline interpolation through the VTK mappers (issue 13, item 3):
+"""Cubic B-spline interpolation through the VTK mappers
+(Documentation/user-guide/channels-and-blending.md):
 SetInterpolationType / SetInterpolationTypeToCubic / ...ToProperty.
 
 - Default -1 follows the vtkVolumeProperty; PrintSelf names the setting.

@@ -15,7 +15,8 @@
   colour function;
 - lighting (ShadeOn) works on the classified channel;
 - 3 components, or channel arrays, with IndependentComponentsOff are a clear
-  error (nothing drawn, no crash); 1 component renders as before;
+  error (nothing drawn, no crash); 1 component renders as with
+  IndependentComponentsOn;
 - IndependentComponentsOn (the default) still renders the components as
   independent channels.
 """

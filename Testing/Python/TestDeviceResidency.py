@@ -1,4 +1,5 @@
-"""The CUDA backend inside a VTK pipeline (issue 15): what stays on the GPU.
+"""The CUDA backend inside a VTK pipeline: what stays on the GPU
+(Documentation/user-guide/backends.md).
 
 - 100 progressive renders upload each channel once (GetNumberOfDataUploads).
 - Camera moves, transfer-function edits and ParaView-style per-frame shallow

@@ -1,4 +1,5 @@
-"""Estimated error and adaptive stopping (issue 14, item 4):
+"""Estimated error and adaptive stopping
+(Documentation/user-guide/accumulation-and-estimators.md):
 GetEstimatedError() falls like 1/sqrt(samples) and agrees with the true error
 against a high-sample reference (from 1/1.25 to 2.5 times it: conservative
 with the Sobol' sequence); SetTargetError() stops

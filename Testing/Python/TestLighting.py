@@ -1,4 +1,5 @@
-"""Lighting through vtkMultiChannelVolumeMapper (issue 6, work in progress):
+"""Lighting through vtkMultiChannelVolumeMapper
+(Documentation/user-guide/lighting.md):
 ShadeOff is pure emission-absorption whatever the lighting parameters say;
 ShadeOn lights the volume with the renderer's lights (the primary collisions,
 hence alpha, stay exactly the same for a seed, the colours change); ShadeOn

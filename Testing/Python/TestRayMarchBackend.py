@@ -1,6 +1,7 @@
-"""vtkMultiChannelRayMarchMapper's Backend setting (issue 14, item 6): the
-reference marches on the backend chosen, with the Monte Carlo mapper's API and
-words (SetBackendToAuto/CPU/CUDA, GetBackendAsString, GetActiveBackendName,
+"""vtkMultiChannelRayMarchMapper's Backend setting
+(Documentation/user-guide/backends.md): the reference marches on the backend
+chosen, with the Monte Carlo mapper's API and words
+(SetBackendToAuto/CPU/CUDA, GetBackendAsString, GetActiveBackendName,
 GetBackendReport, PrintSelf).
 
 - CPU: renders, reports "cpu", and the image is the same whatever Backend

@@ -1,9 +1,9 @@
 """The readers of mcvol-render's scene files (Documentation/scene-format.md,
 `input`): NIfTI with its orientation (qform with a slice flip, oblique sform,
 an sform flipped against the qform, 4-D, types, rescaling), plain TIFF
-stacks, ImageJ and OME-TIFF hyperstacks, raw files, .vti/.mha/.nrrd as
-before, several files as the channels of one image (resampled onto the first's grid when asked); every
-reader error exits with status 2, names the key and the file on one line and
+stacks, ImageJ and OME-TIFF hyperstacks, raw files, .vti/.mha/.nrrd,
+several files as the channels of one image (resampled onto the first's grid
+when asked); every reader error exits with status 2, names the key and the file on one line and
 writes no image. Files are generated here; the NIfTI checks read the headers
 and voxels with their own code, after the NIfTI-1 standard, so that a voxel's
 value and world position are checked against the file, not against VTK.

@@ -1,8 +1,8 @@
-"""Visibility optimization through the VTK API (paper 004): a green target
-slab behind a red occluder slab. With importance on the target its share of
-the image rises; off, or with no importance, the image is the unoptimized
-one bit for bit; a label channel of zero opacity can carry the importance;
-the segment lists' memory is reported."""
+"""Visibility optimization through the VTK API (Lerzer and Dachsbacher): a
+green target slab behind a red occluder slab. With importance on the target
+its share of the image rises; off, or with no importance, the image is the
+unoptimized one bit for bit; a label channel of zero opacity can carry the
+importance; the segment lists' memory is reported."""
 
 import os
 import sys
