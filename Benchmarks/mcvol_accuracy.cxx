@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 //
 // mcvol-accuracy: renders the images of the accuracy-versus-time study for
-// one dataset and blend mode (VTK-free; Benchmarks/accuracy_study.py runs it
+// one dataset and blend mode (VTK-free; Benchmarks/studies/accuracy_study.py runs it
 // for every dataset and mode and scores the images):
 //   reference.f32        ray march, extinction model, --ref-step voxels
 //   reference_mc.f32     Monte Carlo (1-DDA) at --ref-spp, the cross-check
@@ -11,19 +11,18 @@
 //   rm_<model>_<step>.f32   ray march at each --steps (voxels), both models
 //   timings.csv          method,variant,param,ms[,rmse,psnr],backend,estimator,
 //                        sampler (MC: cumulative render time; backend: where
-//                        it ran; variant: the tracker or march model, as
-//                        before the estimator and sampler columns existed)
+//                        it ran; variant: the tracker or march model)
 // Images are W x H premultiplied RGBA float32, rows from the bottom. Monte
 // Carlo samples pixel centres (no pixel jitter) like the ray marcher, so both
 // estimate the same image. --backend picks where Monte Carlo runs and
 // --march-backend (default: the same) where the ray marches run, so that
 // both are timed on the same hardware; --march-textures makes the CUDA march
 // read voxels through the hardware texture filter, as the Monte Carlo
-// renders do (the reference march never does).
-// --sampler independent|sobol (default sobol, the
-// renderer's default) picks the progressive series' sample sequence, and
-// --estimator expected-value|collision (default expected-value, the
-// renderer's default) its estimator; the 4096-spp cross-check uses the same.
+// renders do (the reference march never does). --sampler independent|sobol
+// (default sobol, the renderer's default) picks the progressive series'
+// sample sequence, and --estimator expected-value|collision (default
+// expected-value, the renderer's default) its estimator; the cross-check
+// uses the same.
 // Without --mc-configs the series are that estimator and sampler with both
 // trackers; --mc-configs lists estimator:sampler:tracker triples instead
 // (e.g. expected-value:sobol:1dda,collision:independent:1dda; a 4th field,
@@ -34,45 +33,41 @@
 // choice in meta.txt; on a backend that renders pilots at once, meta.txt
 // also gets a transfer-function edit timed to 35 dB three ways: the hinted
 // choice then the frames, the frames rendered during the pilots, and
-// expected value's frames), so that one
-// run, with one reference, times several Monte Carlo configurations. A
+// expected value's frames), so that one run, with one reference, times
+// several Monte Carlo configurations. A
 // configuration the renderer would not run as asked (the expected-value
 // estimator under the composite blend, which keeps the collision estimator)
 // is recorded under the estimator it runs, once: the CSV never holds two
 // copies of one series under different names.
 
+#include "bench/ArgParser.h"
+#include "bench/BenchUtil.h"
+
 #include "mcvol/CameraMath.h"
 #include "mcvol/DemoData.h"
 #include "mcvol/EstimatorChoice.h"
-#include "mcvol/Integrator.h"
+#include "mcvol/ray/Integrator.h"
 #include "mcvol/MarchSetup.h"
-#include "mcvol/RayMarch.h"
+#include "mcvol/ray/RayMarch.h"
 #include "mcvol/Renderer.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
 #include <string>
-#include <utility>
 #include <vector>
 
 #ifdef _OPENMP
 #include <omp.h>
 #endif
 
+using namespace mcvolbench;
+
 namespace
 {
-using Clock = std::chrono::steady_clock;
-
-double msSince(Clock::time_point t0)
-{
-  return 1e3 * std::chrono::duration<double>(Clock::now() - t0).count();
-}
-
 /// One Monte Carlo series of the study.
 struct McConfig
 {
@@ -133,9 +128,7 @@ mcvol::Sampler samplerOf(const std::string& s, const std::string& option)
 std::vector<McConfig> splitConfigs(const std::string& s)
 {
   std::vector<McConfig> v;
-  std::stringstream ss(s);
-  std::string item;
-  while (std::getline(ss, item, ','))
+  for (const std::string& item : splitList(s))
   {
     const size_t a = item.find(':');
     const size_t b = a == std::string::npos ? a : item.find(':', a + 1);
@@ -159,136 +152,73 @@ std::vector<McConfig> splitConfigs(const std::string& s)
   return v;
 }
 
-std::vector<double> splitDoubles(const std::string& s)
+mcvol::Backend backendOf(const std::string& s, const std::string& option)
 {
-  std::vector<double> v;
-  std::stringstream ss(s);
-  std::string item;
-  while (std::getline(ss, item, ','))
+  if (s != "cuda" && s != "cpu")
   {
-    v.push_back(std::stod(item));
+    throw std::invalid_argument(option + " takes cpu or cuda, not " + s);
   }
-  return v;
+  return s == "cuda" ? mcvol::Backend::CUDA : mcvol::Backend::CPU;
+}
+
+/// The options of mcvol-accuracy, stored into `o`.
+ArgParser makeParser(Options& o)
+{
+  ArgParser p("mcvol-accuracy");
+  p.add("--dataset", 1, "NAME", "demo dataset: cosmology, microscopy, weather, figure3 (default cosmology)",
+     [&](const Args& v) { o.dataset = v[0]; })
+    .add("--dims", 3, "X Y Z", "volume size in voxels (default 0 0 0: the dataset's own)",
+      [&](const Args& v)
+      {
+        for (size_t k = 0; k < 3; ++k)
+          o.dims[k] = std::stoi(v[k]);
+      })
+    .add("--blend", 1, "density|max|mix|composite", "blend mode (default density)",
+      [&](const Args& v) { o.blend = v[0]; })
+    .add("--size", 2, "W H", "image size in pixels (default 256 256)",
+      [&](const Args& v)
+      {
+        o.width = std::stoi(v[0]);
+        o.height = std::stoi(v[1]);
+      })
+    .add("--out", 1, "DIR", "folder for the images, timings.csv and meta.txt (default .)",
+      [&](const Args& v) { o.out = v[0]; })
+    .add("--spp-max", 1, "N", "the progressive series' last sample count (default 1024)",
+      [&](const Args& v) { o.sppMax = std::stoi(v[0]); })
+    .add("--steps", 1, "4,2,1,...", "ray-march steps in voxels (default 4,2,1,0.5,0.25,0.125)",
+      [&](const Args& v) { o.steps = splitDoubles(v[0]); })
+    .add("--ref-step", 1, "S", "the reference march's step in voxels (default 0.0625)",
+      [&](const Args& v) { o.refStep = std::stod(v[0]); })
+    .add("--ref-spp", 1, "N", "samples per pixel of the Monte Carlo cross-check (default 4096)",
+      [&](const Args& v) { o.refSpp = std::stoi(v[0]); })
+    .add("--macrocell", 1, "M", "macrocell edge in voxels (default 8)",
+      [&](const Args& v) { o.macrocell = std::stoi(v[0]); })
+    .add("--reps", 1, "N", "ray marches timed per step; the median is reported (default 3)",
+      [&](const Args& v) { o.reps = std::stoi(v[0]); })
+    .add("--score-only", 0, "", "no image files: RMSE and PSNR against the reference in timings.csv instead",
+      [&](const Args&) { o.scoreOnly = true; })
+    .add("--estimator", 1, "expected-value|collision|unbiased-march",
+      "estimator of the default series and the cross-check (default expected-value)",
+      [&](const Args& v) { o.estimator = estimatorOf(v[0], "--estimator"); })
+    .add("--sampler", 1, "independent|sobol", "sampler of the default series and the cross-check (default sobol)",
+      [&](const Args& v) { o.sampler = samplerOf(v[0], "--sampler"); })
+    .add("--mc-configs", 1, "E:S:T[:MIN],...",
+      "Monte Carlo series as estimator:sampler:tracker[:min samples per voxel] (estimator automatic: the "
+      "automatic choice)",
+      [&](const Args& v) { o.mcConfigs = splitConfigs(v[0]); })
+    .add("--backend", 1, "cpu|cuda", "where Monte Carlo renders (default cpu)",
+      [&](const Args& v) { o.backend = backendOf(v[0], "--backend"); })
+    .add("--march-backend", 1, "cpu|cuda", "where the ray marches run (default: --backend)",
+      [&](const Args& v) { o.marchBackend = int(backendOf(v[0], "--march-backend")); })
+    .add("--march-textures", 0, "", "CUDA march: read voxels through the hardware texture filter",
+      [&](const Args&) { o.marchTextures = true; });
+  return p;
 }
 
 Options parse(int argc, char** argv)
 {
   Options o;
-  for (int i = 1; i < argc; ++i)
-  {
-    const std::string a = argv[i];
-    auto need = [&](int n)
-    {
-      if (i + n >= argc)
-      {
-        throw std::invalid_argument(a + " needs " + std::to_string(n) + " value(s)");
-      }
-    };
-    if (a == "--dataset")
-    {
-      need(1);
-      o.dataset = argv[++i];
-    }
-    else if (a == "--dims")
-    {
-      need(3);
-      for (int k = 0; k < 3; ++k)
-        o.dims[size_t(k)] = std::stoi(argv[++i]);
-    }
-    else if (a == "--blend")
-    {
-      need(1);
-      o.blend = argv[++i];
-    }
-    else if (a == "--size")
-    {
-      need(2);
-      o.width = std::stoi(argv[++i]);
-      o.height = std::stoi(argv[++i]);
-    }
-    else if (a == "--out")
-    {
-      need(1);
-      o.out = argv[++i];
-    }
-    else if (a == "--spp-max")
-    {
-      need(1);
-      o.sppMax = std::stoi(argv[++i]);
-    }
-    else if (a == "--steps")
-    {
-      need(1);
-      o.steps = splitDoubles(argv[++i]);
-    }
-    else if (a == "--ref-step")
-    {
-      need(1);
-      o.refStep = std::stod(argv[++i]);
-    }
-    else if (a == "--ref-spp")
-    {
-      need(1);
-      o.refSpp = std::stoi(argv[++i]);
-    }
-    else if (a == "--macrocell")
-    {
-      need(1);
-      o.macrocell = std::stoi(argv[++i]);
-    }
-    else if (a == "--reps")
-    {
-      need(1);
-      o.reps = std::stoi(argv[++i]);
-    }
-    else if (a == "--score-only")
-    {
-      o.scoreOnly = true;
-    }
-    else if (a == "--estimator")
-    {
-      need(1);
-      o.estimator = estimatorOf(argv[++i], a);
-    }
-    else if (a == "--sampler")
-    {
-      need(1);
-      o.sampler = samplerOf(argv[++i], a);
-    }
-    else if (a == "--mc-configs")
-    {
-      need(1);
-      o.mcConfigs = splitConfigs(argv[++i]);
-    }
-    else if (a == "--backend")
-    {
-      need(1);
-      const std::string b = argv[++i];
-      if (b != "cuda" && b != "cpu")
-      {
-        throw std::invalid_argument("--backend takes cpu or cuda, not " + b);
-      }
-      o.backend = b == "cuda" ? mcvol::Backend::CUDA : mcvol::Backend::CPU;
-    }
-    else if (a == "--march-backend")
-    {
-      need(1);
-      const std::string b = argv[++i];
-      if (b != "cuda" && b != "cpu")
-      {
-        throw std::invalid_argument("--march-backend takes cpu or cuda, not " + b);
-      }
-      o.marchBackend = int(b == "cuda" ? mcvol::Backend::CUDA : mcvol::Backend::CPU);
-    }
-    else if (a == "--march-textures")
-    {
-      o.marchTextures = true;
-    }
-    else
-    {
-      throw std::invalid_argument("unknown option " + a);
-    }
-  }
+  makeParser(o).parse(argc, argv);
   return o;
 }
 
@@ -305,23 +235,11 @@ mcvol::BlendMode blendOf(const std::string& s)
   throw std::invalid_argument("unknown blend mode " + s);
 }
 
-/// RMSE and PSNR (peak 1) of the premultiplied RGB clipped to [0, 1], as
-/// accuracy_study.py scores images.
-std::pair<double, double> score(const mcvol::Accumulator& a, const std::vector<float>& ref)
+/// The image's error against the reference, as the study scores images
+/// (clipped RGB, peak 1).
+ImageError score(const mcvol::Accumulator& a, const std::vector<float>& ref)
 {
-  double se = 0;
-  const size_t P = size_t(a.width()) * size_t(a.height());
-  for (size_t p = 0; p < P; ++p)
-  {
-    for (int c = 0; c < 3; ++c)
-    {
-      const double x = std::min(1.0, std::max(0.0, double(a.rgba()[4 * p + c])));
-      const double y = std::min(1.0, std::max(0.0, double(ref[4 * p + c])));
-      se += (x - y) * (x - y);
-    }
-  }
-  const double mse = se / double(3 * P);
-  return { std::sqrt(mse), mse > 0 ? -10.0 * std::log10(mse) : 300.0 };
+  return clippedRgbError(a.rgba(), ref.data(), size_t(a.width()) * size_t(a.height()));
 }
 
 void writeImage(const std::string& path, const mcvol::Accumulator& a)
@@ -367,8 +285,7 @@ int main(int argc, char** argv)
     for (int n = 0; n < v.numChannels(); ++n)
     {
       const std::array<float, 2> r = v.range(n);
-      scene.setTransferFunction(
-        n, mcvol::sampleTransferFunction(v.transferFunctions[size_t(n)], r[0], r[1], 1024, v.spacing[0]));
+      scene.setTransferFunction(n, demoTransferFunction(v, n, r));
     }
     scene.setMacrocellSize(o.macrocell);
     scene.setBlendMode(blendOf(o.blend));
@@ -386,8 +303,7 @@ int main(int argc, char** argv)
       ownMarcher = mcvol::Renderer::create(marchBackend);
     }
     mcvol::Renderer* marcher = ownMarcher ? ownMarcher.get() : r.get();
-    // The estimator and sampler columns come last, so that readers of the
-    // older layout (column names, not positions) read the new one.
+    // The estimator and sampler columns come last: readers go by column name.
     std::vector<std::string> rows = { o.scoreOnly ? "method,variant,param,ms,rmse,psnr,backend,estimator,sampler"
                                                   : "method,variant,param,ms,backend,estimator,sampler" };
     std::vector<float> refImage;
@@ -405,7 +321,7 @@ int main(int argc, char** argv)
       if (o.scoreOnly)
       {
         const auto e = score(a, refImage);
-        s << "," << e.first << "," << e.second;
+        s << "," << e.rmse << "," << e.psnr;
       }
       else
       {
@@ -589,7 +505,7 @@ int main(int argc, char** argv)
             r->render(scene, cam, st, nullptr, a);
             ++n;
             r->readBack(a);
-            if (score(a, refImage).second >= targetDb)
+            if (score(a, refImage).psnr >= targetDb)
             {
               break;
             }
@@ -673,11 +589,7 @@ int main(int argc, char** argv)
         emit("raymarch", name, s, t[t.size() / 2], "rm_" + name + "_" + stepName(s) + ".f32", img);
       }
     }
-    std::ofstream f(o.out + "/timings.csv");
-    for (const auto& l : rows)
-    {
-      f << l << "\n";
-    }
+    writeLines(o.out + "/timings.csv", rows);
     std::ofstream m(o.out + "/meta.txt");
     m << "dataset " << o.dataset << "\ndims " << v.dims[0] << " " << v.dims[1] << " " << v.dims[2] << "\nchannels "
       << v.numChannels() << "\nblend " << o.blend << "\nsize " << o.width << " " << o.height << "\nthreads " << threads

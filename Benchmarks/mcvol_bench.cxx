@@ -2,7 +2,9 @@
 //
 // mcvol-bench: VTK-free benchmark of the core and its backends. It builds on
 // any machine with a C++17 compiler and OpenMP (the GPU machine included) and
-// prints Markdown tables; --csv also writes the rows as CSV.
+// prints Markdown tables; --csv also writes the rows as CSV; --help lists
+// every option (bench/BenchCommon.cxx, the parser's table). Benchmarks/README.md
+// says which figures of the performance page each section produces.
 //
 // Sections (select with --sections a,b,...; one file each, bench/Section*.cxx):
 //   trackers   frame time at 1 spp, 1-DDA and N-DDA
@@ -18,17 +20,25 @@
 //              (software trilinear) sampling, both trackers
 //   effects    lighting effects one by one: frame time, work per ray (shadow
 //              rays, scattering events, gradients), image change against the
-//              unlit image and 1-spp noise (issue 6)
-//   visibility the visibility optimization (paper 004): frame time against
-//              the unoptimized frame, refining renders, segment-list memory
+//              unlit image and 1-spp noise
+//   visibility the visibility optimization (Lerzer and Dachsbacher): frame
+//              time against the unoptimized frame, refining renders,
+//              segment-list memory
 //   estimate   the error estimate against the true error (--reference-spp)
 //              at 16, 64, 256 spp, and the frame time with and without it
 //   sequences  error against spp for the independent sampler and Owen-scrambled
 //              Sobol' points (--samplers, --spp-max): fitted slopes, spp and
-//              ms to RMSE 0.01 and to --psnr dB (issue 14, item 2)
-//   pyramid    levels of detail (issue 13): 1-spp frame time of level 0 (scalar
+//              ms to RMSE 0.01 and to --psnr dB
+//   pyramid    levels of detail: 1-spp frame time of level 0 (scalar
 //              channels) against the pre-classified level 0 and box4 pyramid
-//              levels 1 and 2 (density blend), classify/build time, memory
+//              levels 1..--pyramid-levels (density blend), classify/build
+//              time, memory, the level rebuild after an edit
+//   pilots     what the automatic estimator choice's pilots cost
+//
+// The image quality of the levels is mcvol-pyramid's (mcvol_pyramid.cxx);
+// the accuracy-versus-time images are mcvol-accuracy's (mcvol_accuracy.cxx).
+// All three share the option parser and helpers of bench/ArgParser.h and
+// bench/BenchUtil.h.
 //
 // On the CUDA backend frames are timed as render() + finish() with the image
 // left on the device (RenderSettings::readBack = false); a separate column
@@ -36,6 +46,7 @@
 
 #include "bench/BenchCommon.h"
 #include "bench/Sections.h"
+#include "mcvol/DeviceRenderer.h"
 
 #include <cstdio>
 #include <exception>
@@ -109,7 +120,7 @@ int main(int argc, char** argv)
       std::to_string(o.blockY);
   }
 #endif
-  const bool hostAccel = !r->buildsAccelerationOnDevice();
+  const bool hostAccel = !(r->device() && r->device()->buildsAccelerationOnDevice());
   int threads = 1;
 #ifdef _OPENMP
   threads = omp_get_max_threads();

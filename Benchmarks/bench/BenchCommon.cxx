@@ -2,11 +2,12 @@
 
 #include "BenchCommon.h"
 
+#include "ArgParser.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <fstream>
 #include <sstream>
 #include <stdexcept>
 
@@ -14,279 +15,167 @@ namespace mcvolbench
 {
 namespace
 {
-std::vector<std::string> split(const std::string& s, char sep)
+/// The options of mcvol-bench, stored into `o`.
+ArgParser makeParser(Options& o)
 {
-  std::vector<std::string> out;
-  std::stringstream ss(s);
-  std::string item;
-  while (std::getline(ss, item, sep))
-  {
-    if (!item.empty())
-    {
-      out.push_back(item);
-    }
-  }
-  return out;
-}
-
-std::vector<int> splitInts(const std::string& s)
-{
-  std::vector<int> out;
-  for (const auto& t : split(s, ','))
-  {
-    out.push_back(std::stoi(t));
-  }
-  return out;
+  ArgParser p("mcvol-bench",
+    "sections (run in this order): trackers channels macrocell rebuild memory paper sampling effects converge\n"
+    "          visibility estimate sequences pyramid pilots");
+  p.add("--dataset", 1, "NAME", "demo dataset: cosmology, microscopy, weather, figure3 (default cosmology)",
+     [&](const Args& v) { o.dataset = v[0]; })
+    .add("--dims", 3, "X Y Z", "volume size in voxels (default 256 256 256)",
+      [&](const Args& v)
+      {
+        for (size_t k = 0; k < 3; ++k)
+          o.dims[k] = std::stoi(v[k]);
+      })
+    .add("--channels", 1, "N", "channels generated (default 0: the dataset's own count)",
+      [&](const Args& v) { o.channels = std::stoi(v[0]); })
+    .add("--size", 2, "W H", "image size in pixels (default 512 512)",
+      [&](const Args& v)
+      {
+        o.width = std::stoi(v[0]);
+        o.height = std::stoi(v[1]);
+      })
+    .add("--warmup", 1, "N", "untimed frames before the timed ones (default 3)",
+      [&](const Args& v) { o.warmup = std::stoi(v[0]); })
+    .add("--frames", 1, "N", "timed frames; their median is reported (default 10)",
+      [&](const Args& v) { o.frames = std::stoi(v[0]); })
+    .add("--macrocell", 1, "M", "macrocell edge in voxels (default 8)",
+      [&](const Args& v) { o.macrocell = std::stoi(v[0]); })
+    .add("--backend", 1, "cpu|cuda|auto", "where frames render (default cpu)",
+      [&](const Args& v)
+      {
+        o.backend =
+          v[0] == "cuda" ? mcvol::Backend::CUDA : (v[0] == "auto" ? mcvol::Backend::Auto : mcvol::Backend::CPU);
+      })
+    .add("--sections", 1, "A,B,...", "sections to run (default trackers,channels,macrocell,rebuild,memory)",
+      [&](const Args& v) { o.sections = splitList(v[0]); })
+    .add("--channel-counts", 1, "1,2,4", "channels: the counts swept (default 1,2,4,8,12,16)",
+      [&](const Args& v) { o.channelCounts = splitInts(v[0]); })
+    .add("--macrocell-sizes", 1, "4,8,16", "macrocell: the sizes swept (default 2,4,8,16,32,64)",
+      [&](const Args& v) { o.macrocellSizes = splitInts(v[0]); })
+    .add("--csv", 1, "FILE", "also write every row as CSV", [&](const Args& v) { o.csv = v[0]; })
+    .add("--label", 1, "TEXT", "name printed with the dataset (e.g. NYX-like)", [&](const Args& v) { o.label = v[0]; })
+    .add("--sampling", 1, "texture|global", "CUDA: hardware or software trilinear sampling (default texture)",
+      [&](const Args& v)
+      {
+        o.sampling = v[0];
+        if (o.sampling != "texture" && o.sampling != "global")
+        {
+          throw std::invalid_argument("--sampling takes texture or global");
+        }
+      })
+    .add("--block", 2, "X Y", "CUDA: render-kernel block size (default 8 8)",
+      [&](const Args& v)
+      {
+        o.blockX = std::stoi(v[0]);
+        o.blockY = std::stoi(v[1]);
+      })
+    .add("--psnr", 1, "DB", "converge, sequences: the target PSNR (default 35)",
+      [&](const Args& v) { o.psnr = std::stod(v[0]); })
+    .add("--reference-spp", 1, "N", "samples per pixel of the converged reference (default 2048)",
+      [&](const Args& v) { o.referenceSpp = std::stoi(v[0]); })
+    .add("--density", 1, "F", "divides every opacity unit distance: F times denser (default 1)",
+      [&](const Args& v) { o.density = std::stod(v[0]); })
+    .add("--pyramid-levels", 1, "N", "pyramid: levels 1..N timed (default 2; half precision for 1 and 2 only)",
+      [&](const Args& v) { o.pyramidLevels = std::max(1, std::stoi(v[0])); })
+    .add("--samplers", 1, "independent,sobol", "sequences: the samplers compared (default both)",
+      [&](const Args& v)
+      {
+        o.samplers = splitList(v[0]);
+        for (const std::string& n : o.samplers)
+        {
+          if (n != "independent" && n != "sobol")
+          {
+            throw std::invalid_argument("--samplers takes independent and/or sobol, not " + n);
+          }
+        }
+      })
+    .add("--spp-max", 1, "N", "sequences: the largest sample count (default 256)",
+      [&](const Args& v) { o.sppMax = std::stoi(v[0]); })
+    .add("--estimators", 1, "collision,expected-value,unbiased-march", "sequences: the estimators (default collision)",
+      [&](const Args& v)
+      {
+        o.estimators = splitList(v[0]);
+        for (const std::string& n : o.estimators)
+        {
+          if (n != "collision" && n != "expected-value" && n != "unbiased-march")
+          {
+            throw std::invalid_argument(
+              "--estimators takes collision, expected-value and/or unbiased-march, not " + n);
+          }
+        }
+      })
+    .add("--min-samples-per-voxel", 1, "0.5,1",
+      "converge: expected-value rows with these RenderSettings::minSamplesPerVoxel (default none)",
+      [&](const Args& v)
+      {
+        for (const std::string& n : splitList(v[0]))
+        {
+          o.minSamplesPerVoxel.push_back(std::stof(n));
+        }
+      })
+    .add("--march-samples-per-voxel", 1, "1,2",
+      "converge: unbiased-march rows with these RenderSettings::marchSamplesPerVoxel (default 2)",
+      [&](const Args& v)
+      {
+        o.marchSamplesPerVoxel.clear();
+        for (const std::string& n : splitList(v[0]))
+        {
+          o.marchSamplesPerVoxel.push_back(std::stof(n));
+        }
+      })
+    .add("--no-collision", 0, "", "converge: leave out the collision-estimator rows",
+      [&](const Args&) { o.skipCollision = true; })
+    .add("--pixel-centres", 0, "", "converge: also every configuration at pixel centres (no pixel jitter)",
+      [&](const Args&) { o.pixelCentres = true; })
+    .add("--centres-only", 0, "", "converge: the pixel-centre rows alone",
+      [&](const Args&)
+      {
+        o.pixelCentres = true;
+        o.centresOnly = true;
+      })
+    .add("--steady-frames", 1, "N", "converge: back-to-back frames timed per configuration (default 200)",
+      [&](const Args& v) { o.steadyFrames = std::stoi(v[0]); })
+    .add("--only-automatic", 0, "", "converge: only the automatic row (with the expected-value row)",
+      [&](const Args&) { o.onlyAutomatic = true; })
+    .add("--choice-all", 0, "", "converge: the automatic choice tries (and reports) every rate",
+      [&](const Args&) { o.choiceAll = true; })
+    .add("--cost-model", 1, "RAY,DDA,TENTATIVE,SAMPLE",
+      "converge: the automatic choice's 4 cost weights (default: the backend's defaultCostModel())",
+      [&](const Args& v)
+      {
+        o.costModel.clear();
+        for (const std::string& n : splitList(v[0]))
+        {
+          o.costModel.push_back(std::stod(n));
+        }
+        if (o.costModel.size() != 4)
+        {
+          throw std::invalid_argument("--cost-model takes 4 weights: ray,dda,tentative,sample");
+        }
+      });
+  return p;
 }
 } // namespace
 
 void usage()
 {
-  std::puts(
-    "usage: mcvol-bench [--dataset NAME] [--dims X Y Z] [--channels N] [--size W H]\n"
-    "                   [--warmup N] [--frames N] [--macrocell M] [--backend cpu|cuda|auto]\n"
-    "                   [--sections trackers,channels,macrocell,rebuild,memory]\n"
-    "                   [--channel-counts 1,2,4] [--macrocell-sizes 4,8,16] [--csv FILE]\n"
-    "                   [--label TEXT] [--sampling texture|global] [--block X Y]\n"
-    "                   [--psnr DB] [--reference-spp N] [--density F] [--pyramid-levels N]\n"
-    "                   [--samplers independent,sobol] [--spp-max N]\n"
-    "                   [--estimators collision,expected-value] [--min-samples-per-voxel 0.5,1]\n"
-    "                   [--march-samples-per-voxel 1,2] [--no-collision]\n"
-    "                   [--pixel-centres] [--centres-only] [--steady-frames N] [--only-automatic] [--choice-all]\n"
-    "                   [--cost-model RAY,DDA,TENTATIVE,SAMPLE]\n"
-    "sections: trackers channels macrocell rebuild memory paper converge sampling effects visibility estimate\n"
-    "          sequences pyramid pilots");
+  Options o;
+  makeParser(o).printHelp();
 }
 
 Options parse(int argc, char** argv)
 {
   Options o;
-  for (int i = 1; i < argc; ++i)
-  {
-    const std::string a = argv[i];
-    auto need = [&](int n)
-    {
-      if (i + n >= argc)
-      {
-        throw std::invalid_argument(a + " needs " + std::to_string(n) + " value(s)");
-      }
-    };
-    if (a == "--dataset")
-    {
-      need(1);
-      o.dataset = argv[++i];
-    }
-    else if (a == "--dims")
-    {
-      need(3);
-      for (int k = 0; k < 3; ++k)
-        o.dims[size_t(k)] = std::stoi(argv[++i]);
-    }
-    else if (a == "--channels")
-    {
-      need(1);
-      o.channels = std::stoi(argv[++i]);
-    }
-    else if (a == "--size")
-    {
-      need(2);
-      o.width = std::stoi(argv[++i]);
-      o.height = std::stoi(argv[++i]);
-    }
-    else if (a == "--warmup")
-    {
-      need(1);
-      o.warmup = std::stoi(argv[++i]);
-    }
-    else if (a == "--frames")
-    {
-      need(1);
-      o.frames = std::stoi(argv[++i]);
-    }
-    else if (a == "--macrocell")
-    {
-      need(1);
-      o.macrocell = std::stoi(argv[++i]);
-    }
-    else if (a == "--backend")
-    {
-      need(1);
-      const std::string b = argv[++i];
-      o.backend = b == "cuda" ? mcvol::Backend::CUDA : (b == "auto" ? mcvol::Backend::Auto : mcvol::Backend::CPU);
-    }
-    else if (a == "--label")
-    {
-      need(1);
-      o.label = argv[++i];
-    }
-    else if (a == "--sampling")
-    {
-      need(1);
-      o.sampling = argv[++i];
-      if (o.sampling != "texture" && o.sampling != "global")
-      {
-        throw std::invalid_argument("--sampling takes texture or global");
-      }
-    }
-    else if (a == "--block")
-    {
-      need(2);
-      o.blockX = std::stoi(argv[++i]);
-      o.blockY = std::stoi(argv[++i]);
-    }
-    else if (a == "--density")
-    {
-      need(1);
-      o.density = std::stod(argv[++i]);
-    }
-    else if (a == "--psnr")
-    {
-      need(1);
-      o.psnr = std::stod(argv[++i]);
-    }
-    else if (a == "--estimators")
-    {
-      need(1);
-      o.estimators = split(argv[++i], ',');
-      for (const std::string& n : o.estimators)
-      {
-        if (n != "collision" && n != "expected-value" && n != "unbiased-march")
-        {
-          throw std::invalid_argument("--estimators takes collision, expected-value and/or unbiased-march, not " + n);
-        }
-      }
-    }
-    else if (a == "--samplers")
-    {
-      need(1);
-      o.samplers = split(argv[++i], ',');
-      for (const std::string& n : o.samplers)
-      {
-        if (n != "independent" && n != "sobol")
-        {
-          throw std::invalid_argument("--samplers takes independent and/or sobol, not " + n);
-        }
-      }
-    }
-    else if (a == "--pixel-centres")
-    {
-      o.pixelCentres = true;
-    }
-    else if (a == "--centres-only")
-    {
-      o.pixelCentres = true;
-      o.centresOnly = true;
-    }
-    else if (a == "--min-samples-per-voxel")
-    {
-      need(1);
-      for (const std::string& n : split(argv[++i], ','))
-      {
-        o.minSamplesPerVoxel.push_back(std::stof(n));
-      }
-    }
-    else if (a == "--march-samples-per-voxel")
-    {
-      need(1);
-      o.marchSamplesPerVoxel.clear();
-      for (const std::string& n : split(argv[++i], ','))
-      {
-        o.marchSamplesPerVoxel.push_back(std::stof(n));
-      }
-    }
-    else if (a == "--no-collision")
-    {
-      o.skipCollision = true;
-    }
-    else if (a == "--only-automatic")
-    {
-      o.onlyAutomatic = true;
-    }
-    else if (a == "--choice-all")
-    {
-      o.choiceAll = true;
-    }
-    else if (a == "--steady-frames")
-    {
-      need(1);
-      o.steadyFrames = std::stoi(argv[++i]);
-    }
-    else if (a == "--cost-model")
-    {
-      need(1);
-      o.costModel.clear();
-      for (const std::string& n : split(argv[++i], ','))
-      {
-        o.costModel.push_back(std::stod(n));
-      }
-      if (o.costModel.size() != 4)
-      {
-        throw std::invalid_argument("--cost-model takes 4 weights: ray,dda,tentative,sample");
-      }
-    }
-    else if (a == "--spp-max")
-    {
-      need(1);
-      o.sppMax = std::stoi(argv[++i]);
-    }
-    else if (a == "--reference-spp")
-    {
-      need(1);
-      o.referenceSpp = std::stoi(argv[++i]);
-    }
-    else if (a == "--pyramid-levels")
-    {
-      need(1);
-      o.pyramidLevels = std::max(1, std::stoi(argv[++i]));
-    }
-    else if (a == "--sections")
-    {
-      need(1);
-      o.sections = split(argv[++i], ',');
-    }
-    else if (a == "--channel-counts")
-    {
-      need(1);
-      o.channelCounts = splitInts(argv[++i]);
-    }
-    else if (a == "--macrocell-sizes")
-    {
-      need(1);
-      o.macrocellSizes = splitInts(argv[++i]);
-    }
-    else if (a == "--csv")
-    {
-      need(1);
-      o.csv = argv[++i];
-    }
-    else if (a == "--help" || a == "-h")
-    {
-      usage();
-      std::exit(0);
-    }
-    else
-    {
-      throw std::invalid_argument("unknown option " + a);
-    }
-  }
+  makeParser(o).parse(argc, argv);
   return o;
 }
 
 bool wants(const Options& o, const std::string& s)
 {
-  return std::find(o.sections.begin(), o.sections.end(), s) != o.sections.end();
-}
-
-double seconds(Clock::time_point t0)
-{
-  return std::chrono::duration<double>(Clock::now() - t0).count();
-}
-
-double median(std::vector<double> v)
-{
-  std::sort(v.begin(), v.end());
-  const size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+  return contains(o.sections, s);
 }
 
 void Setup::load(const Options& o, int channels, int macrocell, bool hostAcceleration)
@@ -317,9 +206,8 @@ void Setup::configure(const Options& o, int channels, int macrocell, bool hostAc
   this->scene.setMacrocellSize(macrocell);
   for (int n = 0; n < channels; ++n)
   {
-    this->scene.setTransferFunction(n,
-      mcvol::sampleTransferFunction(this->volume.transferFunctions[size_t(n)], this->ranges[size_t(n)][0],
-        this->ranges[size_t(n)][1], o.tableSize, this->volume.spacing[0] / o.density));
+    this->scene.setTransferFunction(
+      n, demoTransferFunction(this->volume, n, this->ranges[size_t(n)], o.tableSize, o.density));
   }
   this->scene.update();
 }
@@ -454,11 +342,7 @@ void Bench::writeCsv() const
 {
   if (!o.csv.empty())
   {
-    std::ofstream f(o.csv);
-    for (const auto& l : csv)
-    {
-      f << l << "\n";
-    }
+    writeLines(o.csv, csv);
   }
 }
 } // namespace mcvolbench

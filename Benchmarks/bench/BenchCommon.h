@@ -6,6 +6,8 @@
 
 #pragma once
 
+#include "BenchUtil.h"
+
 #include "mcvol/CameraMath.h"
 #include "mcvol/DemoData.h"
 #include "mcvol/Renderer.h"
@@ -14,7 +16,6 @@
 #endif
 
 #include <array>
-#include <chrono>
 #include <string>
 #include <vector>
 
@@ -75,15 +76,11 @@ struct Options
   bool centresOnly = false; ///< --centres-only: the pixel-centre rows alone
 };
 
+/// Prints every option with its help.
 void usage();
 /// Throws std::invalid_argument on a bad command line; --help prints usage() and exits.
 Options parse(int argc, char** argv);
 bool wants(const Options& o, const std::string& s);
-
-using Clock = std::chrono::steady_clock;
-
-double seconds(Clock::time_point t0);
-double median(std::vector<double> v);
 
 /// A loaded dataset with its scene.
 struct Setup

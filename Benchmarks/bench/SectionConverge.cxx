@@ -4,7 +4,7 @@
 // dB (default 35) against a converged reference (--reference-spp samples),
 // for the default settings (expected-value estimator, Sobol' points) and the
 // collision estimator with each tracker, with Sobol' points and with the
-// independent sampler (the default until issue 14), and the unbiased march
+// independent sampler (the renderer's former default), and the unbiased march
 // (--march-samples-per-voxel, default 2; --no-collision leaves the collision
 // rows out), and the automatic choice (chooseEstimator(): its pilots' time
 // is added to its row's). On a backend that renders pilots at once, the
@@ -71,7 +71,7 @@ void runConverge(Bench& bench)
       mcvol::Sampler::Sobol },
     { "collision, 1-DDA, sobol", mcvol::Estimator::Collision, mcvol::Tracker::OneDDA, mcvol::Sampler::Sobol },
     { "collision, N-DDA, sobol", mcvol::Estimator::Collision, mcvol::Tracker::NDDA, mcvol::Sampler::Sobol },
-    { "collision, 1-DDA, independent (before issue 14)", mcvol::Estimator::Collision, mcvol::Tracker::OneDDA,
+    { "collision, 1-DDA, independent (former default)", mcvol::Estimator::Collision, mcvol::Tracker::OneDDA,
       mcvol::Sampler::Independent },
     { "collision, N-DDA, independent", mcvol::Estimator::Collision, mcvol::Tracker::NDDA,
       mcvol::Sampler::Independent },

@@ -2,7 +2,7 @@
 //
 // mcvol-bench section "effects": lighting effects one by one: frame time, work
 // per ray (shadow rays, scattering events, gradients), image change against the
-// unlit image and 1-spp noise (issue 6).
+// unlit image and 1-spp noise.
 
 #include "BenchCommon.h"
 #include "Sections.h"
@@ -20,7 +20,7 @@ void runEffects(Bench& bench)
   const Options& o = bench.o;
   Setup& s = bench.s;
   mcvol::Renderer& r = bench.r;
-  // Issue 6: what each lighting effect costs and what it changes. The
+  // What each lighting effect costs and what it changes. The
   // emission-absorption row runs the unlit kernel; the others the lit one.
   s.load(o, o.channels, o.macrocell, bench.hostAccel);
   const std::string ds = describe(o, s);

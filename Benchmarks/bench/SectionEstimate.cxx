@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 //
 // mcvol-bench section "estimate": the progressive image's estimated error
-// (Accumulator::estimatedMSE, issue 14 item 4) against its true error at
+// (Accumulator::estimatedMSE) against its true error at
 // 16, 64 and 256 spp, and the frame time with and without the even-sample
 // half the estimate keeps.
 

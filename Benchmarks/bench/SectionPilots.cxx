@@ -3,8 +3,8 @@
 // mcvol-bench section "pilots": what the automatic estimator choice's pilots
 // (chooseEstimator()) cost, jittered pixels and pixel centres, each run
 // three times (the first after the data's first frames; median reported).
-// On CUDA both ways: the renders one after the other (Renderer::renderPilots,
-// the fifteenth session's pilots) and all of a round's samples at once
+// On CUDA both ways: the renders one after the other (Renderer::renderPilots)
+// and all of a round's samples at once
 // (CUDARenderer::renderPilots, the default; with it chooseEstimator() renders
 // ahead the rates it will most likely reach), and at once with the previous
 // choice's candidates as the hint (EstimatorChoiceSettings::hint, what the

@@ -1,23 +1,23 @@
 // SPDX-License-Identifier: BSD-3-Clause
 //
-// mcvol-bench section "pyramid": levels of detail (issue 13). Frame time at
-// 1 spp of level 0 rendered the normal way (the scalar channels through their
-// transfer functions) against the pre-classified levels: the channels
-// classified by classifyScalars into one float4 extinction channel (with
-// accumulate = true: their density blend, so the blend mode is density),
-// level 0 of that, and levels 1 and 2 of its box4 extinction pyramid, each
-// with its own spacing and origin (the same view). Also the classify and
-// build times and the memory of each level. The issue's target: level 1
-// renders at least 4x faster than level 0 for a 4 x 512^3 float volume at
-// 1024^2 on the GPU (Benchmarks/gpu/bench.sh pyramid); the CPU figure is the
-// same section with --backend cpu. Image quality per level is mcvol-pyramid's.
+// mcvol-bench section "pyramid": what levels of detail buy a frame. Frame
+// time at 1 spp of level 0 rendered the normal way (the scalar channels
+// through their transfer functions) against the pre-classified levels: the
+// channels classified by classifyScalars into one float4 extinction channel
+// (with accumulate = true: their density blend, so the blend mode is
+// density), level 0 of that, and levels 1..--pyramid-levels of its box4
+// extinction pyramid, each with its own spacing and origin (the same view).
+// Also the classify and build times and the memory of each level, and the
+// ratio of level 0's frame time to level 1's against a 4x target (the GPU
+// figure comes from Benchmarks/gpu/bench.sh pyramid; the CPU figure is the
+// same section with --backend cpu). Image quality per level is mcvol-pyramid's.
 // Last, the rebuild of levels 1 and 2 after a transfer-function edit on the
-// host and by the renderer's classifyLevel (on the GPU for CUDA; issue 13,
-// item 2).
+// host and by the renderer's classifyLevel (on the GPU for CUDA).
 
 #include "BenchCommon.h"
 #include "Sections.h"
 
+#include "mcvol/DeviceRenderer.h"
 #include "mcvol/MarchSetup.h"
 #include "mcvol/Pyramid.h"
 
@@ -33,22 +33,6 @@ namespace mcvolbench
 {
 namespace
 {
-/// The bench camera with the world-to-index map of a grid of this spacing
-/// and origin (level 0's origin is 0), so every level is seen the same way.
-mcvol::Camera forGrid(mcvol::Camera cam, const double spacing[3], const double origin[3])
-{
-  for (double& x : cam.worldToIndex)
-  {
-    x = 0.0;
-  }
-  for (int a = 0; a < 3; ++a)
-  {
-    cam.worldToIndex[a * 4 + a] = 1.0 / spacing[a];
-    cam.worldToIndex[a * 4 + 3] = -origin[a] / spacing[a];
-  }
-  return cam;
-}
-
 /// Median ms of --frames 1-spp frames after --warmup, the image left on the
 /// device (as timeFrames, with a camera of the caller's).
 double medianFrameMs(const Options& o, mcvol::Renderer& r, const mcvol::Scene& scene, const mcvol::Camera& cam,
@@ -120,7 +104,7 @@ double maxRelativeDiff(const mcvol::PyramidLevel& a, const mcvol::PyramidLevel& 
 }
 
 /**
- * Rebuilding a level after a transfer-function edit (issue 13, item 2):
+ * Rebuilding a level after a transfer-function edit:
  * levels 1 and 2 (box4) of the loaded scalar channels, their density blend
  * (all channels summed into one level) and per channel (one level each,
  * times added), by the host build (classifyExtinctionLevel, once: seconds
@@ -140,14 +124,12 @@ void runLevelRebuild(Bench& bench)
   const int* d = s.volume.dims;
   const int channels = s.volume.numChannels();
   const double MiB = 1024.0 * 1024.0;
-  // classifyLevel() builds on the device with the CUDA backend whether or
-  // not the mapper takes it yet (CUDARenderer::setDeviceLevels).
+  // classifyLevel() builds on the device with the CUDA backend.
   const bool device = std::string(r.name()) == "cuda";
   std::vector<mcvol::TransferFunctionDesc> tfs;
   for (int k = 0; k < channels; ++k)
   {
-    tfs.push_back(mcvol::sampleTransferFunction(s.volume.transferFunctions[size_t(k)], s.ranges[size_t(k)][0],
-      s.ranges[size_t(k)][1], o.tableSize, s.volume.spacing[0] / o.density));
+    tfs.push_back(demoTransferFunction(s.volume, k, s.ranges[size_t(k)], o.tableSize, o.density));
   }
   const std::vector<mcvol::TransferFunctionDesc> original = tfs;
   std::vector<mcvol::ClassifyInput> inputs(static_cast<size_t>(channels));
@@ -228,7 +210,7 @@ void runLevelRebuild(Bench& bench)
             size_t peak = 0;
             const auto t0 = Clock::now();
             const mcvol::PyramidLevel lv =
-              r.classifyLevel(inputs.data() + g * per, per, d, s.volume.spacing, origin, level, f, &peak);
+              r.device()->classifyLevel(inputs.data() + g * per, per, d, s.volume.spacing, origin, level, f, &peak);
             total += 1e3 * seconds(t0);
             row.deviceMiB = std::max(row.deviceMiB, double(peak) / MiB);
             if (i == 0)
@@ -256,7 +238,7 @@ void runLevelRebuild(Bench& bench)
   }
 
   std::printf("## Level rebuild after a transfer-function edit (%s, %d channels, box4; host: classifyExtinctionLevel, "
-              "%s: Renderer::classifyLevel)\n\n",
+              "%s: DeviceRenderer::classifyLevel)\n\n",
     ds.c_str(), channels, r.name());
   std::printf(
     "| level | grid | channels | level MiB | host ms | host work MiB | %s first build ms (copies the data) | %s "
@@ -289,7 +271,7 @@ void runLevelRebuild(Bench& bench)
   }
   if (!device)
   {
-    std::printf("\n(%s builds levels on the host: Renderer::classifyLevel is classifyExtinctionLevel.)\n", r.name());
+    std::printf("\n(%s builds levels on the host: classifyExtinctionLevel.)\n", r.name());
   }
 #ifdef MCVOL_WITH_CUDA
   if (mcvol::CUDARenderer* cuda = asCuda(r))
@@ -356,7 +338,7 @@ void runPyramid(Bench& bench)
     r.render(scene, cam, st, nullptr, acc, &c);
     row.tentativePerRay = double(c.tentativeCollisions) / double(std::max<uint64_t>(1, c.rays));
     row.ddaPerRay = double(c.ddaSteps) / double(std::max<uint64_t>(1, c.rays));
-    row.deviceMiB = double(r.deviceBytes()) / MiB;
+    row.deviceMiB = r.device() ? double(r.device()->deviceBytes()) / MiB : 0.0;
   };
 
   // Level 0, the normal path.
@@ -380,8 +362,8 @@ void runPyramid(Bench& bench)
     level0.assign(4 * n, 0.f);
     for (int k = 0; k < s.volume.numChannels(); ++k)
     {
-      const mcvol::TransferFunctionDesc tf = mcvol::sampleTransferFunction(s.volume.transferFunctions[size_t(k)],
-        s.ranges[size_t(k)][0], s.ranges[size_t(k)][1], o.tableSize, s.volume.spacing[0] / o.density);
+      const mcvol::TransferFunctionDesc tf =
+        demoTransferFunction(s.volume, k, s.ranges[size_t(k)], o.tableSize, o.density);
       mcvol::classifyScalars(s.volume.source(k), d, tf, level0.data(), 4, true);
     }
     classifiedRow.buildMs = 1e3 * seconds(t0);
@@ -425,20 +407,7 @@ void runPyramid(Bench& bench)
     return std::vector<float>(acc.rgba(), acc.rgba() + size_t(cam.width) * size_t(cam.height) * 4);
   };
   auto gridScene = [&](const mcvol::ClassifiedVolumeView& v)
-  {
-    auto scene = std::make_unique<mcvol::Scene>();
-    mcvol::ChannelSource src;
-    src.data = v.voxels;
-    src.type = mcvol::ScalarType::Float32;
-    src.stride = 4;
-    src.format = mcvol::ChannelFormat::Extinction;
-    scene->setHostAcceleration(bench.hostAccel);
-    scene->setVolume(v.dims, 1, &src);
-    scene->setMacrocellSize(o.macrocell);
-    scene->setBlendMode(mcvol::BlendMode::Density);
-    scene->update();
-    return scene;
-  };
+  { return classifiedScene(v, o.macrocell, bench.hostAccel); };
 
   // Level 0 pre-classified: what pre-classification alone changes.
   {

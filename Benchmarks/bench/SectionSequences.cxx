@@ -1,9 +1,9 @@
 // SPDX-License-Identifier: BSD-3-Clause
 //
-// mcvol-bench section "sequences" (issue 14, item 2): the error of the
-// progressive image against a converged reference at 1, 2, 4, ... --spp-max
-// samples per pixel, for the independent sampler and for Owen-scrambled
-// Sobol' points (RenderSettings::sampler), each with the --estimators given
+// mcvol-bench section "sequences": the error of the progressive image against
+// a converged reference at 1, 2, 4, ... --spp-max samples per pixel, for the
+// independent sampler and for Owen-scrambled Sobol' points
+// (RenderSettings::sampler), each with the --estimators given
 // (RenderSettings::estimator: collision, expected-value), 1 spp per frame
 // (1-DDA, pixel jitter on). Prints per sampler the RMSE and PSNR at each power of two, the
 // fitted log-log slope of RMSE against spp (over all points and over 1-16

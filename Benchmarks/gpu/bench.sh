@@ -15,13 +15,13 @@
 #   sequences independent samples against Owen-scrambled Sobol' points, each
 #             with the collision and the expected-value estimator: error
 #             against spp, slopes, spp and ms to RMSE 0.01 and 35 dB (1024^2,
-#             the four paper-sized datasets; issue 14, items 1 and 2)
-#   pyramid   levels of detail (issue 13): 1-spp frame time of level 0 (4 x
+#             the four paper-sized datasets)
+#   pyramid   levels of detail: 1-spp frame time of level 0 (4 x
 #             512^3 float, scalar channels) against the pre-classified level 0
 #             and box4 levels 1 and 2 (density blend), classify/build time and
 #             memory; CUDA at 1024^2 (target: level 1 >= 4x faster than level
 #             0), the CPU at 1024^2 and 512^2
-#   estimator the automatic estimator choice (issue 14, item 1): time to 35 dB
+#   estimator the automatic estimator choice: time to 35 dB
 #             at 1024^2 of expected value, the unbiased march at 0.0625-2
 #             strata per voxel and the automatic choice (pilots included),
 #             the four paper-sized datasets; then the cost model fitted to
@@ -31,7 +31,7 @@
 #   automatic the automatic choice alone at 1024^2: its time to 35 dB with the
 #             default rate search (automatic-*.md), then every candidate's
 #             prediction (--choice-all, automatic-all-*.md)
-#   pilots    the automatic choice's pilots (sixteenth session): time to 35 dB
+#   pilots    the automatic choice's pilots: time to 35 dB
 #             with the pilots included (pilots-*.md, converge rows) and the
 #             pilots' cost rendered all at once and one after the other
 #             (section pilots), jittered and at pixel centres
@@ -42,7 +42,7 @@
 #             (centres-rates-*.md)
 #   big       a volume of FRACTION (default 0.6) of the device's memory
 #             (figure3, 3 x float32, generated cheaply) renders: device bytes
-#             and frame time (issue 14, item 5)
+#             and frame time
 # Usage: bash Benchmarks/gpu/bench.sh [build-dir] stage...   (results under $OUT)
 set -uo pipefail
 b="${1:-/tmp/mcvol-gpu}"
@@ -94,7 +94,7 @@ for stage in "$@"; do
         grep -E "^\| (expected-value, sobol \(default\)|automatic)" "$out/estimator-$key.md" | sed "s/^/$label /"
       done
       here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
-      python3 "$here/../fit_cost_model.py" "$out"/estimator-*.md > "$out/cost-model-fit.md"
+      python3 "$here/../studies/fit_cost_model.py" "$out"/estimator-*.md > "$out/cost-model-fit.md"
       tail -3 "$out/cost-model-fit.md"
       model="$(tail -1 "$out/cost-model-fit.md" | sed 's/^--cost-model //')"
       for s in "${sets[@]}"; do
@@ -106,9 +106,9 @@ for stage in "$@"; do
       done
       ;;
     pilots)
-      # The automatic choice with its pilots all at once (the default since
-      # the sixteenth session) and one after the other: time to 35 dB with
-      # the pilots included, and the pilots' cost both ways.
+      # The automatic choice with its pilots all at once (the default) and
+      # one after the other: time to 35 dB with the pilots included, and the
+      # pilots' cost both ways.
       for s in "${sets[@]}"; do
         read -r key ds x y z ch label <<< "$s"
         run "pilots-$key" --backend cuda --dataset "$ds" --dims "$x" "$y" "$z" --channels "$ch" \
@@ -217,7 +217,7 @@ for stage in "$@"; do
       done
       ;;
     effects)
-      # Issue 6: each lighting effect's cost and effect, CUDA and CPU.
+      # Each lighting effect's cost and effect, CUDA and CPU.
       run effects-cuda --backend cuda --dataset cosmology --dims 256 256 256 --channels 4 --label "cosmology 256^3" \
         --size 1024 1024 --warmup 10 --frames 100 --reference-spp 256 --sections effects
       run effects-cpu --backend cpu --dataset cosmology --dims 256 256 256 --channels 4 --label "cosmology 256^3" \
@@ -255,9 +255,9 @@ for stage in "$@"; do
       grep -E "^GPU memory|^\| (1-DDA|N-DDA)" "$out/big-$edge.md"
       ;;
     pyramid)
-      # Issue 13's target: level 1 at least 4x faster than level 0 for a
-      # 4 x 512^3 float volume at 1024^2 on the GPU, and the CPU figures.
-      # Levels 3-6 too on CUDA: the bound on any level's gain (twentieth session).
+      # The target: level 1 at least 4x faster than level 0 for a 4 x 512^3
+      # float volume at 1024^2 on the GPU, and the CPU figures. Levels 3-6
+      # too on CUDA: the coarsest level bounds what any level can gain.
       run pyramid-cuda --backend cuda --dataset cosmology --dims 512 512 512 --channels 4 --label NYX-like \
         --size 1024 1024 --warmup 25 --frames 200 --sections pyramid --pyramid-levels 6
       run pyramid-cpu-1024 --backend cpu --dataset cosmology --dims 512 512 512 --channels 4 --label NYX-like \

@@ -1,4 +1,4 @@
-"""One GPU per MPI rank (issue 15): `mpiexec -n N pvbatch --symmetric`.
+"""One GPU per MPI rank: `mpiexec -n N pvbatch --symmetric`.
 
 Every rank renders its piece of a generated multi-channel volume (a
 programmable source: numpy fields, only the rank's extent generated) with the
@@ -39,7 +39,7 @@ T.load_plugin()
 # A programmable source generates each rank's piece with numpy (ParaView asks
 # every rank for its own extent of the whole one, so no rank holds the
 # volume): smooth fields of different frequency in [0, 1]. (The Wavelet source
-# and calculators, used before, spent minutes per rank on a 768^3 volume.)
+# with calculators takes minutes per rank on a 768^3 volume.)
 t_gen = time.perf_counter()
 names = ["c%d" % k for k in range(args.channels)]
 source = simple.ProgrammableSource()

@@ -36,7 +36,7 @@ if [ "${1:-}" = "--dev" ]; then dev_only=1; build_only=1; shift; fi
 top="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 b="$(cd "${1:-$top/build}" && pwd)"
 out="$top/.gpuroot"
-# A call carries 64 MiB with the working tree (about 37 MiB, 2026-11-25) included.
+# A call carries 64 MiB, the working tree included.
 chunk_mb="${CHUNK_MB:-24}"
 work="$(mktemp -d)"
 trap 'rm -rf "$work"' EXIT

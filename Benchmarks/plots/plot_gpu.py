@@ -109,7 +109,7 @@ def paper_bars(rows, out):
 
 
 def main():
-    d = sys.argv[1] if len(sys.argv) > 1 else os.path.join(os.path.dirname(__file__), "results", "gpu")
+    d = sys.argv[1] if len(sys.argv) > 1 else os.path.join(os.path.dirname(__file__), "..", "results", "gpu")
     mc = load(os.path.join(d, "macrocell-*.csv"))
     sweep(mc, "macrocell", "macrocell", "Frame rate against macrocell size (paper Fig. 8)", "macrocell edge (voxels)",
           os.path.join(d, "gpu-macrocell.png"), logx=True)

@@ -7,7 +7,7 @@ at 4, 3, 2, 1.5, 1.25 and 1 per voxel (two seeds each), then the median time of 
 render of each, and the automatic choice at 35 dB and at RMSE 0.01.
 
   PYTHONPATH=build/lib/python3.11/site-packages xvfb-run -a /usr/bin/python3 \\
-      Benchmarks/choice_truth.py [--linear] [--centres] [--ref-spp 512]
+      Benchmarks/studies/choice_truth.py [--linear] [--centres] [--ref-spp 512]
 """
 import argparse
 import statistics

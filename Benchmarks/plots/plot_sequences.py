@@ -4,8 +4,8 @@
 file, the independent sampler and Owen-scrambled Sobol' points, with the
 1/sqrt(spp) Monte Carlo rate for reference.
 
-    /usr/bin/python3 Benchmarks/plot_sequences.py Benchmarks/results/sequences/*.csv \
-        --out Benchmarks/results/sequences/sequences.png
+    /usr/bin/python3 Benchmarks/plots/plot_sequences.py Benchmarks/results/sample-sequences-cpu/*.csv \
+        --out Benchmarks/results/sample-sequences-cpu/sequences-cpu.png
 """
 import argparse
 import csv

@@ -1,12 +1,12 @@
 #!/usr/bin/python3
 """Time to a target error through the VTK API: vtkMultiChannelVolumeMapper
 (Monte Carlo, progressive) against vtkMultiChannelRayMarchMapper at its
-default step (issue 14: "CPU (2 cores), through the VTK API, unlit: Monte
-Carlo time to RMSE 0.01 within 2x the ray marcher's time at its default
-step; lit: keep beating it").
+default step. The target: on the CPU (2 cores), through the VTK API, unlit,
+Monte Carlo reaches RMSE 0.01 within 2x the ray marcher's time at its
+default step; lit, it beats the ray marcher.
 
 Scene: the generated microscopy set (3 uint8 channels) of --dims (default
-128 x 112 x 64, the issue's scene), the demo source's suggested transfer
+128 x 112 x 64), the demo source's suggested transfer
 functions, independent components, linear interpolation, density blend, one
 camera (azimuth 35, elevation 25), a --size window (default 256 x 256),
 pixel centres for every image (Monte Carlo with pixel jitter off, as the
@@ -46,7 +46,7 @@ Prints a Markdown table; --csv writes the rows.
 
 Usage (from the repository, after scripts/build.sh):
   PYTHONPATH=build/lib/python3.11/site-packages xvfb-run -a python3 \\
-      Benchmarks/cpu_time_to_error.py --out Benchmarks/results/cpu-time-to-error
+      Benchmarks/studies/cpu_time_to_error.py --out Benchmarks/results/cpu-time-to-error
 """
 import argparse
 import csv

@@ -1,4 +1,4 @@
-"""Levels of detail in ParaView on the CPU (issue 13, item 4): interactive
+"""Levels of detail in ParaView on the CPU: interactive
 frame times of a 4-channel float volume with ParaView's LOD forced (the
 view's LODThreshold at 0, so every interactive render uses the
 representation's InteractiveLevelOfDetail), at level 0 (no coarser level
@@ -14,8 +14,8 @@ nearest voxel (the representation's InteractiveInterpolation default;
 is the wall time of the interactive render, the first frame at a level
 (which builds it) left out of the median.
 
-  bash scripts/paraview.sh pvpython Benchmarks/lod_bench.py --dims 512 --size 512 \\
-      --out Benchmarks/results/cpu-lod
+  bash scripts/paraview.sh pvpython Benchmarks/studies/lod_bench.py --dims 512 --size 512 \\
+      --out Benchmarks/results/levels-of-detail/paraview-cpu
 
 Prints a Markdown table and writes it, with the machine, date and command,
 to OUT/README.md (and the rows to OUT/lod.csv).
@@ -35,7 +35,7 @@ from vtkmodules.util.numpy_support import numpy_to_vtk
 from vtkmodules.vtkCommonDataModel import vtkImageData
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, os.path.join(os.path.dirname(HERE), "Testing", "ParaView"))
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(HERE)), "Testing", "ParaView"))
 import mcvolParaViewTesting as T  # noqa: E402
 
 NAMES = ["c0", "c1", "c2", "c3"]
@@ -227,9 +227,9 @@ def main():
                 cpu = next(line.split(":", 1)[1].strip() for line in f if line.startswith("model name"))
         except (OSError, StopIteration):
             pass
-        command = "bash scripts/paraview.sh pvpython Benchmarks/lod_bench.py " + " ".join(sys.argv[1:])
+        command = "bash scripts/paraview.sh pvpython Benchmarks/studies/lod_bench.py " + " ".join(sys.argv[1:])
         with open(os.path.join(args.out, "README.md"), "w") as f:
-            f.write("# Levels of detail in ParaView, %s backend (issue 13, item 4)\n\n" % args.backend)
+            f.write("# Levels of detail in ParaView, %s backend\n\n" % args.backend)
             f.write("%s, %d cores (os.cpu_count), %s, %s UTC. Load average (1, 5, 15 min) %s before the "
                     "run and %s after it: the machine was shared with other work, so the times are upper "
                     "bounds of what it does idle.\n\n" % (

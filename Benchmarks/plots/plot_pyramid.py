@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Plots of the levels-of-detail study (mcvol-pyramid --csv, issue 13):
+"""Plots of the levels-of-detail study (mcvol-pyramid --csv):
 
   pyramid-error-conv.png  image error against level, one panel per dataset,
                           each filter extinction-based (solid) and opacity-
@@ -12,10 +12,11 @@
                           far views' levels against the supersampled image
                           (ray march per level, Monte Carlo at 64 spp)
 
-    python3 Benchmarks/plot_pyramid.py Benchmarks/results/cpu-pyramid/pyramid.csv \\
-        --out Benchmarks/results/cpu-pyramid [--summary]
+    python3 Benchmarks/plots/plot_pyramid.py Benchmarks/results/levels-of-detail/pyramid-study/pyramid.csv \\
+        --out Benchmarks/results/levels-of-detail/pyramid-study [--summary]
 
---summary also prints the Markdown summary tables of RESULTS.md (the ratios
+--summary also prints the Markdown summary tables of the performance page
+(Documentation/performance.md, "Levels of detail": the ratios
 of opacity to extinction error per dataset and level, the frame times per
 level, the far views).
 """
@@ -143,7 +144,7 @@ def time_figure(values, datasets, out):
 
 
 def summary(values, datasets):
-    """Prints RESULTS.md's summary tables from the CSV."""
+    """Prints the performance page's summary tables from the CSV."""
     filters = [f for f, _ in FILTERS]
     print("| dataset | level | ext. RMSE vs conv (box2 / box4 / bspline) | ratio opacity/ext., conv | "
           "ratio opacity/ext., full |")

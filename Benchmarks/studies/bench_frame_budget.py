@@ -9,7 +9,7 @@ time to reach a total of --spp samples per pixel. Budget 0 is the fixed
 SamplesPerPixel = 1 of before.
 
     PYTHONPATH=build/lib/python3.11/site-packages xvfb-run -a /usr/bin/python3 \\
-        Benchmarks/bench_frame_budget.py --dims 256 256 256 --size 512 [--backend cpu]
+        Benchmarks/studies/bench_frame_budget.py --dims 256 256 256 --size 512 [--backend cpu]
 """
 import argparse
 import platform

@@ -12,7 +12,7 @@ phantom with the nuclei important:
 Prints Markdown tables and writes the pictures to --out.
 
     PYTHONPATH=build/lib/python3.11/site-packages xvfb-run -a \\
-        /usr/bin/python3 Benchmarks/visibility_study.py --out Benchmarks/results/visibility
+        /usr/bin/python3 Benchmarks/studies/visibility_study.py --out Benchmarks/results/visibility-optimization
 """
 import argparse
 import os

@@ -7,8 +7,8 @@ For each dataset and Samples Per Render value it measures, on the CPU backend:
 - the wall time to reach 256 samples per pixel from a camera change.
 Writes a Markdown table (and CSV) to --out.
 
-  bash scripts/paraview.sh pvpython Benchmarks/paraview_bench.py --out Benchmarks/results/paraview
-  bash scripts/paraview.sh mpiexec -n 2 pvbatch Benchmarks/paraview_bench.py --out ... --label 2ranks
+  bash scripts/paraview.sh pvpython Benchmarks/studies/paraview_bench.py --out Benchmarks/results/paraview-plugin
+  bash scripts/paraview.sh mpiexec -n 2 pvbatch Benchmarks/studies/paraview_bench.py --out ... --label 2ranks
 """
 import argparse
 import os
@@ -20,7 +20,7 @@ from paraview import simple
 from paraview import servermanager as sm
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, os.path.join(os.path.dirname(HERE), "Testing", "ParaView"))
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(HERE)), "Testing", "ParaView"))
 import mcvolParaViewTesting as T  # noqa: E402
 
 

@@ -3,7 +3,7 @@
 """A scene file rendered by mcvol and by VTK's own GPU volume mapper, side by side.
 
     PYTHONPATH=build/lib/python3.11/site-packages xvfb-run -a /usr/bin/python3 \\
-        Benchmarks/compare_vtk_mapper.py SCENE.json -o side.png [--size 384x384] [--spp N]
+        Benchmarks/studies/compare_vtk_mapper.py SCENE.json -o side.png [--size 384x384] [--spp N]
 
 The scene is assembled as mcvol-render assembles it (same data, transfer
 functions, unit distances, camera, background, interpolation). VTK's
@@ -125,7 +125,7 @@ def main():
     from mcvol.scenefile.errors import ErrorCollector
     from mcvol.scenefile.render import accumulate
 
-    top = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    top = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
     presets = os.environ.get("MCVOL_PRESETS", os.path.join(top, "Data", "presets.json"))
     with open(args.scene) as f:
         scene = parse_scene(json.load(f), os.path.dirname(os.path.abspath(args.scene)), Presets(presets))

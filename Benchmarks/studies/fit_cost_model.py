@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 # SPDX-License-Identifier: BSD-3-Clause
 """Fit the automatic estimator choice's cost model (mcvol::CostModel,
-Rendering/Core/EstimatorChoice.cxx) to measured frame times.
+Rendering/Core/EstimatorChoice/CostModel.cxx) to measured frame times.
 
 Reads mcvol-bench converge outputs (their "Work per pixel and frame" tables:
 rays, DDA steps, tentative collisions, channel samples per pixel and the
@@ -12,7 +12,7 @@ weights kept non-negative (a negative weight's feature is dropped and the
 rest refitted). Prints the weights, each row's measured and modelled time,
 and the largest relative error. Pure Python (no numpy on the GPU machine).
 
-    python3 Benchmarks/fit_cost_model.py converge-*.md
+    python3 Benchmarks/studies/fit_cost_model.py converge-*.md
 """
 import re
 import sys

@@ -4,7 +4,7 @@ levels (does a smaller edge, which keeps the majorants' world extent, pay?).
 The volume and transfer functions are lod_bench.py's, at --dims.
 
   PYTHONPATH=build/lib/python3.11/site-packages xvfb-run -a /usr/bin/python3 \\
-      Benchmarks/lod_levels_vtk.py --dims 256 --size 512
+      Benchmarks/studies/lod_levels_vtk.py --dims 256 --size 512
 
 Prints a Markdown table: mapper, level, macrocell edge, median frame ms of 5
 frames that each move the camera 1 degree (1 sample per pixel for Monte

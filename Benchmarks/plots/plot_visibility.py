@@ -3,8 +3,8 @@
 visibility): error against time for each quality knob (samples per pixel,
 importance samples per pass, light-ray samples), one line per result file.
 
-    python3 Benchmarks/plot_visibility.py Benchmarks/results/visibility/vis-knobs-*.md \
-        --out Benchmarks/results/visibility/visibility-knobs.png
+    python3 Benchmarks/plots/plot_visibility.py Benchmarks/results/visibility-optimization/*-800x800.md \
+        --out Benchmarks/results/visibility-optimization/visibility-knobs.png
 """
 import argparse
 import os

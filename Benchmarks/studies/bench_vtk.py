@@ -9,11 +9,11 @@ function per channel) at the same size with:
 and prints a Markdown table (median of the timed frames after warm-up).
 
 VTK's mappers blend independent components with their own formulas (see
-DESIGN.md), so their images differ from ours by design: this compares time,
+Documentation/design.md), so their images differ from ours by design: this compares time,
 and writes a side-by-side picture, not an error.
 
 Run from the build tree:  PYTHONPATH=build/lib/python3/dist-packages \
-    xvfb-run -a /usr/bin/python3 Benchmarks/bench_vtk.py --dims 256 256 256
+    xvfb-run -a /usr/bin/python3 Benchmarks/studies/bench_vtk.py --dims 256 256 256
 """
 import argparse
 import os
