@@ -27,7 +27,7 @@ bool Renderer::cudaAvailable(std::string* why, int cudaDevice)
   (void)cudaDevice;
   if (why)
   {
-    *why = "this build of mcvol has no CUDA backend (no CUDA compiler was found when it was configured)";
+    *why = "this build of mcvol has no CUDA backend (" MCVOL_NO_CUDA_REASON ")";
   }
   return false;
 #endif
