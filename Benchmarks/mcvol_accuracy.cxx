@@ -39,6 +39,11 @@
 // estimator under the composite blend, which keeps the collision estimator)
 // is recorded under the estimator it runs, once: the CSV never holds two
 // copies of one series under different names.
+// --lighting shadows|ambient|multiple (lightingPreset() in BenchUtil.h) lights
+// the scene: every Monte Carlo series then runs the collision estimator (a lit
+// camera ray's), the marches are the lit march (extinction model only), and
+// with multiple scattering, which the march does not render, the reference is
+// a Monte Carlo image at --ref-spp with its own seed and no marches are run.
 
 #include "bench/ArgParser.h"
 #include "bench/BenchUtil.h"
@@ -102,6 +107,7 @@ struct Options
   mcvol::Sampler sampler = mcvol::Sampler::Sobol;
   mcvol::Estimator estimator = mcvol::Estimator::ExpectedValue;
   std::vector<McConfig> mcConfigs; ///< empty: estimator and sampler, both trackers
+  std::string lighting = "none";   ///< lightingPreset() name
 };
 
 mcvol::Estimator estimatorOf(const std::string& s, const std::string& option)
@@ -210,6 +216,13 @@ ArgParser makeParser(Options& o)
       [&](const Args& v) { o.backend = backendOf(v[0], "--backend"); })
     .add("--march-backend", 1, "cpu|cuda", "where the ray marches run (default: --backend)",
       [&](const Args& v) { o.marchBackend = int(backendOf(v[0], "--march-backend")); })
+    .add("--lighting", 1, kLightingPresets,
+      "the scene's lighting (default none): one light with shadows, plus ambient 0.2, plus multiple scattering",
+      [&](const Args& v)
+      {
+        lightingPreset(v[0], 1); // refuses an unknown name here
+        o.lighting = v[0];
+      })
     .add("--march-textures", 0, "", "CUDA march: read voxels through the hardware texture filter",
       [&](const Args&) { o.marchTextures = true; });
   return p;
@@ -289,7 +302,11 @@ int main(int argc, char** argv)
     }
     scene.setMacrocellSize(o.macrocell);
     scene.setBlendMode(blendOf(o.blend));
+    scene.setLighting(lightingPreset(o.lighting, v.numChannels()));
     scene.update();
+    // The march renders single scattering only: with more, the reference is
+    // a Monte Carlo image.
+    const bool marchable = o.lighting != "multiple";
     const mcvol::Camera cam = mcvol::orbitCamera(v.dims, v.spacing, o.width, o.height, 30, 20);
     const double voxel = 2.0 * mcvol::marchNyquistStep(cam); // smallest spacing
     // Monte Carlo's backend, and the march's: the same renderer when both
@@ -308,9 +325,9 @@ int main(int argc, char** argv)
                                                   : "method,variant,param,ms,backend,estimator,sampler" };
     std::vector<float> refImage;
     const mcvol::BlendMode blend = blendOf(o.blend);
-    // The estimator a render asked for `e` runs (unlit, not optimized).
+    // The estimator a render asked for `e` runs (not optimized).
     auto effective = [&](mcvol::Estimator e)
-    { return mcvol::unlitEstimator(e, blend, false, false) != 0 ? e : mcvol::Estimator::Collision; };
+    { return mcvol::unlitEstimator(e, blend, scene.lit(), false) != 0 ? e : mcvol::Estimator::Collision; };
     // Writes the image (or, with --score-only, scores it) and adds its row;
     // `mc` (Monte Carlo rows) names the estimator and sampler that ran.
     auto emit = [&](const std::string& m, const std::string& var, double p, double ms, const std::string& file,
@@ -327,7 +344,7 @@ int main(int argc, char** argv)
       {
         writeImage(o.out + "/" + file, a);
       }
-      const bool isMc = m == "montecarlo" || var == "montecarlo";
+      const bool isMc = m == "montecarlo" || var == "montecarlo" || var == "montecarlo-reference";
       const bool textures = m == "raymarch" && o.marchTextures && std::string(marcher->name()) == "cuda";
       s << "," << (isMc ? r->name() : marcher->name()) << (textures ? "+textures" : "");
       s << "," << (mc ? (mc->automatic ? "automatic" : mcvol::toString(effective(mc->estimator))) : "") << ","
@@ -338,42 +355,59 @@ int main(int argc, char** argv)
 #ifdef _OPENMP
     threads = omp_get_max_threads();
 #endif
-    std::fprintf(stderr, "mcvol-accuracy: %s %dx%dx%d, %s, %dx%d, %d threads\n", o.dataset.c_str(), v.dims[0],
-      v.dims[1], v.dims[2], o.blend.c_str(), o.width, o.height, threads);
+    std::fprintf(stderr, "mcvol-accuracy: %s %dx%dx%d, %s, lighting %s, %dx%d, %d threads\n", o.dataset.c_str(),
+      v.dims[0], v.dims[1], v.dims[2], o.blend.c_str(), o.lighting.c_str(), o.width, o.height, threads);
 
     // Reference: fine-step ray march (no early termination), after an
-    // untimed coarse march (threads, device upload and kernel loading).
+    // untimed coarse march (threads, device upload and kernel loading); or,
+    // where the march cannot render the scene, Monte Carlo at refSpp.
     mcvol::Accumulator img;
     mcvol::MarchSettings ms;
-    ms.terminateTransmittance = 0.f;
-    ms.step = 4 * voxel;
-    marcher->march(scene, cam, ms, nullptr, img);
-    ms.step = o.refStep * voxel;
-    auto t0 = Clock::now();
-    marcher->march(scene, cam, ms, nullptr, img);
-    const double refMs = msSince(t0);
-    refImage.assign(img.rgba(), img.rgba() + size_t(4) * img.width() * img.height());
-    emit("reference", "raymarch", o.refStep, refMs, "reference.f32", img);
-
-    // Monte Carlo: cross-check at refSpp, then the progressive series.
     mcvol::RenderSettings rs;
     rs.jitterPixels = false;
     rs.sampler = o.sampler;
     rs.estimator = o.estimator;
     rs.readBack = false; // device backends: the copy-back is not part of the timed render
+    // refSpp samples into `acc` with `seed`, in batches; returns the ms.
+    auto renderMany = [&](mcvol::Accumulator& acc, uint32_t seed)
     {
-      mcvol::Accumulator acc;
-      rs.seed = 999;
-      rs.samplesPerPixel = 64;
-      t0 = Clock::now();
+      rs.seed = seed;
+      const auto start = Clock::now();
       while (int(acc.samples()) < o.refSpp)
       {
         rs.samplesPerPixel = std::min(64, o.refSpp - int(acc.samples()));
         r->render(scene, cam, rs, nullptr, acc);
       }
       r->readBack(acc);
-      const McConfig cross = { o.estimator, o.sampler, mcvol::Tracker::OneDDA };
-      emit("reference", "montecarlo", o.refSpp, msSince(t0), "reference_mc.f32", acc, &cross);
+      return msSince(start);
+    };
+    const McConfig cross = { o.estimator, o.sampler, mcvol::Tracker::OneDDA };
+    if (marchable)
+    {
+      ms.terminateTransmittance = 0.f;
+      ms.step = 4 * voxel;
+      marcher->march(scene, cam, ms, nullptr, img);
+      ms.step = o.refStep * voxel;
+      auto t0 = Clock::now();
+      marcher->march(scene, cam, ms, nullptr, img);
+      const double refMs = msSince(t0);
+      refImage.assign(img.rgba(), img.rgba() + size_t(4) * img.width() * img.height());
+      emit("reference", "raymarch", o.refStep, refMs, "reference.f32", img);
+    }
+    else
+    {
+      mcvol::Accumulator acc;
+      const double refMs = renderMany(acc, 12345);
+      refImage.assign(acc.rgba(), acc.rgba() + size_t(4) * acc.width() * acc.height());
+      emit("reference", "montecarlo-reference", o.refSpp, refMs, "reference.f32", acc, &cross);
+    }
+    auto t0 = Clock::now();
+
+    // Monte Carlo: cross-check at refSpp, then the progressive series.
+    {
+      mcvol::Accumulator acc;
+      const double crossMs = renderMany(acc, 999);
+      emit("reference", "montecarlo", o.refSpp, crossMs, "reference_mc.f32", acc, &cross);
     }
     std::vector<McConfig> configs = o.mcConfigs;
     if (configs.empty())
@@ -570,7 +604,18 @@ int main(int argc, char** argv)
     // image back to the host: on a device that copy (W x H x 16 bytes) is
     // part of its time, where the Monte Carlo times above leave it out.
     ms.deviceTextures = o.marchTextures;
-    for (auto model : { mcvol::Compositing::Extinction, mcvol::Compositing::Opacity })
+    std::vector<mcvol::Compositing> models = { mcvol::Compositing::Extinction, mcvol::Compositing::Opacity };
+    if (scene.lit())
+    {
+      // The lit march composites extinctions only; with multiple
+      // scattering there is no march at all.
+      models.resize(marchable ? 1 : 0);
+      if (!marchable)
+      {
+        std::fprintf(stderr, "mcvol-accuracy: the ray marcher renders single scattering only: no march rows\n");
+      }
+    }
+    for (auto model : models)
     {
       const std::string name = model == mcvol::Compositing::Extinction ? "extinction" : "opacity";
       ms.compositing = model;
@@ -594,7 +639,7 @@ int main(int argc, char** argv)
     m << "dataset " << o.dataset << "\ndims " << v.dims[0] << " " << v.dims[1] << " " << v.dims[2] << "\nchannels "
       << v.numChannels() << "\nblend " << o.blend << "\nsize " << o.width << " " << o.height << "\nthreads " << threads
       << "\nbackend " << r->name() << "\nmarch_backend " << marcher->name() << (o.marchTextures ? " (textures)" : "")
-      << "\nvoxel " << voxel << "\nsampler " << mcvol::toString(o.sampler) << "\nestimator "
+      << "\nvoxel " << voxel << "\nlighting " << o.lighting << "\nsampler " << mcvol::toString(o.sampler) << "\nestimator "
       << mcvol::toString(o.estimator) << "\n";
     for (const McConfig& c : done)
     {

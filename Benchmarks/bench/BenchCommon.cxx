@@ -76,6 +76,13 @@ ArgParser makeParser(Options& o)
       [&](const Args& v) { o.psnr = std::stod(v[0]); })
     .add("--reference-spp", 1, "N", "samples per pixel of the converged reference (default 2048)",
       [&](const Args& v) { o.referenceSpp = std::stoi(v[0]); })
+    .add("--lighting", 1, kLightingPresets,
+      "the scene's lighting (default none): one light with shadows, plus ambient 0.2, plus multiple scattering",
+      [&](const Args& v)
+      {
+        lightingPreset(v[0], 1); // refuses an unknown name here
+        o.lighting = v[0];
+      })
     .add("--density", 1, "F", "divides every opacity unit distance: F times denser (default 1)",
       [&](const Args& v) { o.density = std::stod(v[0]); })
     .add("--pyramid-levels", 1, "N", "pyramid: levels 1..N timed (default 2; half precision for 1 and 2 only)",
@@ -209,6 +216,7 @@ void Setup::configure(const Options& o, int channels, int macrocell, bool hostAc
     this->scene.setTransferFunction(
       n, demoTransferFunction(this->volume, n, this->ranges[size_t(n)], o.tableSize, o.density));
   }
+  this->scene.setLighting(lightingPreset(o.lighting, channels));
   this->scene.update();
 }
 
@@ -326,6 +334,10 @@ std::string describe(const Options& o, const Setup& s)
   }
   ss << o.dataset << " " << s.volume.dims[0] << "x" << s.volume.dims[1] << "x" << s.volume.dims[2] << " "
      << mcvol::toString(s.volume.type);
+  if (o.lighting != "none")
+  {
+    ss << ", lighting " << o.lighting;
+  }
   return ss.str();
 }
 

@@ -46,6 +46,9 @@ struct Options
   int pyramidLevels = 2; ///< section pyramid: levels 1..N timed (half precision for 1 and 2 only)
   int maxConvergeFrames = 4096;
   double density = 1.0; ///< divides every opacity unit distance (denser volumes)
+  /// lightingPreset() name: the scene's lighting (the effects section sets
+  /// its own)
+  std::string lighting = "none";
   std::vector<std::string> samplers = { "independent", "sobol" }; ///< section sequences
   int sppMax = 256;                                               ///< section sequences
   std::vector<std::string> estimators = { "collision" };          ///< section sequences

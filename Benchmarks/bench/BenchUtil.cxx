@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <stdexcept>
 
 namespace mcvolbench
 {
@@ -51,6 +52,36 @@ mcvol::TransferFunctionDesc demoTransferFunction(
 {
   return mcvol::sampleTransferFunction(
     v.transferFunctions[size_t(n)], range[0], range[1], tableSize, v.spacing[0] / density);
+}
+
+mcvol::LightingDesc lightingPreset(const std::string& name, int channels)
+{
+  if (name != "none" && name != "shadows" && name != "ambient" && name != "multiple")
+  {
+    throw std::invalid_argument(std::string("--lighting takes ") + kLightingPresets + ", not " + name);
+  }
+  mcvol::LightingDesc d;
+  if (name == "none")
+  {
+    return d;
+  }
+  mcvol::LightDesc sun;
+  sun.vector[0] = 1;
+  sun.vector[1] = 2;
+  sun.vector[2] = 1.5;
+  sun.intensity = 4.0;
+  d.lights.push_back(sun);
+  d.albedo.assign(size_t(channels), 0.8f);
+  d.anisotropy.assign(size_t(channels), 0.3f);
+  if (name != "shadows")
+  {
+    d.ambient[0] = d.ambient[1] = d.ambient[2] = 0.2;
+  }
+  if (name == "multiple")
+  {
+    d.maxDepth = 8;
+  }
+  return d;
 }
 
 mcvol::Camera forGrid(mcvol::Camera cam, const double spacing[3], const double origin[3])

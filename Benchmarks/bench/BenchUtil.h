@@ -47,6 +47,17 @@ ImageError clippedRgbError(const float* rgba, const float* ref, size_t pixels);
 mcvol::TransferFunctionDesc demoTransferFunction(
   const mcvol::DemoVolume& v, int n, const std::array<float, 2>& range, int tableSize = 1024, double density = 1.0);
 
+/// The lit scenes the benchmarks measure, by name:
+///   none      no light (emission-absorption)
+///   shadows   one directional light (intensity 4, from (1, 2, 1.5)) with
+///             ratio-tracking shadows; albedo 0.8, anisotropy 0.3
+///   ambient   shadows plus ambient radiance 0.2
+///   multiple  ambient plus multiple scattering (up to 8 events per path)
+/// Throws std::invalid_argument on another name.
+mcvol::LightingDesc lightingPreset(const std::string& name, int channels);
+/// The names lightingPreset() takes, for help texts.
+constexpr const char* kLightingPresets = "none|shadows|ambient|multiple";
+
 /// `cam` (a camera of level 0, whose origin is 0) with the world-to-index map
 /// of a grid of this spacing and origin, so that every pyramid level is seen
 /// through the same rays.

@@ -95,6 +95,16 @@ void runConverge(Bench& bench)
     a.automatic = true;
     configs.push_back(a);
   }
+  if (s.scene.lit())
+  {
+    // A lit camera ray always runs the collision estimator (unlitEstimator()
+    // in Integrator.h): the expected-value, unbiased-march and automatic rows
+    // would repeat the collision ones under other names.
+    configs.erase(std::remove_if(configs.begin(), configs.end(),
+                    [](const Config& c) { return c.automatic || c.estimator != mcvol::Estimator::Collision; }),
+      configs.end());
+    configs.front().name += " (the default when lit)";
+  }
   if (o.onlyAutomatic)
   {
     configs.erase(std::remove_if(configs.begin(), configs.end(),

@@ -30,19 +30,7 @@ void runEffects(Bench& bench)
     std::string name;
     mcvol::LightingDesc desc;
   };
-  auto base = [&]()
-  {
-    mcvol::LightingDesc d;
-    mcvol::LightDesc sun;
-    sun.vector[0] = 1;
-    sun.vector[1] = 2;
-    sun.vector[2] = 1.5;
-    sun.intensity = 4.0;
-    d.lights.push_back(sun);
-    d.albedo.assign(size_t(nch), 0.8f);
-    d.anisotropy.assign(size_t(nch), 0.3f);
-    return d;
-  };
+  auto base = [&]() { return lightingPreset("shadows", nch); };
   std::vector<Effect> effects;
   effects.push_back({ "emission-absorption (no light)", mcvol::LightingDesc() });
   {

@@ -9,6 +9,13 @@
 #   channels  frame rate against channel count 1..16 (paper Fig. 9), CUDA and CPU
 #   accuracy  the accuracy study's series with the CUDA backend (Monte Carlo,
 #             new and old defaults, and the ray marches): accuracy.tgz
+#   lit       lit convergence: time to 35 dB at 1024^2 with one light,
+#             shadows and ambient 0.2 (converge section, --lighting ambient)
+#             on the four paper-sized datasets; then the lit accuracy series
+#             (mcvol-accuracy --lighting shadows|ambient|multiple: Monte Carlo
+#             against the lit CUDA ray march at several steps, scored against
+#             a fine-step lit march, or a Monte Carlo reference for multiple
+#             scattering) on the four demo datasets at 256^2: accuracy-lit.tgz
 #   rebuild   GPU majorant rebuild after one transfer-function change
 #   block     render-kernel block shapes (NYX-like)
 #   profile   Nsight Compute on the render kernel of the slowest paper case
@@ -215,6 +222,33 @@ for stage in "$@"; do
             k = $1 " " $2 " " $(c["estimator"]) " " $(c["sampler"]); if (!(k in seen)) { seen[k] = 1;
             printf "%s %s: %s ms (%s)\n", f, k, $(c["ms"]), $(c["param"]) } }' "$f"
       done
+      ;;
+    lit)
+      for s in "${sets[@]}"; do
+        read -r key ds x y z ch label <<< "$s"
+        run "lit-converge-$key" --backend cuda --dataset "$ds" --dims "$x" "$y" "$z" --channels "$ch" --label "$label" \
+          --size 1024 1024 --lighting ambient --reference-spp 2048 --steady-frames 50 --sections converge
+        grep -A5 "^| estimator, tracker, sampler" "$out/lit-converge-$key.md" | sed -n 3,5p | sed "s/^/$label /"
+      done
+      mkdir -p "$out/accuracy-lit"
+      for lighting in ${LIT_PRESETS:-shadows ambient multiple}; do
+        for ds in ${ACCURACY_DATASETS:-figure3 microscopy cosmology weather}; do
+          work="$(mktemp -d)"
+          t0=$SECONDS
+          if "$b/bin/mcvol-accuracy" --backend cuda --score-only --dataset "$ds" --size 256 256 --lighting "$lighting" \
+            --ref-spp 2048 --spp-max 1024 --steps 4,2,1,0.5,0.25 --mc-configs collision:sobol:1dda,collision:independent:1dda \
+            --out "$work" 2> "$out/accuracy-lit/$ds-$lighting.log"; then
+            cp "$work/timings.csv" "$out/accuracy-lit/$ds-$lighting.csv"
+            cp "$work/meta.txt" "$out/accuracy-lit/$ds-$lighting.meta.txt"
+          else
+            echo "accuracy-lit $ds $lighting failed"; tail -3 "$out/accuracy-lit/$ds-$lighting.log"
+          fi
+          echo "accuracy-lit $ds $lighting: $((SECONDS - t0)) s" >&2
+          rm -rf "$work"
+        done
+      done
+      nvidia-smi --query-gpu=name,driver_version --format=csv,noheader > "$out/accuracy-lit/device.txt" 2>&1
+      tar -czf "$out/accuracy-lit.tgz" -C "$out" accuracy-lit
       ;;
     effects)
       # Each lighting effect's cost and effect, CUDA and CPU.
