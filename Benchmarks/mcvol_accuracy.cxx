@@ -59,6 +59,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
@@ -287,6 +288,7 @@ int main(int argc, char** argv)
   }
   try
   {
+    std::filesystem::create_directories(o.out); // images, timings.csv and meta.txt go there
     const mcvol::DemoVolume v = mcvol::makeDemo(o.dataset, o.dims);
     mcvol::Scene scene;
     std::vector<mcvol::ChannelSource> src;
