@@ -154,10 +154,6 @@ void CPURenderer::render(const Scene& scene, const Camera& camera, const RenderS
   const bool lit = s.lighting.enabled;
   if (lit)
   {
-    if (s.blend.mode == BlendMode::Composite)
-    {
-      throw std::invalid_argument("mcvol: lighting with post-render composite blending is not supported yet");
-    }
     setLightingFrame(s, camera);
   }
   ImportanceFrame imp;

@@ -413,7 +413,8 @@ void CUDARenderer::render(const Scene& scene, const Camera& camera, const Render
   {
     if (s.blend.mode == BlendMode::Composite)
     {
-      throw std::invalid_argument("mcvol: lighting with post-render composite blending is not supported yet");
+      throw std::invalid_argument("mcvol: the CUDA backend does not light post-render composite blending; use "
+                                  "the CPU backend, or density, max or mix blending");
     }
     setLightingFrame(s, camera);
   }

@@ -49,8 +49,8 @@ __global__ void marchKernel(const __grid_constant__ SceneView s, const __grid_co
 }
 
 /// Launches the march kernel for the blend mode, lighting and counting
-/// known at run time. Post-render composite is never lit (prepareMarch()
-/// refuses it): no lit kernel is compiled for it.
+/// known at run time. Post-render composite is never lit on this backend
+/// (CUDARenderer::march() refuses it): no lit kernel is compiled for it.
 void launchMarch(BlendMode mode, bool lit, bool count, dim3 grid, dim3 block, const SceneView& s, const CameraView& cam,
   const MarchParams& mp, bool jitter, uint32_t seed, const float* depth, float4* image, unsigned long long* counters)
 {
@@ -92,6 +92,12 @@ void CUDARenderer::march(const Scene& scene, const Camera& camera, const MarchSe
   }
   // The same checks, refusals and per-render fields as the CPU march.
   const MarchParams mp = prepareMarch(camera, settings, s);
+  if (s.lighting.enabled && s.blend.mode == BlendMode::Composite)
+  {
+    // The composite kernels are compiled unlit (launchMarch()).
+    throw std::invalid_argument("mcvol: the CUDA backend does not light post-render composite blending; use "
+                                "the CPU backend, or density, max or mix blending");
+  }
   if (s.importance.enabled)
   {
     s.importance.table = in.deviceImportanceTables(scene);

@@ -94,10 +94,9 @@ MarchParams prepareMarch(const Camera& camera, const MarchSettings& settings, Sc
   s.sigmaLimit = extinctionLimit(cam);
   if (s.lighting.enabled)
   {
-    if (s.blend.mode == BlendMode::Composite || settings.compositing != Compositing::Extinction)
+    if (settings.compositing != Compositing::Extinction)
     {
-      throw std::invalid_argument("mcvol: the lit reference supports the extinction model and density, max and "
-                                  "mix blending");
+      throw std::invalid_argument("mcvol: the lit reference supports the extinction compositing model only");
     }
     if (s.lighting.maxDepth > 1)
     {

@@ -267,8 +267,44 @@ MCVOL_HOT float scatterFunction(
  */
 template <BlendMode Mode>
 MCVOL_HOT Vec4f traceLitSample(const SceneView& s, Tracker tracker, Vec3f o, Vec3f d, Vec3f w, float tmax, Rng& rng,
-  RayCounters& c, ShadowCounters& sc, const RayImportance* imp = nullptr)
+  RayCounters& c, ShadowCounters& sc, const RayImportance* imp = nullptr);
+
+/**
+ * Lighting under post-render compositing: each active channel lit as if it
+ * were alone (its own emission, scattering and shadows), the premultiplied
+ * results added. Alpha estimates 1 - prod(1 - alpha_n) as "some channel's
+ * camera ray collided", which holds only when the channels' samples are
+ * independent: they draw from the PCG stream, not from one shared Sobol'
+ * point (whose sets are keyed by the place in the active list, the same
+ * place 0 for every channel alone).
+ */
+MCVOL_HOT Vec4f traceLitComposite(const SceneView& s, Tracker tracker, Vec3f o, Vec3f d, Vec3f w, float tmax, Rng& rng,
+  RayCounters& c, ShadowCounters& sc, const RayImportance* imp)
 {
+  rng.endSequence();
+  SceneView alone = s;
+  alone.numActive = 1;
+  Vec4f out;
+  for (int i = 0; i < s.numActive; ++i)
+  {
+    alone.active[0] = s.active[i];
+    const Vec4f v = traceLitSample<BlendMode::Density>(alone, tracker, o, d, w, tmax, rng, c, sc, imp);
+    out.r += v.r;
+    out.g += v.g;
+    out.b += v.b;
+    out.a = fmaxf(out.a, v.a);
+  }
+  return out;
+}
+
+template <BlendMode Mode>
+MCVOL_HOT Vec4f traceLitSample(const SceneView& s, Tracker tracker, Vec3f o, Vec3f d, Vec3f w, float tmax, Rng& rng,
+  RayCounters& c, ShadowCounters& sc, const RayImportance* imp)
+{
+  if (Mode == BlendMode::Composite)
+  {
+    return traceLitComposite(s, tracker, o, d, w, tmax, rng, c, sc, imp);
+  }
   const LightingView& L = s.lighting;
   const ShadowEstimator est = L.shadowEstimator == 1 ? ShadowEstimator::Delta : ShadowEstimator::Ratio;
   Vec4f out;

@@ -680,6 +680,25 @@ MCVOL_FUNC Vec4f marchPixel(const SceneView& s, const CameraView& cam, const Mar
   {
     return marchLit<Mode>(s, mp, ray.o, ray.d, ray.world, ray.tmax, phase, mc);
   }
+  if (MayBeLit && Mode == BlendMode::Composite && s.lighting.enabled)
+  {
+    // Each channel lit alone, as the Monte Carlo composite does.
+    SceneView alone = s;
+    alone.numActive = 1;
+    Vec4f sum;
+    float clear = 1.f;
+    for (int i = 0; i < s.numActive; ++i)
+    {
+      alone.active[0] = s.active[i];
+      const Vec4f v = marchLit<BlendMode::Density>(alone, mp, ray.o, ray.d, ray.world, ray.tmax, phase, mc);
+      sum.r += v.r;
+      sum.g += v.g;
+      sum.b += v.b;
+      clear *= 1.f - v.a;
+    }
+    sum.a = 1.f - clear;
+    return sum;
+  }
   if (Mode != BlendMode::Composite)
   {
     return marchChannels<Mode>(s, mp, s.active, s.numActive, ray.o, ray.d, ray.tmax, phase, mc);
