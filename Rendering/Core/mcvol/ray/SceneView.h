@@ -46,7 +46,9 @@ struct VolumeView
   int numChannels = 0;
   ChannelView channels[kMaxChannels];
   /// Index-space box the volume occupies: [0, dim-1] per axis, except that an
-  /// axis with a single voxel gets [-0.5, 0.5] (one spacing of thickness).
+  /// axis with a single voxel gets [-0.5, 0.5] (one spacing of thickness); a
+  /// level of detail's is level 0's box (Scene::setIndexBounds), up to half
+  /// a voxel wider, where sampling clamps to the outer voxels.
   Vec3f boxLo;
   Vec3f boxHi;
   /// Nearest-voxel instead of trilinear sampling (vtkVolumeProperty's
