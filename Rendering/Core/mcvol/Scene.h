@@ -120,6 +120,12 @@ struct ImportanceDesc
   int refinePasses = 4;                   ///< passes that refine a pixel's segments (>= 1)
   bool lightRays = true;                  ///< optimize the rays to the lights too (Sec. 5.3)
   int lightRaySamples = 200;              ///< samples of each light ray's list (2 .. 4096)
+  /// Which end of a light ray Eq. 7's x (where K starts) is: false (default)
+  /// the scattering vertex, the ray's origin, as on a camera ray: an
+  /// occluder between an important vertex and the light is weighted by r;
+  /// true the light, read as the viewer: that occluder is weighted by q
+  /// (Documentation/user-guide/visibility.md compares the two).
+  bool lightRaysFromLight = false;
 };
 
 /// Snaps an importance value to the levels of ImportanceDesc.

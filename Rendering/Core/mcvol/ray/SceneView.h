@@ -139,6 +139,9 @@ struct ImportanceView
   int refinePasses = 4;         ///< one uniform, then adaptive passes
   bool lightRays = true;        ///< optimize every connection to a light too (Sec. 5.3-5.4)
   int lightRaySamples = 200;    ///< stratified samples of a light ray's fresh list
+  /// A light ray's K runs from the light (ImportanceDesc::lightRaysFromLight)
+  /// instead of from the scattering vertex.
+  bool lightRaysFromLight = false;
   /// Set per render by the backend from the camera: world length of one
   /// normalised ray unit (half the volume's largest world extent), inverse.
   float invLengthUnit = 1.f;
