@@ -874,6 +874,52 @@ TEST(Visibility, StepImportanceLitMonteCarloConvergesToTheOptimizedRayMarch)
   }
 }
 
+// A light ray's list is built afresh from its samples; where the importance
+// along the ray changes more often than kImportanceCapacity segments hold, the
+// build fails and optimizedShadow() tracks that ray unoptimized and counts it
+// (Documentation/user-guide/visibility.md, "Overflows"). A 64-voxel line whose
+// importance alternates every 2 voxels (32 runs) overflows with 200 samples; the
+// same line with one step (2 runs) does not.
+TEST(Visibility, LightRayListOverflowIsCounted)
+{
+  for (int runs : { 32, 2 })
+  {
+    TestVolume v(64, 1, 1, 1, 0.f);
+    for (int i = 0; i < 64; ++i)
+    {
+      v.channels[0][v.index(i, 0, 0)] = (i / (64 / runs)) % 2 == 0 ? 1.f : 0.f;
+    }
+    Scene scene;
+    TransferFunctionDesc tf = flatTF(0.3f, 1, 1, 1, 1.f, 64);
+    configure(scene, v, { tf }, 4);
+    LightingDesc ld;
+    ld.lights = { LightDesc() };
+    ld.albedo = { 1.f };
+    scene.setLighting(ld);
+    ImportanceDesc imp;
+    imp.enabled = true;
+    imp.tables = { stepTable(64, 0.f, 1.f) };
+    scene.setImportance(imp);
+    scene.update();
+    const SceneView& s = scene.view();
+    ASSERT_EQ(s.importance.lightRaySamples, 200);
+    ImportanceSegment seg[kImportanceCapacity];
+    RayImportance ri;
+    uint32_t samples = 0;
+    Rng rng(3, 0, 1);
+    const bool fits = buildLightRayImportance(s, Vec3f(0.f, 0.f, 0.f), Vec3f(1.f, 0.f, 0.f), 63.f, rng, seg, ri, samples);
+    EXPECT_EQ(fits, runs <= kImportanceCapacity) << runs << " runs";
+    EXPECT_GT(samples, 0u);
+    ShadowCounters sc;
+    Rng rng2(3, 0, 1);
+    const float T = optimizedShadow<BlendMode::Density>(
+      s, Vec3f(0.f, 0.f, 0.f), Vec3f(1.f, 0.f, 0.f), 63.f, ShadowEstimator::Ratio, rng2, sc);
+    EXPECT_TRUE(T >= 0.f && T <= 1.f);
+    EXPECT_EQ(sc.importanceOverflows, runs <= kImportanceCapacity ? 0u : 1u) << runs << " runs";
+    EXPECT_EQ(sc.rays, 1u);
+  }
+}
+
 // ------------------------------------------------- Eq. 7-8 by value
 //
 // The factor mu'/mu = p / (p + (1 - g)^(2 lambda) h), h = (r - q) K + q K(z)
