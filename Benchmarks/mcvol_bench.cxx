@@ -34,6 +34,11 @@
 //              levels 1..--pyramid-levels (density blend), classify/build
 //              time, memory, the level rebuild after an edit
 //   pilots     what the automatic estimator choice's pilots cost
+//   blends     the paper's Table 2 protocol: converged images of every blend
+//              with flat red, green, blue, white colour maps, scored against
+//              density blending (PSNR, mean absolute difference)
+//   raymarch   the paper's Fig. 10: the ray marcher (mix) at 1-16x the
+//              Nyquist step against 1-DDA MDWT (mix) at 1-16 spp: ms, PSNR
 //
 // The image quality of the levels is mcvol-pyramid's (mcvol_pyramid.cxx);
 // the accuracy-versus-time images are mcvol-accuracy's (mcvol_accuracy.cxx).
@@ -83,6 +88,8 @@ const Section sections[] = {
   { "sequences", runSequences },
   { "pyramid", runPyramid },
   { "pilots", runPilots },
+  { "blends", runBlends },
+  { "raymarch", runRaymarch },
 };
 } // namespace
 

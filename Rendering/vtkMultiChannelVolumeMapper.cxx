@@ -1399,6 +1399,11 @@ bool vtkMultiChannelVolumeMapper::UpdateLevelScene(RenderPass& pass)
       sources.push_back(channel.source());
     }
     in.LevelScene.setVolume(level.Channels[0].dims, static_cast<int>(sources.size()), sources.data());
+    // Rendered over level 0's box, so that the level covers what level 0
+    // covers (its outer voxels sit inside that box).
+    double lo[3], hi[3];
+    level.Channels[0].indexBounds(lo, hi);
+    in.LevelScene.setIndexBounds(lo, hi);
     in.LevelSceneVersion = level.Version;
   }
   pass.Scene = &in.LevelScene;

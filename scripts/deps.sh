@@ -22,6 +22,8 @@ MCVOL_PACKAGES=(
   libdouble-conversion-dev liblz4-dev libutfcpp-dev libexpat1-dev liblzma-dev
   libxml2-dev libfreetype-dev libjpeg-dev libpng-dev libeigen3-dev
   qtxmlpatterns5-dev-tools
+  # Benchmarks/plots/sampling_figures.sh turns the figure program's PPMs into PNGs
+  netpbm
 )
 
 mcvol_missing=()

@@ -20,7 +20,7 @@ ArgParser makeParser(Options& o)
 {
   ArgParser p("mcvol-bench",
     "sections (run in this order): trackers channels macrocell rebuild memory paper sampling effects converge\n"
-    "          visibility estimate sequences pyramid pilots");
+    "          visibility estimate sequences pyramid pilots blends raymarch");
   p.add("--dataset", 1, "NAME", "demo dataset: cosmology, microscopy, weather, figure3 (default cosmology)",
      [&](const Args& v) { o.dataset = v[0]; })
     .add("--dims", 3, "X Y Z", "volume size in voxels (default 256 256 256)",

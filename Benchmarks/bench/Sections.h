@@ -23,4 +23,6 @@ void runEstimate(Bench& bench);
 void runSequences(Bench& bench);
 void runPyramid(Bench& bench);
 void runPilots(Bench& bench);
+void runBlends(Bench& bench);
+void runRaymarch(Bench& bench);
 } // namespace mcvolbench

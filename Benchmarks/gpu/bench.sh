@@ -50,6 +50,10 @@
 #   big       a volume of FRACTION (default 0.6) of the device's memory
 #             (figure3, 3 x float32, generated cheaply) renders: device bytes
 #             and frame time
+#   papertables Sahistan et al.'s Table 2 protocol (blends: every blend with
+#             flat colour maps against density) and Fig. 10 (raymarch: the
+#             ray marcher, mix, at 1-16x the Nyquist step against 1-DDA at
+#             1-16 spp), NYX-like and Miranda-like at 1024^2
 # Usage: bash Benchmarks/gpu/bench.sh [build-dir] stage...   (results under $OUT)
 set -uo pipefail
 b="${1:-/tmp/mcvol-gpu}"
@@ -316,6 +320,14 @@ for stage in "$@"; do
         run "block-${bs/ /x}" --backend cuda --dataset cosmology --dims 512 512 512 --channels 4 --label NYX-like \
           --size 1024 1024 --warmup 25 --frames 200 --block $bs --sections trackers
         echo "block $bs: $(grep -E '^\| (1-DDA|N-DDA)' "$out/block-${bs/ /x}.md" | tr '\n' ' ')"
+      done
+      ;;
+    papertables)
+      for s in "${sets[@]}"; do
+        read -r key ds x y z ch label <<< "$s"
+        case "$key" in nyx | miranda) ;; *) continue ;; esac
+        run "papertables-$key" --backend cuda --dataset "$ds" --dims "$x" "$y" "$z" --channels "$ch" --label "$label" \
+          --size 1024 1024 --warmup 5 --frames 50 --reference-spp 4096 --sections blends,raymarch
       done
       ;;
     profile)

@@ -193,9 +193,11 @@ std::vector<float> filter3(std::vector<float> data, const int dims[3], Downsampl
 }
 
 /// The coarser level's geometry: spacing doubled and origin moved by half a
-/// finer spacing on every axis that was halved.
+/// finer spacing on every axis that was halved; `fine`'s box as the bounds
+/// (the builders of several levels put level 0's there).
 void coarseGeometry(const ClassifiedVolumeView& fine, PyramidLevel& out)
 {
+  volumeBounds(fine.dims, fine.spacing, fine.origin, out.boundsLo, out.boundsHi);
   for (int a = 0; a < 3; ++a)
   {
     if (fine.dims[a] > 1)
@@ -521,6 +523,40 @@ FilterTaps filterTaps(DownsampleFilter f)
   return t;
 }
 
+void volumeBounds(const int dims[3], const double spacing[3], const double origin[3], double lo[3], double hi[3])
+{
+  for (int a = 0; a < 3; ++a)
+  {
+    if (dims[a] == 1)
+    {
+      lo[a] = origin[a] - 0.5 * spacing[a];
+      hi[a] = origin[a] + 0.5 * spacing[a];
+    }
+    else
+    {
+      lo[a] = origin[a];
+      hi[a] = origin[a] + double(dims[a] - 1) * spacing[a];
+    }
+  }
+}
+
+void PyramidLevel::indexBounds(double lo[3], double hi[3]) const
+{
+  for (int a = 0; a < 3; ++a)
+  {
+    if (std::isfinite(this->boundsLo[a]) && std::isfinite(this->boundsHi[a]))
+    {
+      lo[a] = (this->boundsLo[a] - this->origin[a]) / this->spacing[a];
+      hi[a] = (this->boundsHi[a] - this->origin[a]) / this->spacing[a];
+    }
+    else
+    {
+      lo[a] = this->dims[a] == 1 ? -0.5 : 0.0;
+      hi[a] = this->dims[a] == 1 ? 0.5 : double(this->dims[a] - 1);
+    }
+  }
+}
+
 ClassifiedVolumeView PyramidLevel::view() const
 {
   if (this->halfPrecision())
@@ -629,6 +665,7 @@ std::vector<PyramidLevel> buildExtinctionPyramid(
   {
     PyramidLevel next = downsampleExtinction(l == 1 ? level0 : out.back().view(), filter);
     next.level = l;
+    volumeBounds(level0.dims, level0.spacing, level0.origin, next.boundsLo, next.boundsHi);
     out.push_back(std::move(next));
   }
   return out;
@@ -825,6 +862,7 @@ PyramidLevel pyramidLevelGeometry(const int dims[3], const double spacing[3], co
   std::copy(g.dims, g.dims + 3, out.dims);
   std::copy(g.spacing, g.spacing + 3, out.spacing);
   std::copy(g.origin, g.origin + 3, out.origin);
+  volumeBounds(dims, spacing, origin, out.boundsLo, out.boundsHi);
   return out;
 }
 
@@ -1062,6 +1100,7 @@ std::vector<PyramidLevel> buildOpacityPyramid(
   {
     PyramidLevel next = downsampleOpacity(l == 1 ? level0 : out.back().view(), step, filter);
     next.level = l;
+    volumeBounds(level0.dims, level0.spacing, level0.origin, next.boundsLo, next.boundsHi);
     out.push_back(std::move(next));
     step *= 2.0;
   }

@@ -121,5 +121,6 @@ void Scene::refreshImportance()
   iv.refinePasses = d.refinePasses;
   iv.lightRays = d.lightRays;
   iv.lightRaySamples = d.lightRaySamples;
+  iv.lightRaysFromLight = d.lightRaysFromLight;
 }
 } // namespace mcvol

@@ -110,6 +110,11 @@ void Scene::layoutGrid()
       g.lo[a] = 0.f;
       g.cellSize[a] = float(this->MacrocellSize);
     }
+    if (this->HasIndexBounds)
+    {
+      v.boxLo[a] = float(this->IndexBoundsLo[a]);
+      v.boxHi[a] = float(this->IndexBoundsHi[a]);
+    }
     g.invCellSize[a] = 1.f / g.cellSize[a];
   }
   v.numChannels = this->NumChannels;

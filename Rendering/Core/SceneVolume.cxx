@@ -101,8 +101,38 @@ void Scene::setVolume(const int dims[3], int numChannels, const ChannelSource* c
   }
   this->NumChannels = numChannels;
   std::copy(channels, channels + numChannels, this->Channels.begin());
+  this->HasIndexBounds = false;
   this->MacrocellsDirty = true;
   ++this->ContentVersion;
+}
+
+void Scene::setIndexBounds(const double lo[3], const double hi[3])
+{
+  if (this->NumChannels == 0)
+  {
+    throw std::invalid_argument("mcvol: setIndexBounds needs a volume (setVolume) first");
+  }
+  for (int a = 0; a < 3; ++a)
+  {
+    const double first = this->Dims[a] == 1 ? -0.5 : 0.0;
+    const double last = this->Dims[a] == 1 ? 0.5 : double(this->Dims[a] - 1);
+    if (!std::isfinite(lo[a]) || !std::isfinite(hi[a]) || !(lo[a] < hi[a]) || lo[a] < first - 0.5 ||
+      hi[a] > last + 0.5)
+    {
+      throw std::invalid_argument("mcvol: the index bounds [" + std::to_string(lo[a]) + ", " + std::to_string(hi[a]) +
+        "] of axis " + std::to_string(a) + " must be finite, not empty, and within half a voxel of the volume's [" +
+        std::to_string(first) + ", " + std::to_string(last) + "]");
+    }
+  }
+  this->HasIndexBounds = true;
+  for (int a = 0; a < 3; ++a)
+  {
+    this->IndexBoundsLo[a] = lo[a];
+    this->IndexBoundsHi[a] = hi[a];
+    // The grids do not depend on the box: the view takes it at once.
+    this->View.volume.boxLo[a] = float(lo[a]);
+    this->View.volume.boxHi[a] = float(hi[a]);
+  }
 }
 
 void Scene::dataModified()

@@ -162,6 +162,8 @@ size_t expectLevelsAgree(const PyramidLevel& gpu, const PyramidLevel& cpu, const
     EXPECT_EQ(gpu.dims[a], cpu.dims[a]) << what << " axis " << a;
     EXPECT_DOUBLE_EQ(gpu.spacing[a], cpu.spacing[a]) << what << " axis " << a;
     EXPECT_DOUBLE_EQ(gpu.origin[a], cpu.origin[a]) << what << " axis " << a;
+    EXPECT_DOUBLE_EQ(gpu.boundsLo[a], cpu.boundsLo[a]) << what << " axis " << a;
+    EXPECT_DOUBLE_EQ(gpu.boundsHi[a], cpu.boundsHi[a]) << what << " axis " << a;
   }
   EXPECT_EQ(gpu.voxels.size(), cpu.voxels.size()) << what;
   if (gpu.voxels.size() != cpu.voxels.size())

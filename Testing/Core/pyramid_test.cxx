@@ -1459,3 +1459,365 @@ TEST(HalfPrecision, BadInputErrors)
   f.scale = 2.0;
   expectInvalidArgument([&] { scene.setVolume(dims, 1, &f); }, "only float16 pre-classified channels are scaled");
 }
+
+// ------------------------------------------------------------- level bounds
+//
+// Every level covers level 0's world box (PyramidLevel::indexBounds,
+// Scene::setIndexBounds; Documentation/user-guide/levels-of-detail.md): a
+// level's outer voxels sit inside that box, and the rays are clipped to the
+// box, not to them. Rendered by testBackend() (its march and its Monte
+// Carlo), levels 1 and 2 built by the backend (classifyLevel: on the device
+// for CUDA), for every filter and interpolation.
+//
+// Significance: LevelBounds.WallKeepsItsWholeImageAlpha makes 3 filters x 3
+// interpolations x 3 levels = 27 z-tests of Monte Carlo against the march at
+// kAlpha / 27 (Bonferroni). The march checks are deterministic. Seeds are
+// fixed.
+namespace
+{
+constexpr DownsampleFilter kFilters[3] = { DownsampleFilter::Box2, DownsampleFilter::Box4, DownsampleFilter::BSpline };
+constexpr Interpolation kInterpolations[3] = { Interpolation::Linear, Interpolation::Nearest, Interpolation::Cubic };
+
+const char* interpolationName(Interpolation i)
+{
+  return i == Interpolation::Linear ? "linear" : (i == Interpolation::Nearest ? "nearest" : "cubic");
+}
+
+/// A scalar volume in level 0's index space (world = index) with a
+/// transfer function whose extinction is linear in the scalar (0 at 0,
+/// `sigma1` at 1, white), and a level of it rendered over level 0's box.
+struct LevelScene
+{
+  PyramidLevel data; ///< level > 0: the pre-classified level the scene reads
+  Scene scene;
+  double spacing[3] = { 1, 1, 1 };
+  double origin[3] = { 0, 0, 0 };
+};
+
+TransferFunctionDesc linearSigmaTF(double sigma1)
+{
+  TransferFunctionDesc tf = flatTF(0.f, 1.f, 1.f, 1.f, 1.f, 2, 0.f, 1.f);
+  tf.opacity[0] = 0.f;
+  tf.opacity[1] = float(-std::expm1(-sigma1));
+  return tf;
+}
+
+/// Level `level` of the scalar volume `values` (0: the volume itself), built
+/// by `r` (classifyLevel) with `filter` and sampled with `interp`.
+std::unique_ptr<LevelScene> levelScene(Renderer& r, const TestVolume& values, const TransferFunctionDesc& tf,
+  int level, DownsampleFilter filter, Interpolation interp)
+{
+  std::unique_ptr<LevelScene> L(new LevelScene());
+  if (level == 0)
+  {
+    configure(L->scene, values, { tf }, 4);
+  }
+  else
+  {
+    const std::vector<ChannelSource> src = values.sources();
+    ClassifyInput in;
+    in.source = src[0];
+    in.tf = &tf;
+    L->data = classifyLevel(r, &in, 1, values.dims, L->spacing, L->origin, level, filter);
+    const ChannelSource s = L->data.source();
+    L->scene.setVolume(L->data.dims, 1, &s);
+    L->scene.setMacrocellSize(4);
+    double lo[3], hi[3];
+    L->data.indexBounds(lo, hi);
+    L->scene.setIndexBounds(lo, hi);
+    std::copy(L->data.spacing, L->data.spacing + 3, L->spacing);
+    std::copy(L->data.origin, L->data.origin + 3, L->origin);
+  }
+  L->scene.setInterpolation(interp);
+  L->scene.update();
+  return L;
+}
+
+/// Orthographic camera along -z over world [x0, x1] x [y0, y1] into the
+/// level's index space.
+Camera levelCamera(const LevelScene& L, int W, int H, double x0, double x1, double y0, double y1)
+{
+  Camera c = orthoAlongZ(W, H, x0, x1, y0, y1, 40.0, 80.0);
+  setWorldToIndex(c, L.spacing, L.origin);
+  return c;
+}
+
+std::vector<float> marchImage(Renderer& r, const LevelScene& L, const Camera& cam)
+{
+  MarchSettings ms;
+  ms.step = 1.0 / 16.0;
+  ms.terminateTransmittance = 0.f;
+  Accumulator acc;
+  acc.resize(cam.width, cam.height);
+  r.march(L.scene, cam, ms, nullptr, acc);
+  return std::vector<float>(acc.rgba(), acc.rgba() + size_t(cam.width) * size_t(cam.height) * 4);
+}
+
+double meanAlpha(const std::vector<float>& rgba)
+{
+  double s = 0;
+  for (size_t p = 0; p * 4 < rgba.size(); ++p)
+  {
+    s += rgba[p * 4 + 3];
+  }
+  return s / double(rgba.size() / 4);
+}
+
+/// Where a row of alpha values crosses 1/2 first from the left and last from
+/// the right, in pixels of the row (linear interpolation between samples at
+/// pixel centres i + 0.5).
+void halfCrossings(const std::vector<float>& rgba, double& left, double& right)
+{
+  const size_t n = rgba.size() / 4;
+  auto a = [&](size_t i) { return double(rgba[i * 4 + 3]); };
+  left = right = -1.0;
+  for (size_t i = 1; i < n && left < 0.0; ++i)
+  {
+    if (a(i - 1) < 0.5 && a(i) >= 0.5)
+    {
+      left = double(i) - 0.5 + (0.5 - a(i - 1)) / (a(i) - a(i - 1));
+    }
+  }
+  for (size_t i = n - 1; i > 0 && right < 0.0; --i)
+  {
+    if (a(i) < 0.5 && a(i - 1) >= 0.5)
+    {
+      right = double(i) - 0.5 + (a(i - 1) - 0.5) / (a(i - 1) - a(i));
+    }
+  }
+}
+} // namespace
+
+// A 32^3 volume with a one-voxel wall (scalar 1 at z = 15, 0 elsewhere,
+// extinction sigma = 1.15 at 1: opacity 0.683) across its whole x-y extent,
+// seen along -z at 32x32 pixels over exactly the volume's x-y box. Every
+// pixel sees the wall, so the whole-image alpha is the wall's at every
+// level: the march at levels 1 and 2 within 2% of level 0 (a level clipped
+// to its own outer voxels loses a one-pixel border at level 1 and two at
+// level 2: 12% and 23% less alpha). The backend's Monte Carlo image agrees
+// with its march at every level (z-test of the image mean).
+TEST(LevelBounds, WallKeepsItsWholeImageAlpha)
+{
+  std::unique_ptr<Renderer> r = testRenderer();
+  TestVolume v(32, 32, 32, 1, 0.f);
+  for (int j = 0; j < 32; ++j)
+    for (int i = 0; i < 32; ++i)
+      v.channels[0][v.index(i, j, 15)] = 1.f;
+  const TransferFunctionDesc tf = linearSigmaTF(1.15);
+  // |z| above which a two-sided normal tail is below kAlpha / 27.
+  double zLo = 0.0, zCrit = 10.0;
+  for (int k = 0; k < 100; ++k)
+  {
+    const double m = 0.5 * (zLo + zCrit);
+    (normalTwoSided(m) > kAlpha / 27.0 ? zLo : zCrit) = m;
+  }
+  for (Interpolation interp : kInterpolations)
+  {
+    double alpha0 = 0.0;
+    for (DownsampleFilter f : kFilters)
+    {
+      for (int level = 0; level <= 2; ++level)
+      {
+        const std::unique_ptr<LevelScene> L = levelScene(*r, v, tf, level, f, interp);
+        const Camera cam = levelCamera(*L, 32, 32, 0.0, 31.0, 0.0, 31.0);
+        const std::vector<float> march = marchImage(*r, *L, cam);
+        const double marched = meanAlpha(march);
+        if (level == 0)
+        {
+          alpha0 = marched;
+        }
+        RenderSettings rs;
+        const Moments m = renderMoments(*r, L->scene, cam, rs, 16, 900u + uint32_t(level));
+        double sumD = 0.0, sumV = 0.0, mc = 0.0;
+        for (size_t p = 0; p < size_t(32 * 32); ++p)
+        {
+          sumD += m.mean(p * 4 + 3) - double(march[p * 4 + 3]);
+          sumV += m.var(p * 4 + 3) / m.n;
+          mc += m.mean(p * 4 + 3);
+        }
+        mc /= 1024.0;
+        std::printf("wall, %s, %s, level %d: whole-image alpha %.4f (march), %.4f (Monte Carlo)\n",
+          interpolationName(interp), toString(f), level, marched, mc);
+        EXPECT_NEAR(marched, 0.683, 0.01) << interpolationName(interp) << " " << toString(f) << " level " << level;
+        EXPECT_LE(std::fabs(marched / alpha0 - 1.0), 0.02)
+          << interpolationName(interp) << " " << toString(f) << " level " << level;
+        EXPECT_LE(std::fabs(sumD) / std::sqrt(std::max(sumV, 1e-30)), zCrit)
+          << interpolationName(interp) << " " << toString(f) << " level " << level << ": Monte Carlo " << mc
+          << " against the march " << marched;
+      }
+    }
+  }
+}
+
+// The silhouette of an opaque box does not move across levels by more than
+// half a pixel (64 pixels across 35 voxels, marched along a row and a column
+// at 8 samples a pixel, crossings of alpha 1/2):
+// - the whole volume opaque (the box is the volume's own): each of its four
+//   edges stays within half a pixel of level 0's;
+// - an opaque box inside it (voxels 10..21 in x, 12..19 in y, centred on
+//   the volume, about which every level's grid is symmetric): the centre of
+//   its silhouette stays within half a pixel (its edges blur outwards with
+//   the filter, symmetrically; a level shifted against level 0 moves it).
+TEST(LevelBounds, OpaqueBoxSilhouetteStays)
+{
+  std::unique_ptr<Renderer> r = testRenderer();
+  TestVolume full(32, 32, 32, 1, 1.f);
+  TestVolume inner(32, 32, 32, 1, 0.f);
+  for (int k = 8; k < 24; ++k)
+    for (int j = 12; j <= 19; ++j)
+      for (int i = 10; i <= 21; ++i)
+        inner.channels[0][inner.index(i, j, k)] = 1.f;
+  const TransferFunctionDesc tf = linearSigmaTF(8.0);
+  const int S = 8;                   // samples a pixel along the line
+  const int W = 64;                  // pixels across the view
+  const double lo = -2.0, hi = 33.0; // the view: W pixels over [lo, hi]
+  const double px = (hi - lo) / W;
+  for (Interpolation interp : kInterpolations)
+  {
+    for (DownsampleFilter f : kFilters)
+    {
+      double edges0[2][4] = {}; // [volume][x left, x right, y low, y high], level 0, in pixels
+      for (int level = 0; level <= 2; ++level)
+      {
+        for (int which = 0; which < 2; ++which)
+        {
+          const TestVolume& v = which == 0 ? full : inner;
+          const std::unique_ptr<LevelScene> L = levelScene(*r, v, tf, level, f, interp);
+          const double mid = 15.5;
+          const Camera row = levelCamera(*L, W * S, 1, lo, hi, mid - 0.01, mid + 0.01);
+          const Camera col = levelCamera(*L, 1, W * S, mid - 0.01, mid + 0.01, lo, hi);
+          double e[4];
+          halfCrossings(marchImage(*r, *L, row), e[0], e[1]);
+          halfCrossings(marchImage(*r, *L, col), e[2], e[3]);
+          for (double& x : e)
+          {
+            x /= S; // in pixels
+          }
+          const std::string what = std::string(which == 0 ? "opaque volume" : "opaque inner box") + ", " +
+            interpolationName(interp) + ", " + toString(f) + ", level " + std::to_string(level);
+          std::printf("%s: silhouette x [%.3f, %.3f] y [%.3f, %.3f] pixels\n", what.c_str(), e[0], e[1], e[2], e[3]);
+          for (double x : e)
+          {
+            ASSERT_GE(x, 0.0) << what << ": no silhouette edge";
+          }
+          if (level == 0)
+          {
+            std::copy(e, e + 4, edges0[which]);
+            if (which == 0)
+            {
+              // The volume's box [0, 31] is at (0 - lo) / px .. (31 - lo) / px.
+              EXPECT_NEAR(e[0], (0.0 - lo) / px, 0.25) << what;
+              EXPECT_NEAR(e[1], (31.0 - lo) / px, 0.25) << what;
+            }
+            continue;
+          }
+          const double* e0 = edges0[which];
+          if (which == 0)
+          {
+            for (int k = 0; k < 4; ++k)
+            {
+              EXPECT_LE(std::fabs(e[k] - e0[k]), 0.5) << what << ", edge " << k;
+            }
+          }
+          else
+          {
+            EXPECT_LE(std::fabs(0.5 * (e[0] + e[1]) - 0.5 * (e0[0] + e0[1])), 0.5) << what << ", x centre";
+            EXPECT_LE(std::fabs(0.5 * (e[2] + e[3]) - 0.5 * (e0[2] + e0[3])), 0.5) << what << ", y centre";
+          }
+        }
+      }
+    }
+  }
+}
+
+// Scene::setIndexBounds: the default box, a level's box, and bad boxes
+// refused with a message; setVolume restores the default.
+TEST(LevelBounds, IndexBoundsOfLevels)
+{
+  const int dims[3] = { 32, 2, 1 };
+  const double spacing[3] = { 0.5, 2.0, 3.0 }, origin[3] = { -4.0, 1.0, 7.0 };
+  const PyramidLevel g1 = pyramidLevelGeometry(dims, spacing, origin, 1);
+  const PyramidLevel g2 = pyramidLevelGeometry(dims, spacing, origin, 2);
+  double lo[3], hi[3];
+  g1.indexBounds(lo, hi);
+  // x: 16 voxels at -4 + 0.25 + 1.0 i; level 0's box [-4, 11.5] -> [-0.25, 15.25].
+  EXPECT_DOUBLE_EQ(lo[0], -0.25);
+  EXPECT_DOUBLE_EQ(hi[0], 15.25);
+  // y: 2 voxels -> 1 at 2.0 (spacing 4); level 0's box [1, 3] -> [-0.25, 0.25].
+  EXPECT_DOUBLE_EQ(lo[1], -0.25);
+  EXPECT_DOUBLE_EQ(hi[1], 0.25);
+  // z: one voxel, never halved: [-0.5, 0.5] as level 0.
+  EXPECT_DOUBLE_EQ(lo[2], -0.5);
+  EXPECT_DOUBLE_EQ(hi[2], 0.5);
+  g2.indexBounds(lo, hi);
+  EXPECT_DOUBLE_EQ(lo[0], -0.375); // 8 voxels at -4 + 0.75 + 2 i
+  EXPECT_DOUBLE_EQ(hi[0], 7.375);
+  for (int a = 0; a < 3; ++a)
+  {
+    EXPECT_DOUBLE_EQ(g2.boundsLo[a], g1.boundsLo[a]);
+    EXPECT_DOUBLE_EQ(g2.boundsHi[a], g1.boundsHi[a]);
+  }
+  // The whole-volume builders keep level 0's box at every level too.
+  ClassifiedData d(32, 2, 1);
+  ClassifiedVolumeView view = d.view();
+  std::copy(spacing, spacing + 3, view.spacing);
+  std::copy(origin, origin + 3, view.origin);
+  const std::vector<PyramidLevel> ext = buildExtinctionPyramid(view, 2);
+  const std::vector<PyramidLevel> opa = buildOpacityPyramid(view, 2, 1.0);
+  for (int a = 0; a < 3; ++a)
+  {
+    EXPECT_DOUBLE_EQ(ext[1].boundsLo[a], g2.boundsLo[a]);
+    EXPECT_DOUBLE_EQ(ext[1].boundsHi[a], g2.boundsHi[a]);
+    EXPECT_DOUBLE_EQ(opa[1].boundsLo[a], g2.boundsLo[a]);
+    EXPECT_DOUBLE_EQ(opa[1].boundsHi[a], g2.boundsHi[a]);
+  }
+  // A level made by hand has its own box.
+  PyramidLevel byHand;
+  byHand.dims[0] = 5;
+  byHand.dims[1] = 1;
+  byHand.dims[2] = 3;
+  byHand.indexBounds(lo, hi);
+  EXPECT_EQ(lo[0], 0.0);
+  EXPECT_EQ(hi[0], 4.0);
+  EXPECT_EQ(lo[1], -0.5);
+  EXPECT_EQ(hi[1], 0.5);
+
+  Scene scene;
+  const double good[2][3] = { { -0.25, -0.25, -0.5 }, { 15.25, 0.25, 0.5 } };
+  EXPECT_THROW(scene.setIndexBounds(good[0], good[1]), std::invalid_argument); // no volume yet
+  ClassifiedData c(16, 1, 1);
+  const ChannelSource src = c.source();
+  scene.setVolume(c.dims, 1, &src);
+  scene.update();
+  EXPECT_EQ(scene.view().volume.boxLo[0], 0.f);
+  EXPECT_EQ(scene.view().volume.boxHi[0], 15.f);
+  scene.setIndexBounds(good[0], good[1]);
+  EXPECT_EQ(scene.view().volume.boxLo[0], -0.25f);
+  EXPECT_EQ(scene.view().volume.boxHi[1], 0.25f);
+  scene.update();
+  EXPECT_EQ(scene.view().volume.boxHi[0], 15.25f);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double bad[4][2][3] = {
+    { { -0.6, 0, -0.5 }, { 15, 0.5, 0.5 } },  // more than half a voxel below
+    { { 0, -0.5, -0.5 }, { 15.6, 0.5, 0.5 } }, // more than half a voxel above
+    { { 3, -0.5, -0.5 }, { 3, 0.5, 0.5 } },    // empty
+    { { nan, -0.5, -0.5 }, { 15, 0.5, 0.5 } }, // not finite
+  };
+  for (const auto& b : bad)
+  {
+    try
+    {
+      scene.setIndexBounds(b[0], b[1]);
+      ADD_FAILURE() << "bad bounds accepted";
+    }
+    catch (const std::invalid_argument& e)
+    {
+      EXPECT_NE(std::string(e.what()).find("index bounds"), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_EQ(scene.view().volume.boxLo[0], -0.25f); // a refused box changes nothing
+  scene.setVolume(c.dims, 1, &src);
+  scene.update();
+  EXPECT_EQ(scene.view().volume.boxLo[0], 0.f);
+  EXPECT_EQ(scene.view().volume.boxHi[0], 15.f);
+}

@@ -175,6 +175,17 @@ huge, _ = render(p_huge)
 diff = max(abs(a - b) for a, b in zip(huge, plain))
 t.check(diff < 2.0 / 256.0, "p -> infinity gives the unoptimized image (max diff %g)" % diff)
 
+# The paper's defaults (Lerzer and Dachsbacher, Sec. 6), read before
+# anything sets them.
+m = vtkMultiChannelVolumeMapper()
+t.check(m.GetDeviationWeight() == 1.0, "default p = 1 (got %g)" % m.GetDeviationWeight())
+t.check(m.GetOcclusionWeight() == 70.0, "default q = 70 (got %g)" % m.GetOcclusionWeight())
+t.check(m.GetClutterWeight() == 30.0, "default r = 30 (got %g)" % m.GetClutterWeight())
+t.check(m.GetImportanceEmphasis() == 1.0, "default lambda = 1 (got %g)" % m.GetImportanceEmphasis())
+t.check(m.GetLightRayImportanceSamples() == 200,
+        "default 200 samples per light ray (got %d)" % m.GetLightRayImportanceSamples())
+t.check(m.GetOptimizeLightRays(), "light rays optimized by default")
+
 m = vtkMultiChannelVolumeMapper()
 m.SetOcclusionWeight(-5)
 t.check(m.GetOcclusionWeight() == 0.0, "weights are clamped")

@@ -6,6 +6,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <vector>
 
 namespace mcvol
@@ -25,7 +26,11 @@ namespace mcvol
  * centred between fine voxels 2c and 2c+1, so a level's spacing is twice the
  * finer one and its origin (world position of voxel 0) moves by half a finer
  * spacing. An axis of 1 voxel is not filtered: its spacing and origin stay.
- * Boundary: taps outside the finer grid are clamped to its edge voxel (a
+ * A level's outer voxels therefore sit inside level 0's box (by a quarter of
+ * a level-1 voxel, 3/8 of a level-2 voxel, ...): every level keeps level 0's
+ * world box (PyramidLevel::bounds) and is rendered over it
+ * (PyramidLevel::indexBounds, Scene::setIndexBounds), with the outer voxels
+ * reaching the box, so a level covers what level 0 covers. Boundary: taps outside the finer grid are clamped to its edge voxel (a
  * constant volume stays constant everywhere, edges included); weights are
  * normalised (they sum to 1).
  */
@@ -75,11 +80,23 @@ struct PyramidLevel
   int dims[3] = { 0, 0, 0 };
   double spacing[3] = { 1, 1, 1 };
   double origin[3] = { 0, 0, 0 };
+  /// World box of level 0, which every level covers: level 0's outer voxel
+  /// centres (origin .. origin + (dims - 1) spacing), half a spacing either
+  /// side of the voxel on an axis of one voxel (the box Scene gives such an
+  /// axis). NaN on a level made by hand (indexBounds then gives its own box).
+  double boundsLo[3] = { kNoBounds, kNoBounds, kNoBounds };
+  double boundsHi[3] = { kNoBounds, kNoBounds, kNoBounds };
   std::vector<float> voxels; ///< 4 floats per voxel (empty once half precision)
   /// After toHalfPrecision(): 4 binary16 values per voxel, each times halfScale.
   std::vector<uint16_t> halfVoxels;
   double halfScale = 1.0;
 
+  static constexpr double kNoBounds = std::numeric_limits<double>::quiet_NaN();
+  /// `bounds` in this level's continuous index space ((world - origin) /
+  /// spacing per axis): the box to render the level over
+  /// (Scene::setIndexBounds) so that it covers level 0's world box. Without
+  /// bounds, the level's own box (as Scene makes it).
+  void indexBounds(double lo[3], double hi[3]) const;
   size_t numVoxels() const { return size_t(this->dims[0]) * size_t(this->dims[1]) * size_t(this->dims[2]); }
   size_t bytes() const { return this->voxels.size() * sizeof(float) + this->halfVoxels.size() * sizeof(uint16_t); }
   bool halfPrecision() const { return !this->halfVoxels.empty(); }
@@ -103,6 +120,11 @@ struct PyramidLevel
    */
   void toHalfPrecision();
 };
+
+/// The world box of a volume of `dims`, `spacing` and `origin` as Scene
+/// renders it: its outer voxel centres, and half a spacing either side on an
+/// axis of one voxel.
+void volumeBounds(const int dims[3], const double spacing[3], const double origin[3], double lo[3], double hi[3]);
 
 /// The number of halvings after which every axis of `dims` is 1 (the most
 /// levels a pyramid of them can have above level 0).

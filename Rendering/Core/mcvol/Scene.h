@@ -120,6 +120,12 @@ struct ImportanceDesc
   int refinePasses = 4;                   ///< passes that refine a pixel's segments (>= 1)
   bool lightRays = true;                  ///< optimize the rays to the lights too (Sec. 5.3)
   int lightRaySamples = 200;              ///< samples of each light ray's list (2 .. 4096)
+  /// Which end of a light ray Eq. 7's x (where K starts) is: false (default)
+  /// the scattering vertex, the ray's origin, as on a camera ray: an
+  /// occluder between an important vertex and the light is weighted by r;
+  /// true the light, read as the viewer: that occluder is weighted by q
+  /// (Documentation/user-guide/visibility.md compares the two).
+  bool lightRaysFromLight = false;
 };
 
 /// Snaps an importance value to the levels of ImportanceDesc.
@@ -166,6 +172,19 @@ public:
   void setVolume(const int dims[3], int numChannels, const ChannelSource* channels);
   /// Marks the data as changed (same pointers, new values).
   void dataModified();
+  /**
+   * The box rays are clipped to, in continuous voxel indices (lo, hi per
+   * axis). By default, and again after setVolume(), it is [0, dims - 1] per
+   * axis, [-0.5, 0.5] on an axis of one voxel: the volume's bounds. A level
+   * of detail takes level 0's bounds in its own index space
+   * (PyramidLevel::indexBounds), so that every level covers the same world
+   * box; points between its outer voxels and the box read the outer voxels
+   * (sampling clamps to the grid, as it does everywhere). Each side may
+   * reach at most half a voxel past the outer voxels. Throws
+   * std::invalid_argument for a non-finite or empty box, one that reaches
+   * further, or no volume.
+   */
+  void setIndexBounds(const double lo[3], const double hi[3]);
   void setTransferFunction(int channel, const TransferFunctionDesc& tf);
   /// Macrocell edge in voxels (>= 1).
   void setMacrocellSize(int voxels);
@@ -261,6 +280,9 @@ private:
   ObjectId Id;
   bool MacrocellsDirty = true;
   bool HostAcceleration = true;
+  bool HasIndexBounds = false; ///< setIndexBounds() since setVolume()
+  double IndexBoundsLo[3] = { 0, 0, 0 };
+  double IndexBoundsHi[3] = { 0, 0, 0 };
   uint64_t ContentVersion = 0;
   std::array<uint64_t, kMaxChannels> ChannelTableVersion{};
   int MacrocellSize = 8;

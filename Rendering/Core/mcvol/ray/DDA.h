@@ -47,7 +47,10 @@ MCVOL_HOT bool intersectBox(Vec3f lo, Vec3f hi, Vec3f o, Vec3f d, float& t0, flo
  * [tmin, tmax] without gaps. Crossing distances are recomputed from the cell
  * boundary at each step (not accumulated), so long traversals do not drift,
  * and a zero direction component never produces a step along that axis.
- * (MDWTracker sets t_near.x twice instead of t_far.x; axis-parallel rays are
+ * The outermost cells reach past the grid (a face of the grid is never
+ * crossed), so the segments cover [tmin, tmax] also where the ray's box
+ * reaches past the grid: a level of detail clipped to level 0's box
+ * (Scene::setIndexBounds). (MDWTracker sets t_near.x twice instead of t_far.x; axis-parallel rays are
  * tested against brute-force walking in DDA_test.)
  */
 struct DDA
@@ -67,6 +70,9 @@ struct DDA
     this->t0 = tmin;
     this->done = !(tmin < tmax);
     const Vec3f p = o + d * tmin;
+    this->Dims[0] = g.dims[0];
+    this->Dims[1] = g.dims[1];
+    this->Dims[2] = g.dims[2];
     for (int a = 0; a < 3; ++a)
     {
       const float x = (p[a] - g.lo[a]) * g.invCellSize[a];
@@ -93,9 +99,6 @@ struct DDA
       this->tNext[a] = this->crossing(a, tmin);
     }
     this->t1 = minf(minf(minf(this->tNext[0], this->tNext[1]), this->tNext[2]), this->tEnd);
-    this->Dims[0] = g.dims[0];
-    this->Dims[1] = g.dims[1];
-    this->Dims[2] = g.dims[2];
   }
 
   /// 64-bit: a fine grid over a large volume can hold more than 2^31 cells.
@@ -140,9 +143,10 @@ struct DDA
 private:
   MCVOL_HOT float crossing(int a, float tmin) const
   {
-    if (this->step[a] == 0)
+    const int beyond = this->cell[a] + this->step[a];
+    if (this->step[a] == 0 || beyond < 0 || beyond >= this->Dims[a])
     {
-      return FLT_MAX;
+      return FLT_MAX; // no step along a, or a face of the grid: the cell reaches tEnd
     }
     const int b = this->cell[a] + (this->step[a] > 0 ? 1 : 0);
     const float t = (this->Lo[a] + float(b) * this->Cs[a] - this->O[a]) * this->InvD[a];

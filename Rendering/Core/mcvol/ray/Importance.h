@@ -450,4 +450,18 @@ MCVOL_HOT float importanceFactor(const ImportanceView& iv, const RayImportance& 
 {
   return optimizedExtinctionFactor(iv, g, importanceIntegral(ray.segments, ray.count, t * iv.invLengthUnit), ray.total);
 }
+
+/**
+ * importanceFactor() on a light ray, whose list runs from the scattering
+ * vertex (t = 0) to the light. Eq. 7's x is the vertex by default; with
+ * iv.lightRaysFromLight it is the light, and the integral before the point
+ * is the rest of the ray's, K(z) - K(t) (the list's integral is the same
+ * read from either end: its gaps are interpolated linearly, its ends have
+ * importance 0).
+ */
+MCVOL_HOT float lightRayImportanceFactor(const ImportanceView& iv, const RayImportance& ray, float t, float g)
+{
+  const float K = importanceIntegral(ray.segments, ray.count, t * iv.invLengthUnit);
+  return optimizedExtinctionFactor(iv, g, iv.lightRaysFromLight ? ray.total - K : K, ray.total);
+}
 } // namespace mcvol

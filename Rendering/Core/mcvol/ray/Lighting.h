@@ -132,7 +132,7 @@ MCVOL_HOT float shadowTransmittance(const SceneView& s, const int* channels, int
         {
           // Ratio or delta tracking through mu' (Lerzer and Dachsbacher, Sec. 5.3).
           ++c.importance;
-          sigma *= importanceFactor(s.importance, *imp, t, importanceAt(s, o + d * t));
+          sigma *= lightRayImportanceFactor(s.importance, *imp, t, importanceAt(s, o + d * t));
         }
         if (estimator == ShadowEstimator::Delta)
         {

@@ -370,7 +370,13 @@ MCVOL_HOT float marchTransmittanceOptimized(
   for (float t = 0.5f * step; t < tmax; t += step)
   {
     const Vec3f p = x + dl * t;
-    const float f = marchImportanceFactor(s, mi, p);
+    // K from the vertex (x) or, with lightRaysFromLight, from the light: the
+    // rest of the ray's sum (lightRayImportanceFactor()).
+    const float g = importanceAt(s, p);
+    const float K = mi.K + g * g * mi.phase * mi.dx;
+    mi.K += g * g * mi.dx;
+    const float f =
+      optimizedExtinctionFactor(s.importance, g, s.importance.lightRaysFromLight ? mi.total - K : K, mi.total);
     tau += blendedOptics<Mode>(s, channels, count, p).sigma * f * step;
   }
   return expf(-tau);

@@ -546,8 +546,9 @@ MCVOL_HOT Corners cornersOf(const VolumeView& vol, Vec3f p)
 /**
  * Cubic B-spline variant of sampleClassified() (vol.cubic): sigma and
  * sigma*colour each filtered over the 64 voxels of the footprint
- * (cubicTap()), colour their ratio (Kraus and Buerger Sec. 3.3 with the
- * B-spline filter of Sec. 4). Convex weights keep sigma within the voxels'
+ * (cubicTap()), colour their ratio (Kraus and Buerger's extinction-based
+ * sampling, Sec. 3.3, with Sigg and Hadwiger's cubic B-spline in place of
+ * trilinear interpolation; the paper's own B-spline is quadratic). Convex weights keep sigma within the voxels'
  * sigma range (the macrocell majorants) and sigma*colour within [0, sigma].
  * A NaN among the voxels read gives sigma 0 (transparent), as in the
  * trilinear variant. Register-light, as sampleChannelCubic() explains.

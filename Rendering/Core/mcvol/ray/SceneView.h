@@ -46,7 +46,9 @@ struct VolumeView
   int numChannels = 0;
   ChannelView channels[kMaxChannels];
   /// Index-space box the volume occupies: [0, dim-1] per axis, except that an
-  /// axis with a single voxel gets [-0.5, 0.5] (one spacing of thickness).
+  /// axis with a single voxel gets [-0.5, 0.5] (one spacing of thickness); a
+  /// level of detail's is level 0's box (Scene::setIndexBounds), up to half
+  /// a voxel wider, where sampling clamps to the outer voxels.
   Vec3f boxLo;
   Vec3f boxHi;
   /// Nearest-voxel instead of trilinear sampling (vtkVolumeProperty's
@@ -137,6 +139,9 @@ struct ImportanceView
   int refinePasses = 4;         ///< one uniform, then adaptive passes
   bool lightRays = true;        ///< optimize every connection to a light too (Sec. 5.3-5.4)
   int lightRaySamples = 200;    ///< stratified samples of a light ray's fresh list
+  /// A light ray's K runs from the light (ImportanceDesc::lightRaysFromLight)
+  /// instead of from the scattering vertex.
+  bool lightRaysFromLight = false;
   /// Set per render by the backend from the camera: world length of one
   /// normalised ray unit (half the volume's largest world extent), inverse.
   float invLengthUnit = 1.f;
