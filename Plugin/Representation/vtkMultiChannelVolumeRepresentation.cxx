@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "vtkMultiChannelVolumeRepresentation.h"
 
+#include "ChannelDefaultRanges.h"
+
 #include "vtkColorTransferFunction.h"
 #include "vtkDataArray.h"
 #include "vtkDiscretizableColorTransferFunction.h"
@@ -704,6 +706,27 @@ void vtkMultiChannelVolumeRepresentation::UpdateMapperParameters()
   this->ChannelStatus = status.str();
   // Volume mappers do not like inputs they cannot draw (as the superclass).
   this->Actor->SetVisibility(this->ChannelStatus.empty() && numChannels > 0);
+}
+
+//------------------------------------------------------------------------------
+const char* vtkMultiChannelVolumeRepresentation::GetChannelDefaultRanges()
+{
+  // The input as the source produced it (the representation's own copy is
+  // made only when the view updates), computed again only when it changes.
+  vtkImageData* image = this->GetNumberOfInputConnections(0) > 0
+    ? vtkImageData::SafeDownCast(this->GetInputDataObject(0, 0))
+    : nullptr;
+  const vtkMTimeType time = image ? image->GetMTime() : 0;
+  if (!image)
+  {
+    this->ChannelDefaultRanges.clear();
+  }
+  else if (time != this->ChannelDefaultRangesTime)
+  {
+    this->ChannelDefaultRanges = mcvol::RobustRanges(image);
+  }
+  this->ChannelDefaultRangesTime = time;
+  return this->ChannelDefaultRanges.c_str();
 }
 
 //------------------------------------------------------------------------------
