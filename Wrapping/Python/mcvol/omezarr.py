@@ -45,6 +45,7 @@ a missing or corrupt chunk, metadata that contradicts the arrays.
 import json
 import math
 import os
+import threading
 
 # Level choice: the finest level whose output fits the budget.
 SUPPORTED_VERSIONS = ("0.4",)
@@ -450,9 +451,10 @@ class OMEZarrImage:
         return "\n".join(lines)
 
     # -- reading -------------------------------------------------------------------------------------------
-    def _decode(self, lv, key, codecs, nbytes):
+    def _decode(self, lv, key, codecs, nbytes, scratch=None):
         """One chunk as a numpy array of the chunk's shape, or None when it
-        is not stored."""
+        is not stored. `scratch`: a uint8 buffer of `nbytes` that a single
+        codec decodes into (reused by a thread: no fresh pages per chunk)."""
         import numpy
 
         fn = os.path.join(lv.folder, lv.path, *key.split("/"))
@@ -473,8 +475,11 @@ class OMEZarrImage:
                 if len(data) < 16 or cbuffer_sizes(data)[1] != len(data):
                     raise ValueError("%d bytes, the blosc header says %d" % (
                         len(data), cbuffer_sizes(data)[1] if len(data) >= 16 else 16))
-            for codec in codecs:
-                data = codec.decode(data)
+            if scratch is not None and len(codecs) == 1:
+                data = codecs[0].decode(data, out=scratch)
+            else:
+                for codec in codecs:
+                    data = codec.decode(data)
             buf = numpy.frombuffer(data, dtype=numpy.uint8) if not isinstance(data, numpy.ndarray) else data
             buf = buf.view(numpy.uint8).reshape(-1)
         except Exception as e:  # codecs raise what their libraries raise
@@ -535,9 +540,13 @@ class OMEZarrImage:
         fill = lv.fill_value
         missing = []
 
+        local = threading.local()
+
         def place(cidx):
             key = lv.separator.join(str(i) for i in cidx)
-            block = self._decode(lv, key, codecs, nbytes)
+            if not hasattr(local, "scratch"):
+                local.scratch = numpy.empty(nbytes, numpy.uint8)
+            block = self._decode(lv, key, codecs, nbytes, local.scratch)
             src, dst = [], [slice(None)] * 4
             for a, (ci, (lo, hi), c) in enumerate(zip(cidx, want, lv.chunks)):
                 start, stop = max(lo, ci * c), min(hi, (ci + 1) * c)
