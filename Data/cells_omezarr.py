@@ -8,9 +8,10 @@ levels study use it.
 
 The cells are the "microscopy" demo (vtkMultiChannelDemoSource: a jittered
 Voronoi tessellation with membranes, a nucleus per cell, bright puncta),
-turned into what a confocal microscope records: 16-bit photon counts over a
-background of about 100, a z step 4x the pixel size (0.8 um against 0.2
-um), Poisson noise. Channels: DAPI (nuclei, blue), membrane (orange) and
+generated at the pixel size along every axis and turned into what a confocal
+microscope records: every 4th slice (a z step of 0.8 um against pixels of
+0.2 um), 16-bit photon counts over a background of about 100, Poisson
+noise. Channels: DAPI (nuclei, blue), membrane (orange) and
 puncta (green), each with an omero colour and a display window (from 4 noise standard
 deviations above the background to the 99.9th percentile of its counts). Levels 1, 2, ... average 2x2x2 blocks
 of the level before (as image pyramids of microscopy files do). Chunks of
@@ -28,6 +29,7 @@ import numpy as np
 CHANNELS = [("nuclei", "DAPI", "3366FF", 3000.0), ("membranes", "membrane", "FF9933", 2200.0),
             ("puncta", "puncta", "33FF66", 4000.0)]
 SPACING = (0.2, 0.2, 0.8)  # x, y, z in micrometres
+Z_STEP = 4  # the z step in pixel sizes
 BACKGROUND = 100.0  # photon counts where there is no dye
 
 
@@ -37,15 +39,18 @@ def cells(dims):
 
     from mcvol import vtkMultiChannelDemoSource
 
+    # The demo at the pixel size along z too, then every Z_STEP-th slice:
+    # the cells keep their shape in micrometres, sampled as a microscope's
+    # z stack is.
+    nx, ny, nz = dims
     source = vtkMultiChannelDemoSource()
     source.SetDataset("microscopy")
-    source.SetDimensions(*dims)
+    source.SetDimensions(nx, ny, nz * Z_STEP)
     source.Update()
     image = source.GetOutput()
     array = image.GetPointData().GetArray("channels")
     names = [array.GetComponentName(c) for c in range(array.GetNumberOfComponents())]
-    nx, ny, nz = dims
-    values = vtk_to_numpy(array).reshape(nz, ny, nx, -1).astype(np.float64)
+    values = vtk_to_numpy(array).reshape(nz * Z_STEP, ny, nx, -1)[::Z_STEP].astype(np.float64)
     scale = float(np.iinfo(vtk_to_numpy(array).dtype).max) if vtk_to_numpy(array).dtype.kind == "u" else 1.0
     rng = np.random.default_rng(2024)
     out = np.empty((len(CHANNELS), nz, ny, nx), np.uint16)
