@@ -121,6 +121,7 @@ def main():
 
     methods = [("omezarr-parallel", omezarr(None)), ("omezarr-serial", omezarr(1)), ("raw-vtk", raw_vtk),
                ("raw-numpy", raw_numpy)]
+    load_before = " ".join("%.2f" % v for v in os.getloadavg())
     for _, fn in methods:
         fn()  # warm the page cache
     rows = []
@@ -141,7 +142,8 @@ def main():
         f.write("dims %s, %d channels uint16, %.2f GiB of voxels\n" % (" ".join(map(str, args.dims)), args.channels,
                                                                        nbytes / 2**30))
         f.write("OME-Zarr on disk: %.2f GiB (blosc lz4 shuffle, chunks 1x64x256x256)\n" % (du(folder) / 2**30))
-        f.write("page cache warm; best of %d repeats\n" % args.repeat)
+        f.write("page cache warm; best of %d repeats; load average before/after: %s / %s\n"
+                % (args.repeat, load_before, " ".join("%.2f" % v for v in os.getloadavg())))
         f.write("machine: %s, %d cores, Python %s\n" % (platform.processor() or platform.machine(), os.cpu_count(),
                                                        platform.python_version()))
         for name, _ in methods:

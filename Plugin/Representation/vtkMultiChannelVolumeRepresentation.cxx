@@ -662,6 +662,19 @@ void vtkMultiChannelVolumeRepresentation::UpdateMapperParameters()
       // point it at the first channel (data without active scalars, such
       // as a file of separate arrays, would otherwise draw nothing).
       SelectPointArray(mapper, this->ChannelArrays[0]);
+      // A multi-component array listed as one channel (an OME-TIFF's
+      // channels): say how to render its components.
+      for (const std::string& name : this->ChannelArrays)
+      {
+        vtkDataArray* array = image ? image->GetPointData()->GetArray(name.c_str()) : nullptr;
+        if (array && array->GetNumberOfComponents() > 1)
+        {
+          status << "point array '" << name << "' has " << array->GetNumberOfComponents()
+                 << " components: set Channels From to Components of One Array (ChannelSource 1) to render them "
+                    "as channels";
+          break;
+        }
+      }
     }
   }
   if (numChannels > vtkMultiChannelVolumeMapper::MAX_CHANNELS)

@@ -154,6 +154,12 @@ if tifffile is not None:
     T.render_converged(view2, rep2)
     checks.check(T.info(rep2, "ChannelStatus") == "", "its channels bind (%r)" % T.info(rep2, "ChannelStatus"))
     checks.check((T.capture(view2).sum(axis=2) > 60).sum() > 100, "and render")
+    rep2.ChannelSource = "Point Arrays"
+    rep2.ChannelArrays = ["stains"]
+    simple.Render(view2)
+    status = T.info(rep2, "ChannelStatus")
+    checks.check("Components of One Array" in status and "3 components" in status,
+                 "the 3-component array as one channel: the message names the fix (%r)" % status)
 
 # -- mcvol-render's default transfer functions on a .vti ---------------------------------------------------
 from vtkmodules.util.numpy_support import numpy_to_vtk  # noqa: E402
