@@ -8,7 +8,8 @@ with the numpy arrays written.
 - types (uint8, uint16 both byte orders, float32, int8 -> int16, int32 ->
   float32) and codecs (blosc, zstd, gzip, none, a delta filter);
 - several levels: by index, by path, by memory budget (the finest that
-  fits, and said so); a region reads only its chunks (a chunk outside it
+  fits, and said so), also for a file of 2 TiB at full resolution (only
+  its metadata exists); a region reads only its chunks (a chunk outside it
   may be missing) and lands at its world position; serial and parallel
   decoding agree;
 - omero: names, colours, windows, active flags as default channels;
@@ -208,6 +209,37 @@ def test_levels(t, work):
     t.check("1 of 48 chunks not stored" in image.report, "and the report says so: %r" % image.report)
 
 
+def test_larger_than_memory(t, work, program):
+    """Level 0 of 2 x 16384 x 16384 x 2048 uint16 (2 TiB: only its metadata
+    exists) and seven coarser levels: a budget of 1 MiB reads the finest
+    that fits without touching the others, and says so."""
+    group = zarr.open_group(os.path.join(work, "huge.ome.zarr"), mode="w")
+    datasets = []
+    rng = np.random.default_rng(7)
+    for k in range(8):
+        f = 2 ** k
+        shape = (2, 2048 // f, 16384 // f, 16384 // f)
+        if k == 7:
+            values = rng.integers(0, 4000, shape).astype(np.uint16)
+            group.create_dataset(str(k), data=values, chunks=(1, 16, 64, 64))
+            small = values
+        else:
+            group.create_dataset(str(k), shape=shape, dtype=np.uint16, chunks=(1, 64, 256, 256), fill_value=0)
+        datasets.append({"path": str(k), "coordinateTransformations": [{"type": "scale", "scale": [1, f, f, f]}]})
+    group.attrs["multiscales"] = [{"version": "0.4", "axes": W.axes_metadata("czyx"), "datasets": datasets}]
+    image = OMEZarrImage(os.path.join(work, "huge.ome.zarr"))
+    out = image.read(memory_budget=1 << 20)
+    t.check(image.level == 7 and out.GetDimensions() == (128, 128, 16) and "finest that fits" in image.report,
+            "2 TiB at full resolution, 1 MiB budget: level 7 (%r)" % image.report)
+    t.check(np.array_equal(channel_values(out, "channel 1"), small[1]), "level 7's values")
+    png = os.path.join(work, "huge.png")
+    r = run(program, [os.path.join(work, "huge.ome.zarr"), "-o", png, "--memory-budget", "1", "--spp", "1",
+                      "--size", "32x32", "--backend", "cpu"])
+    t.check(r.returncode == 0 and "OME-Zarr level 7 ('7', 128x128x16 voxels) of 8: finest that fits the memory "
+            "budget of 1 MiB" in r.stderr, "mcvol-render --memory-budget 1 renders level 7 and says so: %r"
+            % r.stderr)
+
+
 def test_omero(t, work):
     data = np.zeros((3, 4, 5, 6), np.uint16)
     data[:, 1:3, 1:4, 1:5] = 1000
@@ -353,6 +385,7 @@ def main():
     test_types_and_codecs(t, work)
     test_levels(t, work)
     test_omero(t, work)
+    test_larger_than_memory(t, work, args.mcvol_render)
     timed = test_render(t, work, args.mcvol_render)
     test_errors(t, work, args.mcvol_render, timed)
     t.finish()
