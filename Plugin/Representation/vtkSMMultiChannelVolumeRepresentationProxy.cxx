@@ -269,10 +269,6 @@ void vtkSMMultiChannelVolumeRepresentationProxy::ApplyDefaultFunctions(
   const double rgbPoints[8] = { range[0], 0.35 * color[0], 0.35 * color[1], 0.35 * color[2], range[1],
     color[0], color[1], color[2] };
   vtkSMPropertyHelper(lut, "RGBPoints").Set(rgbPoints, 8);
-  if (lut->GetProperty("ColorSpace"))
-  {
-    vtkSMPropertyHelper(lut, "ColorSpace").Set(0); // RGB
-  }
   if (lut->GetProperty("AutomaticRescaleRangeMode"))
   {
     vtkSMPropertyHelper(lut, "AutomaticRescaleRangeMode").Set(-1); // keep the range: "Never"
