@@ -4,7 +4,8 @@
 
     mcvol-render SCENE.json -o out.png [--raw out.pfm] [--raw-alpha alpha.pfm]
                  [--spp N] [--target-error E] [--size WxH] [--backend cpu|cuda|auto]
-                 [--quiet]
+                 [--time T] [--zarr-level L] [--memory-budget MIB] [--quiet]
+    mcvol-render DATA... -o out.png [options]     (data files or OME-Zarr folders)
 
 The scene format is documented in Documentation/scene-format.md. Errors in the
 scene (unknown keys, bad values, missing files) are reported with the key that
@@ -43,6 +44,7 @@ IMPORT_FAILED = "%s: cannot import the mcvol Python package (%s); put the build'
 # where it is, rather than print a traceback.
 try:
     from mcvol.scenefile import ErrorCollector, Presets, RenderError, SceneError, parse_scene, render
+    from mcvol.scenefile.parse import is_omezarr
     from mcvol.scenefile.schema import BACKENDS, BLEND_MODES, COMPOSITING, FILE_FORMATS, split_extension
 except ImportError as e:
     print(IMPORT_FAILED % (PROG, e), file=sys.stderr)
@@ -99,7 +101,8 @@ def main(argv=None):
     parser.add_argument(
         "scene",
         nargs="+",
-        help="scene file (JSON), or one or more data files (NIfTI, TIFF, OME-TIFF, VTI, MHA, NRRD on one grid) to "
+        help="scene file (JSON), or one or more data files (NIfTI, TIFF, OME-TIFF, OME-Zarr, VTI, MHA, NRRD on one "
+        "grid) to "
         "render with default channels: every array (or component) a channel with its own colour",
     )
     parser.add_argument("--blend", choices=BLEND_MODES, help="overrides blend")
@@ -140,6 +143,25 @@ def main(argv=None):
         action="store_true",
         help="Monte Carlo samples through pixel centres (as the reference) instead of over the pixel area",
     )
+    parser.add_argument(
+        "--time",
+        type=int,
+        metavar="T",
+        help="time step T (0, 1, ...) of the OME-Zarr inputs (overrides their \"time\")",
+    )
+    parser.add_argument(
+        "--zarr-level",
+        metavar="L",
+        help="resolution level of the OME-Zarr inputs: an index (0 = full resolution) or a dataset path "
+        "(overrides their \"level\"; by default the finest that fits the memory budget)",
+    )
+    parser.add_argument(
+        "--memory-budget",
+        type=float,
+        metavar="MIB",
+        help="memory budget in MiB (overrides memory_budget): the mapper's, and the one that picks the OME-Zarr "
+        "level read",
+    )
     parser.add_argument("--quiet", action="store_true", help="print nothing on success")
     args = parser.parse_args(argv)
     for opt, v in (("--step", args.step), ("--step-voxels", args.step_voxels)):
@@ -157,7 +179,11 @@ def main(argv=None):
         if not os.path.isdir(folder):
             parser.error("%s: folder does not exist: %s" % (opt, folder))
 
-    data_files = [f for f in args.scene if split_extension(f)[1] in FILE_FORMATS]
+    if args.time is not None and args.time < 0:
+        parser.error("--time: expected a time step >= 0, got %d" % args.time)
+    if args.memory_budget is not None and not (0.0 <= args.memory_budget < float("inf")):
+        parser.error("--memory-budget: expected MiB >= 0, got %s" % args.memory_budget)
+    data_files = [f for f in args.scene if split_extension(f)[1] in FILE_FORMATS or is_omezarr(f)]
     if data_files:
         # Data files: a scene of their own, with default channels.
         if len(data_files) != len(args.scene):
@@ -185,6 +211,19 @@ def main(argv=None):
     log = (lambda msg: None) if args.quiet else (lambda msg: print(msg, file=sys.stderr))
     try:
         scene = parse_scene(data, scene_dir, Presets(default_presets_file()))
+        zarr_inputs = [e for e in scene["input"].get("inputs", []) if e["format"] == "omezarr"]
+        if (args.time is not None or args.zarr_level is not None) and not zarr_inputs:
+            print("%s: --time and --zarr-level apply to OME-Zarr inputs, and %s has none" % (PROG, name),
+                  file=sys.stderr)
+            return 2
+        if args.memory_budget is not None:
+            scene["memory_budget"] = args.memory_budget
+        for entry in zarr_inputs:
+            if args.time is not None:
+                entry["time"] = args.time
+            if args.zarr_level is not None:
+                entry["level"] = int(args.zarr_level) if args.zarr_level.isdigit() else args.zarr_level
+            entry["memory_budget"] = scene["memory_budget"] * 1048576.0
         if args.blend is not None:
             scene["blend"] = args.blend
         if args.spp is not None:

@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "vtkMultiChannelVolumeRepresentation.h"
 
+#include "ChannelDefaultRanges.h"
+
 #include "vtkColorTransferFunction.h"
 #include "vtkDataArray.h"
 #include "vtkDiscretizableColorTransferFunction.h"
@@ -660,6 +662,19 @@ void vtkMultiChannelVolumeRepresentation::UpdateMapperParameters()
       // point it at the first channel (data without active scalars, such
       // as a file of separate arrays, would otherwise draw nothing).
       SelectPointArray(mapper, this->ChannelArrays[0]);
+      // A multi-component array listed as one channel (an OME-TIFF's
+      // channels): say how to render its components.
+      for (const std::string& name : this->ChannelArrays)
+      {
+        vtkDataArray* array = image ? image->GetPointData()->GetArray(name.c_str()) : nullptr;
+        if (array && array->GetNumberOfComponents() > 1)
+        {
+          status << "point array '" << name << "' has " << array->GetNumberOfComponents()
+                 << " components: set Channels From to Components of One Array (ChannelSource 1) to render them "
+                    "as channels";
+          break;
+        }
+      }
     }
   }
   if (numChannels > vtkMultiChannelVolumeMapper::MAX_CHANNELS)
@@ -704,6 +719,27 @@ void vtkMultiChannelVolumeRepresentation::UpdateMapperParameters()
   this->ChannelStatus = status.str();
   // Volume mappers do not like inputs they cannot draw (as the superclass).
   this->Actor->SetVisibility(this->ChannelStatus.empty() && numChannels > 0);
+}
+
+//------------------------------------------------------------------------------
+const char* vtkMultiChannelVolumeRepresentation::GetChannelDefaultRanges()
+{
+  // The input as the source produced it (the representation's own copy is
+  // made only when the view updates), computed again only when it changes.
+  vtkImageData* image = this->GetNumberOfInputConnections(0) > 0
+    ? vtkImageData::SafeDownCast(this->GetInputDataObject(0, 0))
+    : nullptr;
+  const vtkMTimeType time = image ? image->GetMTime() : 0;
+  if (!image)
+  {
+    this->ChannelDefaultRanges.clear();
+  }
+  else if (time != this->ChannelDefaultRangesTime)
+  {
+    this->ChannelDefaultRanges = mcvol::RobustRanges(image);
+  }
+  this->ChannelDefaultRangesTime = time;
+  return this->ChannelDefaultRanges.c_str();
 }
 
 //------------------------------------------------------------------------------

@@ -240,6 +240,11 @@ public:
   /// "Collision" for lit volumes).
   const char* GetChosenEstimator();
   const char* GetChannelStatus() { return this->ChannelStatus.c_str(); }
+  /// The robust range of every point array and component of the input, as
+  /// mcvol-render's "range": "auto" computes it, one line each
+  /// ("name\tcomponent\tlo\thi"): where the client spreads a channel's
+  /// default transfer functions when it first shows the channel.
+  const char* GetChannelDefaultRanges();
   double GetImportanceMemory();
   double GetImportanceOverflows();
   ///@}
@@ -277,6 +282,8 @@ protected:
   std::vector<ImportanceStep> ImportanceSteps;
   vtkSmartPointer<vtkPiecewiseFunction> ImportanceFunctions[NUMBER_OF_IMPORTANCE_FUNCTIONS];
   std::string ChannelStatus;
+  std::string ChannelDefaultRanges;
+  vtkMTimeType ChannelDefaultRangesTime = 0;
   std::string BackendReport;
   std::string LevelOfDetailReport;
   std::string ChosenEstimator;

@@ -13,16 +13,34 @@
 #include "vtkSMTransferFunctionManager.h"
 #include "vtkSMTransferFunctionProxy.h"
 
+#include "vtkPVDataSetAttributesInformation.h"
+#include "vtkSMStringVectorProperty.h"
+
 #include <algorithm>
+#include <cmath>
 #include <cstring>
+#include <map>
+#include <sstream>
+#include <utility>
 
 vtkStandardNewMacro(vtkSMMultiChannelVolumeRepresentationProxy);
 
 namespace
 {
-// Distinct sequential presets for channels whose functions are new.
-const char* const kChannelPresets[] = { "Reds", "Greens", "Blues", "Oranges", "Purples", "Greys" };
-constexpr int kNumChannelPresets = sizeof(kChannelPresets) / sizeof(kChannelPresets[0]);
+// mcvol-render's default channels (Wrapping/Python/mcvol/scenefile/assemble.py,
+// default_channels): one colour per channel, warm white for a channel alone.
+const double kChannelColors[][3] = { { 0.2, 1.0, 0.3 }, { 1.0, 0.25, 0.9 }, { 0.25, 0.7, 1.0 },
+  { 1.0, 0.85, 0.2 }, { 1.0, 0.35, 0.2 }, { 0.6, 0.4, 1.0 }, { 0.3, 1.0, 0.9 }, { 1.0, 1.0, 1.0 } };
+constexpr int kNumChannelColors = sizeof(kChannelColors) / sizeof(kChannelColors[0]);
+const double kChannelAlone[3] = { 1.0, 0.92, 0.82 };
+// Opacity at the top of the range per this many of the smallest voxel spacings.
+constexpr double kDefaultOpacity = 0.3;
+constexpr double kDefaultOpacityVoxels = 4.0;
+// Below this fraction of the robust range a channel is transparent (background).
+constexpr double kDefaultThreshold = 0.15;
+const char* const kRepresentationName = "Multi-Channel Volume (Monte Carlo)";
+const char* const kDisplayPrefix = "mcvol_display/";
+constexpr int kMaxChannels = 32;
 
 bool IsChannelProperty(const char* name)
 {
@@ -95,9 +113,10 @@ int vtkSMMultiChannelVolumeRepresentationProxy::UpdateChannelLookupTables()
   vtkSMPropertyHelper componentsHelper(this, "ChannelComponentsArray");
   const char* componentsArray =
     componentsHelper.GetNumberOfElements() > 0 ? componentsHelper.GetAsString() : nullptr;
-  vtkSMOutputPort* port = vtkSMPropertyHelper(this, "Input", true).GetAsOutputPort();
 
   vtkNew<vtkSMTransferFunctionManager> manager;
+  this->DefaultRanges.clear();
+  this->DefaultRangesFetched = false;
   std::vector<vtkSMProxy*> luts;
   for (size_t c = 0; c < names.size(); ++c)
   {
@@ -114,31 +133,11 @@ int vtkSMMultiChannelVolumeRepresentationProxy::UpdateChannelLookupTables()
       vtkSMPropertyHelper(lut, "ScalarOpacityFunction").Set(pwf);
       lut->UpdateVTKObjects();
     }
-    if (!existed)
+    if (!existed && pwf)
     {
-      // A new channel: its own preset, fitted to the channel's data range.
-      vtkSMTransferFunctionProxy::ApplyPreset(lut, kChannelPresets[c % kNumChannelPresets], false);
-      double range[2] = { 0.0, 1.0 };
-      bool haveRange = false;
-      if (port)
-      {
-        const bool components = source == 1;
-        vtkPVArrayInformation* info = port->GetDataInformation()->GetArrayInformation(
-          components ? componentsArray : name.c_str(), vtkDataObject::POINT);
-        if (info)
-        {
-          info->GetComponentRange(components ? static_cast<int>(c) : 0, range);
-          haveRange = range[0] <= range[1];
-        }
-      }
-      if (haveRange)
-      {
-        vtkSMTransferFunctionProxy::RescaleTransferFunction(lut, range, false);
-        if (pwf)
-        {
-          vtkSMTransferFunctionProxy::RescaleTransferFunction(pwf, range, false);
-        }
-      }
+      const bool components = source == 1;
+      this->ApplyDefaultFunctions(lut, pwf, components ? componentsArray : name.c_str(),
+        components ? static_cast<int>(c) : 0, static_cast<int>(c), static_cast<int>(names.size()));
     }
     luts.push_back(lut);
   }
@@ -152,6 +151,227 @@ int vtkSMMultiChannelVolumeRepresentationProxy::UpdateChannelLookupTables()
   }
   this->InUpdate = false;
   return static_cast<int>(luts.size());
+}
+
+//------------------------------------------------------------------------------
+bool vtkSMMultiChannelVolumeRepresentationProxy::DefaultRange(const char* array, int component, double range[2])
+{
+  if (!this->DefaultRangesFetched)
+  {
+    // Computed where the data is (vtkMultiChannelVolumeRepresentation::
+    // GetChannelDefaultRanges), once per update of the channel list.
+    this->DefaultRangesFetched = true;
+    vtkSMProperty* prop = this->GetProperty("ChannelDefaultRanges");
+    if (prop && this->ObjectsCreated)
+    {
+      this->UpdatePropertyInformation(prop);
+      const char* text = vtkSMPropertyHelper(prop).GetNumberOfElements() > 0
+        ? vtkSMPropertyHelper(prop).GetAsString()
+        : nullptr;
+      std::istringstream lines(text ? text : "");
+      std::string line;
+      while (std::getline(lines, line))
+      {
+        const size_t a = line.find('\t'), b = line.find('\t', a + 1), c = line.find('\t', b + 1);
+        if (a == std::string::npos || b == std::string::npos || c == std::string::npos)
+        {
+          continue;
+        }
+        const std::string key = line.substr(0, b);
+        this->DefaultRanges[key] = { std::stod(line.substr(b + 1, c - b - 1)), std::stod(line.substr(c + 1)) };
+      }
+    }
+  }
+  const auto it = this->DefaultRanges.find(std::string(array ? array : "") + "\t" + std::to_string(component));
+  if (it == this->DefaultRanges.end())
+  {
+    return false;
+  }
+  range[0] = it->second.first;
+  range[1] = it->second.second;
+  return std::isfinite(range[0]) && std::isfinite(range[1]) && range[0] <= range[1];
+}
+
+//------------------------------------------------------------------------------
+void vtkSMMultiChannelVolumeRepresentationProxy::ApplyDefaultFunctions(
+  vtkSMProxy* lut, vtkSMProxy* pwf, const char* array, int component, int channel, int channels)
+{
+  vtkSMOutputPort* port = vtkSMPropertyHelper(this, "Input", true).GetAsOutputPort();
+  vtkPVDataInformation* data = port ? port->GetDataInformation() : nullptr;
+  // The file's display of this channel (an OME-Zarr's omero colour and
+  // window: mcvol_display/<array>, components r, g, b, start, end, active).
+  double color[3], range[2] = { 0.0, 1.0 };
+  bool window = false, haveRange = false;
+  vtkPVArrayInformation* display = (data && component == 0)
+    ? data->GetArrayInformation((std::string(kDisplayPrefix) + (array ? array : "")).c_str(), vtkDataObject::FIELD)
+    : nullptr;
+  if (display && display->GetNumberOfComponents() == 6)
+  {
+    for (int k = 0; k < 3; ++k)
+    {
+      color[k] = display->GetComponentRange(k)[0];
+    }
+    range[0] = display->GetComponentRange(3)[0];
+    range[1] = display->GetComponentRange(4)[0];
+    window = std::isfinite(range[0]) && std::isfinite(range[1]) && range[0] < range[1];
+    haveRange = window;
+  }
+  else
+  {
+    const double* rgb = channels == 1 ? kChannelAlone : kChannelColors[channel % kNumChannelColors];
+    std::copy(rgb, rgb + 3, color);
+  }
+  if (!haveRange)
+  {
+    haveRange = this->DefaultRange(array, component, range);
+  }
+  if (!haveRange && data)
+  {
+    vtkPVArrayInformation* info = data->GetArrayInformation(array, vtkDataObject::POINT);
+    if (info)
+    {
+      info->GetComponentRange(component, range);
+      haveRange = range[0] <= range[1];
+    }
+  }
+  if (!haveRange)
+  {
+    range[0] = 0.0;
+    range[1] = 1.0;
+  }
+  if (!(range[1] > range[0]))
+  {
+    range[1] = range[0] + 1.0; // a constant channel: keep the points apart
+  }
+  // Opacity 0.3 per 4 of the smallest voxel spacings at the top, as
+  // mcvol-render's defaults, expressed for the representation's
+  // ScalarOpacityUnitDistance u: 1 - (1 - 0.3)^(u / (4 s)).
+  double spacing = 0.0;
+  if (data)
+  {
+    const double* bounds = data->GetBounds();
+    const int* extent = data->GetExtent();
+    for (int k = 0; k < 3; ++k)
+    {
+      const int cells = extent[2 * k + 1] - extent[2 * k];
+      const double s = cells > 0 ? (bounds[2 * k + 1] - bounds[2 * k]) / cells : 0.0;
+      spacing = s > 0.0 && (spacing == 0.0 || s < spacing) ? s : spacing;
+    }
+  }
+  const double unit = this->GetProperty("ScalarOpacityUnitDistance")
+    ? vtkSMPropertyHelper(this, "ScalarOpacityUnitDistance").GetAsDouble()
+    : 0.0;
+  double top = kDefaultOpacity;
+  if (spacing > 0.0 && unit > 0.0)
+  {
+    top = 1.0 - std::pow(1.0 - kDefaultOpacity, unit / (kDefaultOpacityVoxels * spacing));
+  }
+  const double rgbPoints[8] = { range[0], 0.35 * color[0], 0.35 * color[1], 0.35 * color[2], range[1],
+    color[0], color[1], color[2] };
+  vtkSMPropertyHelper(lut, "RGBPoints").Set(rgbPoints, 8);
+  if (lut->GetProperty("AutomaticRescaleRangeMode"))
+  {
+    vtkSMPropertyHelper(lut, "AutomaticRescaleRangeMode").Set(-1); // keep the range: "Never"
+  }
+  if (lut->GetProperty("ScalarRangeInitialized"))
+  {
+    vtkSMPropertyHelper(lut, "ScalarRangeInitialized").Set(1);
+  }
+  // Transparent below the window's start (a file's display) or below 15 %
+  // of the robust range (the background), then a ramp to the top.
+  const double threshold = window ? range[0] : range[0] + kDefaultThreshold * (range[1] - range[0]);
+  std::vector<double> points = { range[0], 0.0, 0.5, 0.0 };
+  if (threshold > range[0])
+  {
+    points.insert(points.end(), { threshold, 0.0, 0.5, 0.0 });
+  }
+  points.insert(points.end(), { range[1], top, 0.5, 0.0 });
+  vtkSMPropertyHelper(pwf, "Points").Set(points.data(), static_cast<unsigned int>(points.size()));
+  if (pwf->GetProperty("ScalarRangeInitialized"))
+  {
+    vtkSMPropertyHelper(pwf, "ScalarRangeInitialized").Set(1);
+  }
+  lut->UpdateVTKObjects();
+  pwf->UpdateVTKObjects();
+}
+
+//------------------------------------------------------------------------------
+void vtkSMMultiChannelVolumeRepresentationProxy::ChooseDefaultChannels()
+{
+  vtkSMSessionProxyManager* pxm = this->GetSessionProxyManager();
+  vtkSMProxy* parent = this->GetParentProxy();
+  if (this->DefaultChannelsChosen || this->InUpdate || !this->ObjectsCreated || (pxm && pxm->GetInLoadXMLState()) ||
+    !parent || !parent->GetProperty("Representation") || !this->GetProperty("ChannelArrays"))
+  {
+    return;
+  }
+  const char* shown = vtkSMPropertyHelper(parent, "Representation").GetAsString();
+  if (!shown || strcmp(shown, kRepresentationName) != 0)
+  {
+    return;
+  }
+  vtkSMOutputPort* port = vtkSMPropertyHelper(this, "Input", true).GetAsOutputPort();
+  vtkPVDataInformation* data = port ? port->GetDataInformation() : nullptr;
+  vtkPVDataSetAttributesInformation* points = data ? data->GetPointDataInformation() : nullptr;
+  if (!points || points->GetNumberOfArrays() == 0)
+  {
+    return;
+  }
+  // Chosen once: what the user sets afterwards (an empty list included) stays.
+  this->DefaultChannelsChosen = true;
+  vtkSMPropertyHelper arrays(this, "ChannelArrays");
+  vtkSMPropertyHelper componentsArray(this, "ChannelComponentsArray");
+  // (ChannelComponentsArray holds its domain's first array by default: only
+  // ChannelSource says whether the components were chosen.)
+  if (arrays.GetNumberOfElements() > 0 || vtkSMPropertyHelper(this, "ChannelSource").GetAsInt() != 0)
+  {
+    return;
+  }
+  std::vector<std::string> all, displayed, active;
+  std::string multi;
+  int multiCount = 0;
+  for (int i = 0; i < points->GetNumberOfArrays(); ++i)
+  {
+    vtkPVArrayInformation* info = points->GetArrayInformation(i);
+    if (!info || !info->GetName())
+    {
+      continue;
+    }
+    const std::string name = info->GetName();
+    if (info->GetNumberOfComponents() > 1)
+    {
+      multi = name;
+      ++multiCount;
+      continue;
+    }
+    all.push_back(name);
+    vtkPVArrayInformation* display =
+      data->GetArrayInformation((kDisplayPrefix + name).c_str(), vtkDataObject::FIELD);
+    if (display && display->GetNumberOfComponents() == 6)
+    {
+      displayed.push_back(name);
+      if (display->GetComponentRange(5)[0] > 0.5)
+      {
+        active.push_back(name);
+      }
+    }
+  }
+  if (all.empty() && multiCount == 1)
+  {
+    // One multi-component array (an OME-TIFF's channels, an RGB stack): its components.
+    vtkSMPropertyHelper(this, "ChannelSource").Set(1);
+    componentsArray.Set(multi.c_str());
+  }
+  else if (!all.empty())
+  {
+    // A file's active channels, else every single-component array.
+    const std::vector<std::string>& chosen = !active.empty() ? active : (!displayed.empty() ? displayed : all);
+    const size_t n = std::min<size_t>(chosen.size(), kMaxChannels);
+    vtkSMPropertyHelper(this, "ChannelSource").Set(0);
+    auto* list = vtkSMStringVectorProperty::SafeDownCast(this->GetProperty("ChannelArrays"));
+    std::vector<std::string> values(chosen.begin(), chosen.begin() + static_cast<std::ptrdiff_t>(n));
+    list->SetElements(values);
+  }
 }
 
 //------------------------------------------------------------------------------
@@ -263,6 +483,9 @@ void vtkSMMultiChannelVolumeRepresentationProxy::SetPropertyModifiedFlag(const c
 //------------------------------------------------------------------------------
 void vtkSMMultiChannelVolumeRepresentationProxy::UpdateVTKObjects()
 {
+  // Shown as the Multi-Channel Volume for the first time with no channels:
+  // the file's channels, or the components of a lone multi-component array.
+  this->ChooseDefaultChannels();
   // Every push carries the channel order of the lookup tables as they are now
   // (after a state file is loaded the proxies have new global ids).
   this->SyncLookupTableIndices();

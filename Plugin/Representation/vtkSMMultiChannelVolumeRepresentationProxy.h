@@ -35,7 +35,9 @@
 #include "mcvolParaViewRepresentationModule.h" // For export macro
 #include "vtkSMRepresentationProxy.h"
 
+#include <map>    // For std::map
 #include <string> // For std::string
+#include <utility> // For std::pair
 #include <vector> // For std::vector
 
 class MCVOLPARAVIEWREPRESENTATION_EXPORT vtkSMMultiChannelVolumeRepresentationProxy
@@ -83,7 +85,29 @@ protected:
    */
   bool SyncLookupTableIndices();
 
+  /**
+   * When the representation is first shown with no channel chosen: the
+   * input's channels. A file's active channels (mcvol_display/<array> field
+   * arrays, as the OME-Zarr reader writes them), else the components of the
+   * input's one multi-component point array ("Components of One Array"),
+   * else every single-component point array (at most 32).
+   */
+  void ChooseDefaultChannels();
+  /**
+   * A new channel's transfer functions, as mcvol-render's defaults: a ramp
+   * of the channel's colour over its robust range (or the file's colour and
+   * window), transparent below 15 % of the range (below the window's
+   * start), opacity 0.3 per 4 voxels at the top.
+   */
+  void ApplyDefaultFunctions(vtkSMProxy* lut, vtkSMProxy* pwf, const char* array, int component, int channel,
+    int channels);
+  /// The robust range of a point array's component, from the server.
+  bool DefaultRange(const char* array, int component, double range[2]);
+
   bool InUpdate = false;
+  bool DefaultChannelsChosen = false;
+  bool DefaultRangesFetched = false;
+  std::map<std::string, std::pair<double, double>> DefaultRanges;
 
 
 private:

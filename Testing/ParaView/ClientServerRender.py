@@ -1,5 +1,7 @@
 """pvpython script of TestParaViewClientServer: renders the figure3 scene, in
-builtin mode or connected to a pvserver (argv: OUTPUT.png [HOST:PORT])."""
+builtin mode or connected to a pvserver (argv: OUTPUT.png [HOST:PORT
+[OME-ZARR FOLDER]]). With a folder, it also opens it on the server and
+prints what the client sees: the reader, the channels and DAPI's colours."""
 import sys
 
 from paraview import simple
@@ -28,3 +30,12 @@ for _ in range(8):
     simple.Render(view)
 print("samples: %d (client copy)" % T.info(rep, "TotalSamples"))
 simple.SaveScreenshot(out, view, ImageResolution=[200, 200], TransparentBackground=0)
+
+if len(sys.argv) > 3:
+    # The OME-Zarr reader runs on the server; the client proxy picks the
+    # channels and applies the file's displays from the data information.
+    cells = simple.OpenDataFile(sys.argv[3])
+    shown = simple.Show(cells, view)
+    simple.Render(view)
+    print("omezarr: %s %s %s" % (cells.GetXMLName(), list(shown.ChannelArrays),
+                                 list(simple.GetColorTransferFunction("DAPI").RGBPoints)))

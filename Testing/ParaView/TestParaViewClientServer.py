@@ -51,6 +51,21 @@ def main():
     if res.returncode:
         raise SystemExit("FAIL: builtin render exited with %d" % res.returncode)
 
+    # An OME-Zarr for the server's reader (python3-zarr writes it; without
+    # it that part is left out).
+    zarr_args, zarr_line = [], None
+    try:
+        sys.path.insert(0, os.path.join(os.path.dirname(HERE), "Python"))
+        import omezarrWriter as W
+
+        values = np.zeros((2, 6, 8, 10), np.uint16)
+        values[:, 1:5, 2:6, 2:8] = 1000
+        omero = {"channels": [W.omero_channel("DAPI", "0000FF", 100, 900), W.omero_channel("GFP", "00FF00", 50, 500)]}
+        zarr_args = [W.write(os.path.join(tmp, "cells.ome.zarr"), [values], "czyx", [[1, 1, 1, 1]], omero=omero)]
+        zarr_line = "omezarr: mcvolOMEZarrReader ['DAPI', 'GFP'] [100.0, 0.0, 0.0, 0.35, 900.0, 0.0, 0.0, 1.0]"
+    except ImportError:
+        print("python3-zarr is not installed: the OME-Zarr part is left out")
+
     port = free_port()
     server = subprocess.Popen([args.pvserver, "--server-port=%d" % port], env=env, stdout=subprocess.PIPE,
                               stderr=subprocess.STDOUT, text=True, bufsize=1)
@@ -66,10 +81,10 @@ def main():
             server_log.append(line)
             if "Accepting connection" in line:
                 break
-        res = subprocess.run([args.pvpython, script, remote_png, "localhost:%d" % port], env=env,
+        res = subprocess.run([args.pvpython, script, remote_png, "localhost:%d" % port] + zarr_args, env=env,
                              stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, timeout=300)
         print(res.stdout[-3000:] if res.returncode else "\n".join(l for l in res.stdout.splitlines()
-                                                                if l.startswith(("samples", "backend"))))
+                                                                if l.startswith(("samples", "backend", "omezarr"))))
         if res.returncode:
             server.terminate()
             log = "".join(server_log) + server.communicate(timeout=20)[0]
@@ -93,7 +108,9 @@ def main():
     for ok, msg in [
         (drawn > 0.05, "the builtin image shows the volume (%.1f%% of pixels)" % (100 * drawn)),
         (worst <= 1, "pvserver renders the builtin image (max |diff| %d <= 1, mean %.4f)" % (worst, mean)),
-    ]:
+    ] + ([(zarr_line in res.stdout, "an OME-Zarr read on the server shows the file's channels and colours on "
+                                    "the client (%r)" % [l for l in res.stdout.splitlines() if "omezarr" in l])]
+         if zarr_line else []):
         print(("PASS: " if ok else "FAIL: ") + msg)
         failures += 0 if ok else 1
     if failures:

@@ -81,7 +81,8 @@ checks.check(
 )
 
 # More than 4 channels: the 12 components of the weather set, with the
-# transfer functions the plugin creates (a preset each, fitted to the range).
+# transfer functions the plugin creates (mcvol-render's colour of each
+# channel, over its robust range).
 simple.Hide(figure3, view)
 weather = simple.XMLImageDataReader(FileName=[T.DATA + "/weather.vti"])
 wrep = T.show(weather, view)
@@ -89,7 +90,7 @@ wrep.ChannelSource = "Components of One Array"
 wrep.ChannelComponentsArray = "channels"
 checks.check(len(wrep.ChannelLookupTables) == 12, "12 components give 12 channels (%d)" % len(wrep.ChannelLookupTables))
 presets = {tuple(simple.GetColorTransferFunction("channels:%d" % k).RGBPoints[1:4]) for k in range(12)}
-checks.check(len(presets) >= 5, "new channels get distinct presets (%d distinct first colours)" % len(presets))
+checks.check(len(presets) >= 5, "new channels get distinct colours (%d distinct first colours)" % len(presets))
 simple.ResetCamera(view)
 T.render_converged(view, wrep)
 image = T.capture(view)

@@ -29,10 +29,9 @@ Messages window that names the file, and the output stays empty. The mcvol
 package must be importable where the source runs (scripts/paraview.sh sets
 PYTHONPATH for paraview, pvpython, pvbatch and pvserver).
 
-(A Python algorithm plugin would give a proper Sources menu entry, but
-Debian's ParaView 5.11 cannot load Python plugins under Python 3.11:
-paraview.detail.pythonalgorithm imports inspect.getargspec, which 3.11
-removed.)
+The GUI has the same as a Sources menu entry, "mcvol Channel Files" (the
+plugin's Readers.xml.in, mcvol.paraview_readers), which File > Open also
+offers for .ome.tif files.
 """
 
 _CACHE = {}

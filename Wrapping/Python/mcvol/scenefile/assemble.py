@@ -47,14 +47,24 @@ def default_channels(image):
     """The channels of a file input whose scene names none: every point array
     of the mapper's types (each component of a multi-component one), in
     order, each a ramp of its colour and of opacity (0 below 15 % of its
-    "auto" range, 0.3 at its top per 4 voxels) over its robust range."""
+    "auto" range, 0.3 at its top per 4 voxels) over its robust range.
+
+    An image that carries default displays (an OME-Zarr's omero metadata,
+    mcvol.omezarr.display_defaults) shows its active channels only, each in
+    its colour, the ramps over its window (opacity 0 at the window's start)."""
+    from ..omezarr import display_defaults
     from .parse import parse_channel
 
     pd = image.GetPointData()
+    displays = display_defaults(image)
+    if displays and not any(d["active"] for d in displays.values()):
+        displays = {n: dict(d, active=True) for n, d in displays.items()}  # all off: show them all
     picks = []
     for k in range(pd.GetNumberOfArrays()):
         a = pd.GetArray(k)
         if a is None or not a.GetName() or a.GetDataTypeAsString() not in SUPPORTED_TYPES:
+            continue
+        if a.GetName() in displays and not displays[a.GetName()]["active"]:
             continue
         for c in range(a.GetNumberOfComponents()):
             picks.append((a.GetName(), c, a.GetNumberOfComponents()))
@@ -71,6 +81,13 @@ def default_channels(image):
         raw = {"array": name, "normalized": True, "unit_distance": unit,
                "color": [[0.0] + [0.35 * v for v in rgb], [1.0] + list(rgb)],
                "opacity": [[0.0, 0.0], [0.15, 0.0], [1.0, 0.3]]}
+        display = displays.get(name) if ncomp == 1 else None
+        if display is not None:
+            rgb = display["color"]
+            raw["color"] = [[0.0] + [0.35 * v for v in rgb], [1.0] + list(rgb)]
+            if display["window"] is not None:
+                raw["range"] = display["window"]
+                raw["opacity"] = [[0.0, 0.0], [1.0, 0.3]]
         if ncomp > 1:
             raw["component"] = comp
         out.append(parse_channel(raw, "channels[%d] (default)" % i, ".", None))

@@ -24,6 +24,7 @@ from .schema import (
     ENDIANNESS,
     FILE_FORMATS,
     FILE_INPUT_KEYS,
+    OMEZARR_INPUT_KEYS,
     LIGHT_KEYS,
     LIGHTING_KEYS,
     MAX_CHANNELS,
@@ -96,12 +97,23 @@ def parse_file_input(v, path, scene_dir):
         }
     elif ext in FILE_FORMATS:
         entry["format"] = FILE_FORMATS[ext]
+    elif is_omezarr(name if os.path.isabs(name) else os.path.join(scene_dir, name)):
+        entry["format"] = "omezarr"  # a zarr folder of any name, or its .zattrs
     else:
-        raise SceneError(file_key, "unsupported file type '%s' (expected %s; raw files: {\"raw\": name, ...})"
-                         % (ext, ", ".join(FILE_FORMATS)))
+        raise SceneError(file_key, "unsupported file type '%s' (expected %s, or an OME-Zarr folder; raw files: "
+                                   "{\"raw\": name, ...})" % (ext, ", ".join(FILE_FORMATS)))
     entry["file"] = name if os.path.isabs(name) else os.path.join(scene_dir, name)
-    if not os.path.isfile(entry["file"]):
+    if entry["format"] == "omezarr":
+        if not os.path.exists(entry["file"]):
+            raise SceneError(file_key, "folder not found: %s" % entry["file"])
+        parse_omezarr_keys(v, path, entry)
+    elif not os.path.isfile(entry["file"]):
         raise SceneError(file_key, "file not found: %s" % entry["file"])
+    else:
+        for k in OMEZARR_INPUT_KEYS:
+            if k in v:
+                raise SceneError(join_key(path, k), "only OME-Zarr inputs have resolution levels, regions and time "
+                                                    "steps (this is %s)" % entry["format"])
     if "name" in v:
         entry["name"] = get_string(v["name"], join_key(path, "name"))
         if not entry["name"]:
@@ -118,6 +130,33 @@ def parse_file_input(v, path, scene_dir):
         else:
             entry["resample"] = get_string(r, join_key(path, "resample"), RESAMPLING)
     return entry
+
+
+def is_omezarr(path):
+    from ..omezarr import is_omezarr as check
+
+    return check(path)
+
+
+def parse_omezarr_keys(v, path, entry):
+    """An OME-Zarr input's "level" (index or dataset path), "region"
+    (level-0 voxel extent [x0, x1, y0, y1, z0, z1]) and "time" (step)."""
+    if "level" in v:
+        level = v["level"]
+        if isinstance(level, str):
+            entry["level"] = level
+        else:
+            entry["level"] = get_number(level, join_key(path, "level"), lo=0, integer=True)
+    if "region" in v:
+        region = get_vector(v["region"], join_key(path, "region"), 6, "[x0, x1, y0, y1, z0, z1] voxel indices of "
+                            "the full resolution", lo=0, integer=True)
+        for k, axis in enumerate("xyz"):
+            if region[2 * k] > region[2 * k + 1]:
+                raise SceneError(join_key(path, "region"), "%s0 must be <= %s1, got %s" % (axis, axis,
+                                                                                       json.dumps(v["region"])))
+        entry["region"] = region
+    if "time" in v:
+        entry["time"] = get_number(v["time"], join_key(path, "time"), lo=0, integer=True)
 
 
 def parse_input(v, scene_dir):
@@ -441,6 +480,10 @@ def parse_scene(data, scene_dir, presets):
     s["memory_budget"] = (
         get_number(data["memory_budget"], "memory_budget", lo=0.0, hi=1e12) if "memory_budget" in data else 0.0
     )
+    for entry in s["input"].get("inputs", []):
+        if entry["format"] == "omezarr":
+            # The level read is the finest that fits the mapper's budget.
+            entry["memory_budget"] = s["memory_budget"] * 1048576.0
     if s["interpolation"] == "cubic" and s["renderer"] == "raymarch" and s["compositing"] == "opacity":
         # The opacity model interpolates voxel opacities trilinearly; it has no B-spline variant.
         raise SceneError("interpolation", 'cubic needs "compositing": "extinction" with the ray marcher')

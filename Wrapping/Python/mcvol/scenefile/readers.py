@@ -12,6 +12,8 @@ Each format is read by VTK's own reader where one does the job:
                        ImageJ hyperstacks with tifffile (python3-tifffile),
                        since vtkTIFFReader reads their channels as slices
     raw                vtkImageReader2, the header given in the scene
+    .zarr (a folder)   mcvol.omezarr (OME-NGFF 0.4): one array per channel,
+                       the level that fits the memory budget
 
 Several files (a list "input") become the point arrays of one image, each
 file's point scalars named after it; their grids must match, unless a file
@@ -498,9 +500,30 @@ def read_raw(entry, errors):
     return image
 
 
+def read_omezarr(entry, errors):
+    """An OME-Zarr image (mcvol.omezarr): the level named, or the finest
+    that fits the memory budget, its time step and region; one point array
+    per channel. Which level was read goes to entry["report"]."""
+    try:
+        import numcodecs  # noqa: F401
+    except ImportError:
+        raise RenderError("reading OME-Zarr needs the Python package numcodecs (Debian: python3-zarr)")
+    from ..omezarr import OMEZarrError, OMEZarrImage
+
+    try:
+        image = OMEZarrImage(entry["file"])
+        data = image.read(level=entry.get("level"), time=entry.get("time", 0), region=entry.get("region"),
+                          memory_budget=entry.get("memory_budget", 0.0))
+    except OMEZarrError as e:
+        raise SceneError(entry["file_key"], str(e))
+    entry["report"] = image.report
+    return data
+
+
 def read_input(entry, errors):
     """One file as a vtkImageData, its "spacing" and "origin" applied."""
-    read = {"nifti": read_nifti, "tiff": read_tiff, "raw": read_raw}.get(entry["format"], read_vtk_format)
+    read = {"nifti": read_nifti, "tiff": read_tiff, "raw": read_raw, "omezarr": read_omezarr}.get(
+        entry["format"], read_vtk_format)
     image = read(entry, errors)
     if "spacing" in entry:
         image.SetSpacing(*entry["spacing"])

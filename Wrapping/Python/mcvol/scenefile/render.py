@@ -65,5 +65,8 @@ def render(scene, output, raw=None, raw_alpha=None, errors=None, prog="mcvol-ren
             method += ", estimated RMSE %.4g (PSNR %.1f dB)" % (rmse, mapper.GetEstimatedPSNR())
     if scene.get("level_of_detail", 0) != 0 or scene.get("memory_budget", 0.0) > 0.0:
         method += ", " + mapper.GetLevelOfDetailReport()
+    for entry in scene["input"].get("inputs", []):
+        if entry.get("report"):
+            method += ", " + entry["report"]
     return "%s at %dx%d, %d channel(s), %s blend, %s: %.2f s -> %s" % (
         method, w, h, len(pipeline.channels), scene["blend"], backend, seconds, output)

@@ -42,12 +42,16 @@ FILE_FORMATS = {
     ".nii.gz": "nifti",
     ".tif": "tiff",
     ".tiff": "tiff",
+    ".zarr": "omezarr",
 }
+# OME-Zarr: a folder (any name, when it holds .zattrs/.zgroup) or its .zattrs.
+ZARR_METADATA_FILES = (".zattrs", ".zgroup")
 RAW_TYPES = ("uint8", "int16", "uint16", "float32", "float64")
 ENDIANNESS = ("little", "big")
 RESAMPLING = ("linear", "nearest")
 DEMO_INPUT_KEYS = {"demo", "dimensions", "channels"}
-FILE_INPUT_KEYS = {"file", "name", "spacing", "origin", "resample"}
+FILE_INPUT_KEYS = {"file", "name", "spacing", "origin", "resample", "level", "region", "time"}
+OMEZARR_INPUT_KEYS = ("level", "region", "time")
 RAW_INPUT_KEYS = {"raw", "dimensions", "type", "endianness", "components", "name", "spacing", "origin", "resample"}
 
 TOP_KEYS = {
@@ -131,9 +135,14 @@ def join_key(path, key):
 
 def split_extension(filename):
     """(stem, extension) of a file name, the extension lower case: "T1.nii.gz"
-    -> ("T1", ".nii.gz"), "cells.ome.tif" -> ("cells", ".tif")."""
-    base = os.path.basename(filename)
+    -> ("T1", ".nii.gz"), "cells.ome.tif" -> ("cells", ".tif"),
+    "cells.ome.zarr/.zattrs" -> ("cells", ".zarr")."""
+    base = os.path.basename(filename.rstrip("/" + os.sep))
+    if base in ZARR_METADATA_FILES:  # an OME-Zarr's metadata file: the folder's name
+        return split_extension(os.path.dirname(filename.rstrip("/" + os.sep)))
     lower = base.lower()
+    if lower.endswith(".ome.zarr"):
+        return base[: -len(".ome.zarr")], ".zarr"
     for ext, kept in ((".nii.gz", ".nii.gz"), (".ome.tiff", ".tiff"), (".ome.tif", ".tif")):
         if lower.endswith(ext):
             return base[: -len(ext)], kept
