@@ -34,6 +34,7 @@
 
 #include "mcvolParaViewRepresentationModule.h" // For export macro
 #include "vtkSMRepresentationProxy.h"
+#include "vtkWeakPointer.h" // For vtkWeakPointer
 
 #include <string> // For std::string
 #include <vector> // For std::vector
@@ -69,6 +70,13 @@ public:
 
   void UpdateVTKObjects() override;
 
+  /**
+   * Watches the view: after each of its renders the information properties
+   * (TotalSamples, EstimatedPSNR, Converged, ProgressText, ...) are read
+   * again, so that Python's rep.TotalSamples is the current value.
+   */
+  void ViewUpdated(vtkSMProxy* view) override;
+
 protected:
   vtkSMMultiChannelVolumeRepresentationProxy();
   ~vtkSMMultiChannelVolumeRepresentationProxy() override;
@@ -84,6 +92,9 @@ protected:
   bool SyncLookupTableIndices();
 
   bool InUpdate = false;
+  void ViewRendered();
+  vtkWeakPointer<vtkSMProxy> ObservedView;
+  unsigned long ViewObserver = 0;
 
 
 private:
