@@ -164,11 +164,11 @@ bool vtkMultiChannelVolumeRepresentation::AddToView(vtkView* view)
       text->Owner = this;
       text->GetTextProperty()->SetFontSize(13);
       text->GetTextProperty()->SetJustificationToRight();
-      text->GetTextProperty()->SetVerticalJustificationToBottom();
+      text->GetTextProperty()->SetVerticalJustificationToTop();
       text->GetTextProperty()->SetColor(0.85, 0.85, 0.85);
       text->GetTextProperty()->SetShadow(1);
       text->GetPositionCoordinate()->SetCoordinateSystemToNormalizedViewport();
-      text->SetPosition(0.99, 0.01);
+      text->SetPosition(0.99, 0.99);
       this->ProgressActor = text;
     }
     rview->GetNonCompositedRenderer()->AddActor2D(this->ProgressActor);

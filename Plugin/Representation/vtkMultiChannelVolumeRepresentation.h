@@ -252,7 +252,9 @@ public:
 
   ///@{
   /**
-   * A small text in the view's lower right corner (default on): the samples
+   * A small text in the view's upper right corner (default on; ParaView
+   * puts the colour legend in the lower right and the orientation axes in
+   * the lower left): the samples
    * per pixel, the estimated PSNR and "refining" or "converged", or why
    * nothing is drawn (ChannelStatus). It is read from the mapper as the
    * view draws its annotations, after the volume, so it describes the image

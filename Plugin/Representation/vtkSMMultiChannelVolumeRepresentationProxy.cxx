@@ -303,8 +303,7 @@ void vtkSMMultiChannelVolumeRepresentationProxy::ShowActiveChannel()
   }
 
   // The scalar bar follows the edited channel: where the view shows the
-  // previous channel's bar (or this channel's), it shows this channel's,
-  // titled with the channel's function name.
+  // previous channel's bar (or this channel's), it shows this channel's.
   vtkSMViewProxy* view = vtkSMViewProxy::FindView(target);
   if (view)
   {
@@ -321,13 +320,9 @@ void vtkSMMultiChannelVolumeRepresentationProxy::ShowActiveChannel()
     }
     if (previousShown || shown)
     {
+      // ParaView titles it: the array's name, and a component channel's
+      // component name or number.
       vtkSMPVRepresentationProxy::SetScalarBarVisibility(target, view, true);
-      if (vtkSMProxy* bar = vtkSMTransferFunctionProxy::FindScalarBarRepresentation(lut, view))
-      {
-        vtkSMPropertyHelper(bar, "Title").Set(names[static_cast<size_t>(channel)].c_str());
-        vtkSMPropertyHelper(bar, "ComponentTitle").Set("");
-        bar->UpdateVTKObjects();
-      }
     }
   }
   this->InUpdate = false;
