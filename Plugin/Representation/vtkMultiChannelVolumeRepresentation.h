@@ -258,8 +258,9 @@ public:
    * per pixel, the estimated PSNR and "refining" or "converged", or why
    * nothing is drawn (ChannelStatus). It is read from the mapper as the
    * view draws its annotations, after the volume, so it describes the image
-   * it sits on. Shown only where this process holds the data (builtin
-   * sessions, pvpython, pvbatch; not on the client of a pvserver).
+   * it sits on. Shown only where this process holds the data (in
+   * the GUI on its builtin: server, pvpython, pvbatch; not on the client of
+   * a pvserver).
    */
   void SetProgressAnnotation(bool on);
   vtkGetMacro(ProgressAnnotation, bool);

@@ -8,8 +8,8 @@ and an opacity ramp), the same camera; ParaView's Volume (its GPU ray caster
 with gradient shading) against the Monte Carlo representation with its
 defaults (Light Intensity Scale 4 pi, Light Sampling One Light). The mean
 brightness of the two images must be within a factor 2 of each other. Power:
-the physical scale (Light Intensity Scale 1) is outside the factor 2 (the
-mean brightness before the scale was introduced). Monte Carlo renders are
+the physical scale (Light Intensity Scale 1) is outside the factor 2.
+Monte Carlo renders are
 seeded; the means are over 40 000 pixels of a 64-sample image, whose noise
 moves the mean by far less than the margin.
 """
