@@ -1,15 +1,25 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "pqMultiChannelRefinement.h"
 
+#include "pqActiveObjects.h"
 #include "pqApplicationCore.h"
+#include "pqColorMapEditor.h"
+#include "pqDataRepresentation.h"
+#include "pqCoreUtilities.h"
 #include "pqRenderView.h"
 #include "pqRepresentation.h"
 #include "pqServer.h"
 #include "pqServerManagerModel.h"
+#include "vtkCommand.h"
+#include "vtkEventQtSlotConnect.h"
+#include "vtkSMProperty.h"
 #include "vtkSMPropertyHelper.h"
 #include "vtkSMProxy.h"
 
 #include <QApplication>
+#include <QDockWidget>
+#include <QMainWindow>
+#include <QStatusBar>
 
 #include <algorithm>
 #include <cstring>
@@ -36,12 +46,55 @@ pqMultiChannelRefinement::~pqMultiChannelRefinement() = default;
 void pqMultiChannelRefinement::startup()
 {
   this->Timer.start();
+  QObject::connect(&pqActiveObjects::instance(),
+    QOverload<pqRepresentation*>::of(&pqActiveObjects::representationChanged), this,
+    &pqMultiChannelRefinement::watchActiveRepresentation);
+  this->watchActiveRepresentation();
+}
+
+//------------------------------------------------------------------------------
+void pqMultiChannelRefinement::watchActiveRepresentation()
+{
+  // Edit Channel (ActiveChannel) of the active representation opens the
+  // colour map editor, which the representation has pointed at the channel.
+  this->Links->Disconnect();
+  pqDataRepresentation* repr = pqActiveObjects::instance().activeRepresentation();
+  vtkSMProxy* proxy = repr ? repr->getProxy() : nullptr;
+  vtkSMProperty* active = proxy ? proxy->GetProperty("ActiveChannel") : nullptr;
+  if (active)
+  {
+    this->Links->Connect(active, vtkCommand::ModifiedEvent, this, SLOT(openColorMapEditor()));
+  }
+}
+
+//------------------------------------------------------------------------------
+void pqMultiChannelRefinement::openColorMapEditor()
+{
+  pqDataRepresentation* repr = pqActiveObjects::instance().activeRepresentation();
+  vtkSMProxy* proxy = repr ? repr->getProxy() : nullptr;
+  if (!proxy || !proxy->GetProperty("ActiveChannel") ||
+    vtkSMPropertyHelper(proxy, "ActiveChannel").GetAsInt() < 0)
+  {
+    return;
+  }
+  QWidget* window = pqCoreUtilities::mainWidget();
+  const QList<pqColorMapEditor*> editors =
+    window ? window->findChildren<pqColorMapEditor*>() : QList<pqColorMapEditor*>();
+  for (pqColorMapEditor* editor : editors)
+  {
+    if (auto* dock = qobject_cast<QDockWidget*>(editor->parentWidget()))
+    {
+      dock->show();
+      dock->raise();
+    }
+  }
 }
 
 //------------------------------------------------------------------------------
 void pqMultiChannelRefinement::shutdown()
 {
   this->Timer.stop();
+  this->Links->Disconnect();
 }
 
 //------------------------------------------------------------------------------
@@ -72,6 +125,7 @@ void pqMultiChannelRefinement::refine()
     return;
   }
   bool rendered = false;
+  QString statusLine;
   const QList<pqRenderView*> views = core->getServerManagerModel()->findItems<pqRenderView*>();
   for (pqRenderView* view : views)
   {
@@ -114,6 +168,11 @@ void pqMultiChannelRefinement::refine()
       const int converged = vtkSMPropertyHelper(proxy, "Converged").GetAsInt();
       const int samples = vtkSMPropertyHelper(proxy, "TotalSamples").GetAsInt();
       const char* status = vtkSMPropertyHelper(proxy, "ChannelStatus").GetAsString();
+      if (view == pqActiveObjects::instance().activeView() &&
+        (statusLine.isEmpty() || repr == pqActiveObjects::instance().activeRepresentation()))
+      {
+        statusLine = progressLine(proxy, samples, converged, status);
+      }
       auto last = this->LastSamples.find(proxy);
       const bool stalled = last != this->LastSamples.end() && last.value() == samples;
       if (!converged && (!status || !*status) && !stalled)
@@ -136,6 +195,50 @@ void pqMultiChannelRefinement::refine()
       rendered = true;
     }
   }
+  this->showStatus(statusLine);
   // Nothing to do: look again a little later rather than spin.
   this->Timer.setInterval(rendered ? 0 : 100);
+}
+
+//------------------------------------------------------------------------------
+QString pqMultiChannelRefinement::progressLine(vtkSMProxy* proxy, int samples, int converged, const char* status)
+{
+  if (status && *status)
+  {
+    return QString("Multi-Channel Volume: %1").arg(status);
+  }
+  if (samples <= 0)
+  {
+    return QString();
+  }
+  const double psnr = vtkSMPropertyHelper(proxy, "EstimatedPSNR").GetAsDouble();
+  QString line = QString("Multi-Channel Volume: %1 samples").arg(samples);
+  if (psnr > 0.0)
+  {
+    line += QString(", estimated PSNR %1 dB").arg(psnr, 0, 'f', 1);
+  }
+  line += converged ? ", converged" : ", refining";
+  return line;
+}
+
+//------------------------------------------------------------------------------
+void pqMultiChannelRefinement::showStatus(const QString& line)
+{
+  if (line == this->LastStatus)
+  {
+    return;
+  }
+  auto* window = qobject_cast<QMainWindow*>(pqCoreUtilities::mainWidget());
+  if (window && window->statusBar())
+  {
+    if (line.isEmpty())
+    {
+      window->statusBar()->clearMessage();
+    }
+    else
+    {
+      window->statusBar()->showMessage(line);
+    }
+  }
+  this->LastStatus = line;
 }

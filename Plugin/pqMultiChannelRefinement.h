@@ -18,6 +18,12 @@
  * property change) it renders ceil(Maximum Total Samples / Samples Per
  * Render) - 1 more times, the number that reaches the maximum from a fresh
  * image.
+ *
+ * Setting Edit Channel on the active representation opens the colour map
+ * editor (the representation points it at the channel's functions).
+ *
+ * It also writes the active view's progress to the main window's status
+ * line (samples, estimated PSNR, refining or converged).
  */
 #ifndef pqMultiChannelRefinement_h
 #define pqMultiChannelRefinement_h
@@ -25,9 +31,14 @@
 #include <QMap>
 #include <QObject>
 #include <QPointer>
+#include <QString>
 #include <QTimer>
 
+#include "vtkNew.h"
+
 class pqView;
+class vtkEventQtSlotConnect;
+class vtkSMProxy;
 
 class pqMultiChannelRefinement : public QObject
 {
@@ -44,9 +55,18 @@ public:
 private Q_SLOTS:
   void refine();
   void viewRendered();
+  void watchActiveRepresentation();
+  void openColorMapEditor();
 
 private:
   Q_DISABLE_COPY(pqMultiChannelRefinement)
+  // The status line: "Multi-Channel Volume: 64 samples, estimated PSNR
+  // 41.2 dB, refining" for the active view's representation (the active
+  // one where it is one of ours), or why nothing is drawn.
+  static QString progressLine(vtkSMProxy* proxy, int samples, int converged, const char* status);
+  void showStatus(const QString& line);
+  QString LastStatus;
+  vtkNew<vtkEventQtSlotConnect> Links;
   QTimer Timer;
   // Samples seen per representation proxy after the last render this class
   // asked for: no progress means there is nothing to refine (an error).

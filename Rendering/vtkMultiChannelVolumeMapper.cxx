@@ -1221,8 +1221,17 @@ bool vtkMultiChannelVolumeMapper::UpdateScene(RenderPass& pass)
     lighting.MaxScatteringDepth = this->MaxScatteringDepth;
     lighting.GradientShading = this->GradientShading;
     lighting.Shininess = this->Shininess;
-    scene.setLighting(
-      mcvol::adapter::CollectLighting(pass.Renderer, pass.Property, lighting, sceneChannels, pass.LightsMTime));
+    mcvol::LightingDesc lights =
+      mcvol::adapter::CollectLighting(pass.Renderer, pass.Property, lighting, sceneChannels, pass.LightsMTime);
+    // Where the renderer's lights enter the physics: their scale (ParaView's
+    // lights are meant for surface shading) and how many a scattering event
+    // samples. The ray marcher sums every light whatever LightSampling says.
+    for (mcvol::LightDesc& light : lights.lights)
+    {
+      light.intensity *= this->LightIntensityScale;
+    }
+    lights.sampleOneLight = this->LightSampling == ONE_LIGHT;
+    scene.setLighting(lights);
     mcvol::ImportanceDesc importance;
     // A pre-classified channel (dependent components, or any level above 0)
     // has no scalar to look importance up by.

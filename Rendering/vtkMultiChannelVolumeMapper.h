@@ -608,6 +608,38 @@ public:
 
   ///@{
   /**
+   * How the renderer's lights enter. LightIntensityScale multiplies every
+   * light's intensity (default 1: physical units, in which an isotropic
+   * scatterer under a light of intensity 4 pi reflects about the light's
+   * colour). Programs whose lights are set up for surface shading, where
+   * intensity 1 means "full brightness", scale by 4 pi; the ParaView
+   * representation does (its property Light Intensity Scale). Both mappers
+   * apply it, so they keep agreeing.
+   *
+   * LightSampling: ALL_LIGHTS (default) traces one shadow ray per light at
+   * every scattering event; ONE_LIGHT traces one, towards a light chosen
+   * with probability proportional to its radiance and weighted by the
+   * inverse of that probability. Both are unbiased and converge to the same
+   * image; ONE_LIGHT costs one light's time per sample whatever the number
+   * of lights (ParaView's light kit has five), for somewhat more noise per
+   * sample where lights cast different shadows. The ray-marching mapper
+   * always sums every light (it is deterministic).
+   */
+  vtkSetClampMacro(LightIntensityScale, double, 0.0, 1e6);
+  vtkGetMacro(LightIntensityScale, double);
+  enum LightSamplingModes
+  {
+    ALL_LIGHTS = 0,
+    ONE_LIGHT = 1
+  };
+  vtkSetClampMacro(LightSampling, int, ALL_LIGHTS, ONE_LIGHT);
+  vtkGetMacro(LightSampling, int);
+  void SetLightSamplingToAllLights() { this->SetLightSampling(ALL_LIGHTS); }
+  void SetLightSamplingToOneLight() { this->SetLightSampling(ONE_LIGHT); }
+  ///@}
+
+  ///@{
+  /**
    * Weight of a channel in MC_MIX_BLEND (default 1, >= 0). Weights are
    * normalised to sum 1; all zero means equal weights.
    */
@@ -1052,6 +1084,8 @@ protected:
   int MaxScatteringDepth = 1;
   bool GradientShading = false;
   double Shininess = 32.0;
+  double LightIntensityScale = 1.0;
+  int LightSampling = ALL_LIGHTS;
   int MacrocellSize = 8;
   bool Progressive = true;
   int TransferFunctionRangeMode = DATA_RANGE;

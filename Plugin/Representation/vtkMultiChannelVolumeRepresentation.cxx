@@ -15,15 +15,54 @@
 #include "vtkPVRenderView.h"
 #include "vtkPiecewiseFunction.h"
 #include "vtkPointData.h"
+#include "vtkRenderer.h"
 #include "vtkScalarsToColors.h"
+#include "vtkTextActor.h"
+#include "vtkTextProperty.h"
 #include "vtkVolumeProperty.h"
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <sstream>
 
 vtkStandardNewMacro(vtkMultiChannelVolumeRepresentation);
+
+namespace
+{
+// The progress annotation. It sits in the view's non-composited renderer,
+// which draws after the volume's renderer, and asks the representation for
+// its words when it is drawn: the numbers describe the image under it, not
+// the one before this render.
+class vtkMultiChannelProgressText : public vtkTextActor
+{
+public:
+  static vtkMultiChannelProgressText* New();
+  vtkTypeMacro(vtkMultiChannelProgressText, vtkTextActor);
+
+  vtkMultiChannelVolumeRepresentation* Owner = nullptr; // not counted: the owner holds this actor
+
+  int RenderOpaqueGeometry(vtkViewport* viewport) override
+  {
+    const std::string text = this->Owner ? this->Owner->BuildProgressSummary() : std::string();
+    if (text.empty())
+    {
+      return 0;
+    }
+    if (!this->GetInput() || text != this->GetInput())
+    {
+      this->SetInput(text.c_str());
+    }
+    return this->Superclass::RenderOpaqueGeometry(viewport);
+  }
+  int RenderOverlay(vtkViewport* viewport) override
+  {
+    return this->Owner && !this->Owner->BuildProgressSummary().empty() ? this->Superclass::RenderOverlay(viewport) : 0;
+  }
+};
+vtkStandardNewMacro(vtkMultiChannelProgressText);
+}
 
 namespace
 {
@@ -107,7 +146,98 @@ vtkMultiChannelVolumeRepresentation::vtkMultiChannelVolumeRepresentation()
 }
 
 //------------------------------------------------------------------------------
-vtkMultiChannelVolumeRepresentation::~vtkMultiChannelVolumeRepresentation() = default;
+vtkMultiChannelVolumeRepresentation::~vtkMultiChannelVolumeRepresentation()
+{
+  if (auto* text = vtkMultiChannelProgressText::SafeDownCast(this->ProgressActor))
+  {
+    text->Owner = nullptr;
+  }
+}
+
+//------------------------------------------------------------------------------
+bool vtkMultiChannelVolumeRepresentation::AddToView(vtkView* view)
+{
+  vtkPVRenderView* rview = vtkPVRenderView::SafeDownCast(view);
+  if (rview && rview->GetNonCompositedRenderer())
+  {
+    if (!this->ProgressActor)
+    {
+      auto text = vtkSmartPointer<vtkMultiChannelProgressText>::New();
+      text->Owner = this;
+      text->GetTextProperty()->SetFontSize(13);
+      text->GetTextProperty()->SetJustificationToRight();
+      text->GetTextProperty()->SetVerticalJustificationToTop();
+      text->GetTextProperty()->SetColor(0.85, 0.85, 0.85);
+      text->GetTextProperty()->SetShadow(1);
+      text->GetPositionCoordinate()->SetCoordinateSystemToNormalizedViewport();
+      text->SetPosition(0.99, 0.99);
+      this->ProgressActor = text;
+    }
+    rview->GetNonCompositedRenderer()->AddActor2D(this->ProgressActor);
+  }
+  return this->Superclass::AddToView(view);
+}
+
+//------------------------------------------------------------------------------
+bool vtkMultiChannelVolumeRepresentation::RemoveFromView(vtkView* view)
+{
+  vtkPVRenderView* rview = vtkPVRenderView::SafeDownCast(view);
+  if (rview && rview->GetNonCompositedRenderer() && this->ProgressActor)
+  {
+    rview->GetNonCompositedRenderer()->RemoveActor2D(this->ProgressActor);
+  }
+  return this->Superclass::RemoveFromView(view);
+}
+
+//------------------------------------------------------------------------------
+void vtkMultiChannelVolumeRepresentation::SetProgressAnnotation(bool on)
+{
+  if (this->ProgressAnnotation != on)
+  {
+    this->ProgressAnnotation = on;
+    this->Modified();
+  }
+}
+
+//------------------------------------------------------------------------------
+std::string vtkMultiChannelVolumeRepresentation::BuildProgressSummary()
+{
+  // Nothing where this process holds no data (the client of a pvserver) or
+  // the representation is hidden.
+  if (!this->ProgressAnnotation || !this->Cache || !this->GetVisibility())
+  {
+    return std::string();
+  }
+  if (!this->ChannelStatus.empty())
+  {
+    return "Multi-Channel Volume: " + this->ChannelStatus;
+  }
+  vtkMultiChannelVolumeMapper* mapper = this->GetMultiChannelMapper();
+  const int samples = mapper->GetTotalSamples();
+  if (samples <= 0)
+  {
+    return std::string();
+  }
+  char line[128];
+  const double psnr = mapper->GetEstimatedPSNR();
+  const char* state = mapper->IsConverged() ? "converged" : "refining";
+  if (psnr > 0.0)
+  {
+    std::snprintf(line, sizeof(line), "%d samples   %.1f dB   %s", samples, psnr, state);
+  }
+  else
+  {
+    std::snprintf(line, sizeof(line), "%d sample%s   %s", samples, samples == 1 ? "" : "s", state);
+  }
+  return line;
+}
+
+//------------------------------------------------------------------------------
+const char* vtkMultiChannelVolumeRepresentation::GetProgressSummary()
+{
+  this->ProgressSummaryValue = this->BuildProgressSummary();
+  return this->ProgressSummaryValue.c_str();
+}
 
 //------------------------------------------------------------------------------
 vtkMultiChannelVolumeMapper* vtkMultiChannelVolumeRepresentation::GetMultiChannelMapper()
@@ -340,6 +470,16 @@ void vtkMultiChannelVolumeRepresentation::SetGradientShading(bool on)
 void vtkMultiChannelVolumeRepresentation::SetShininess(double shininess)
 {
   this->GetMultiChannelMapper()->SetShininess(shininess);
+}
+
+void vtkMultiChannelVolumeRepresentation::SetLightIntensityScale(double scale)
+{
+  this->GetMultiChannelMapper()->SetLightIntensityScale(scale);
+}
+
+void vtkMultiChannelVolumeRepresentation::SetLightSampling(int mode)
+{
+  this->GetMultiChannelMapper()->SetLightSampling(mode);
 }
 
 void vtkMultiChannelVolumeRepresentation::SetNumberOfChannelAlbedos(int n)

@@ -45,6 +45,7 @@
 class vtkMultiChannelVolumeMapper;
 class vtkPiecewiseFunction;
 class vtkScalarsToColors;
+class vtkTextActor;
 
 class MCVOLPARAVIEWREPRESENTATION_EXPORT vtkMultiChannelVolumeRepresentation : public vtkImageVolumeRepresentation
 {
@@ -125,6 +126,11 @@ public:
   void SetMaxScatteringDepth(int depth);
   void SetGradientShading(bool on);
   void SetShininess(double shininess);
+  /// vtkMultiChannelVolumeMapper::SetLightIntensityScale (ParaView's default
+  /// 4 pi, see the XML property Light Intensity Scale).
+  void SetLightIntensityScale(double scale);
+  /// vtkMultiChannelVolumeMapper::SetLightSampling.
+  void SetLightSampling(int mode);
   void SetNumberOfChannelAlbedos(int n);
   void SetChannelAlbedo(int channel, double albedo);
   void SetNumberOfChannelAnisotropies(int n);
@@ -249,6 +255,26 @@ public:
   double GetImportanceOverflows();
   ///@}
 
+  ///@{
+  /**
+   * A small text in the view's upper right corner (default on; ParaView
+   * puts the colour legend in the lower right and the orientation axes in
+   * the lower left): the samples
+   * per pixel, the estimated PSNR and "refining" or "converged", or why
+   * nothing is drawn (ChannelStatus). It is read from the mapper as the
+   * view draws its annotations, after the volume, so it describes the image
+   * it sits on. Shown only where this process holds the data (in
+   * the GUI on its builtin: server, pvpython, pvbatch; not on the client of
+   * a pvserver).
+   */
+  void SetProgressAnnotation(bool on);
+  vtkGetMacro(ProgressAnnotation, bool);
+  /// The annotation's text as it would be drawn now (empty when hidden).
+  std::string BuildProgressSummary();
+  /// The same, for the information property ProgressText.
+  const char* GetProgressSummary();
+  ///@}
+
   vtkMultiChannelVolumeMapper* GetMultiChannelMapper();
 
 protected:
@@ -256,6 +282,8 @@ protected:
   ~vtkMultiChannelVolumeRepresentation() override;
 
   void UpdateMapperParameters() override;
+  bool AddToView(vtkView* view) override;
+  bool RemoveFromView(vtkView* view) override;
   void UpdateChannelImportance(int numChannels);
 
   int ChannelSource = ARRAYS;
@@ -292,6 +320,9 @@ protected:
   int InteractiveInterpolation = INTERACTIVE_NEAREST;
   int StillInterpolation = -1; // SetMultiChannelInterpolation's (-1: the volume property's)
   bool RenderingWithLOD = false; // this render is one with ParaView's LOD
+  bool ProgressAnnotation = true;
+  vtkSmartPointer<vtkTextActor> ProgressActor;
+  std::string ProgressSummaryValue;
 
 private:
   vtkMultiChannelVolumeRepresentation(const vtkMultiChannelVolumeRepresentation&) = delete;

@@ -1,17 +1,20 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "vtkSMMultiChannelVolumeRepresentationProxy.h"
 
+#include "vtkCommand.h"
 #include "vtkDataObject.h"
 #include "vtkObjectFactory.h"
 #include "vtkPVArrayInformation.h"
 #include "vtkPVDataInformation.h"
 #include "vtkSMOutputPort.h"
+#include "vtkSMPVRepresentationProxy.h"
 #include "vtkSMProperty.h"
 #include "vtkSMPropertyHelper.h"
 #include "vtkSMProxyProperty.h"
 #include "vtkSMSessionProxyManager.h"
 #include "vtkSMTransferFunctionManager.h"
 #include "vtkSMTransferFunctionProxy.h"
+#include "vtkSMViewProxy.h"
 
 #include "vtkPVDataSetAttributesInformation.h"
 #include "vtkSMStringVectorProperty.h"
@@ -52,7 +55,39 @@ bool IsChannelProperty(const char* name)
 
 //------------------------------------------------------------------------------
 vtkSMMultiChannelVolumeRepresentationProxy::vtkSMMultiChannelVolumeRepresentationProxy() = default;
-vtkSMMultiChannelVolumeRepresentationProxy::~vtkSMMultiChannelVolumeRepresentationProxy() = default;
+vtkSMMultiChannelVolumeRepresentationProxy::~vtkSMMultiChannelVolumeRepresentationProxy()
+{
+  if (this->ObservedView)
+  {
+    this->ObservedView->RemoveObserver(this->ViewObserver);
+  }
+}
+
+//------------------------------------------------------------------------------
+void vtkSMMultiChannelVolumeRepresentationProxy::ViewUpdated(vtkSMProxy* view)
+{
+  this->Superclass::ViewUpdated(view);
+  if (view == this->ObservedView)
+  {
+    return;
+  }
+  if (this->ObservedView)
+  {
+    this->ObservedView->RemoveObserver(this->ViewObserver);
+  }
+  this->ObservedView = view;
+  this->ViewObserver =
+    view ? view->AddObserver(vtkCommand::EndEvent, this, &vtkSMMultiChannelVolumeRepresentationProxy::ViewRendered) : 0;
+}
+
+//------------------------------------------------------------------------------
+void vtkSMMultiChannelVolumeRepresentationProxy::ViewRendered()
+{
+  if (this->ObjectsCreated)
+  {
+    this->UpdatePropertyInformation();
+  }
+}
 
 //------------------------------------------------------------------------------
 std::string vtkSMMultiChannelVolumeRepresentationProxy::ChannelFunctionName(const char* array, int component)
@@ -423,17 +458,58 @@ void vtkSMMultiChannelVolumeRepresentationProxy::ShowActiveChannel()
   }
   const int channel = vtkSMPropertyHelper(this, "ActiveChannel").GetAsInt();
   vtkSMPropertyHelper luts(this, "ChannelLookupTables");
-  if (channel < 0 || static_cast<unsigned int>(channel) >= luts.GetNumberOfElements())
+  const std::vector<std::string> names = this->GetChannelFunctionNames();
+  if (channel < 0)
   {
+    return;
+  }
+  if (static_cast<unsigned int>(channel) >= luts.GetNumberOfElements() ||
+    static_cast<size_t>(channel) >= names.size())
+  {
+    vtkWarningMacro("Edit Channel " << channel << ": there " << (names.size() == 1 ? "is " : "are ")
+                                    << names.size() << " channel" << (names.size() == 1 ? "" : "s")
+                                    << " (0 is the first); the colour map editor is left as it is.");
     return;
   }
   vtkSMProxy* lut = luts.GetAsProxy(static_cast<unsigned int>(channel));
   vtkSMProxy* pwf = lut ? vtkSMPropertyHelper(lut, "ScalarOpacityFunction", true).GetAsProxy() : nullptr;
+  if (!lut)
+  {
+    return;
+  }
   // Set them on the composite representation ParaView shows (its shared
   // properties are linked from the other subproxies to this one, not back).
   vtkSMProxy* target = this->GetParentProxy() ? this->GetParentProxy() : this;
+  vtkSMProxy* previous =
+    target->GetProperty("LookupTable") ? vtkSMPropertyHelper(target, "LookupTable", true).GetAsProxy() : nullptr;
   this->InUpdate = true;
-  if (lut && target->GetProperty("LookupTable"))
+
+  // The colour map editor edits the representation's LookupTable, and only
+  // while it colours by an array (Solid Color shows "Array Name: <none>"):
+  // colour by the channel's array. A component channel colours by its array
+  // with the channel's own functions, which pick that component, so that
+  // the editor's "rescale to data range" and the scalar bar take the
+  // component's range.
+  const bool components = vtkSMPropertyHelper(this, "ChannelSource").GetAsInt() == 1;
+  std::string arrayName = names[static_cast<size_t>(channel)];
+  if (components)
+  {
+    vtkSMPropertyHelper componentsHelper(this, "ChannelComponentsArray");
+    arrayName = componentsHelper.GetNumberOfElements() > 0 && componentsHelper.GetAsString()
+      ? componentsHelper.GetAsString()
+      : "";
+    if (lut->GetProperty("VectorMode") && lut->GetProperty("VectorComponent"))
+    {
+      vtkSMPropertyHelper(lut, "VectorMode").Set(1); // vtkScalarsToColors::COMPONENT
+      vtkSMPropertyHelper(lut, "VectorComponent").Set(channel);
+      lut->UpdateVTKObjects();
+    }
+  }
+  if (!arrayName.empty() && target->GetProperty("ColorArrayName"))
+  {
+    vtkSMPropertyHelper(target, "ColorArrayName").SetInputArrayToProcess(vtkDataObject::POINT, arrayName.c_str());
+  }
+  if (target->GetProperty("LookupTable"))
   {
     vtkSMPropertyHelper(target, "LookupTable").Set(lut);
   }
@@ -444,6 +520,30 @@ void vtkSMMultiChannelVolumeRepresentationProxy::ShowActiveChannel()
   if (target->GetObjectsCreated())
   {
     target->UpdateVTKObjects();
+  }
+
+  // The scalar bar follows the edited channel: where the view shows the
+  // previous channel's bar (or this channel's), it shows this channel's.
+  vtkSMViewProxy* view = vtkSMViewProxy::FindView(target);
+  if (view)
+  {
+    const bool previousShown =
+      previous && previous != lut && vtkSMTransferFunctionProxy::IsScalarBarVisible(previous, view);
+    const bool shown = vtkSMTransferFunctionProxy::IsScalarBarVisible(lut, view);
+    if (previousShown)
+    {
+      if (vtkSMProxy* bar = vtkSMTransferFunctionProxy::FindScalarBarRepresentation(previous, view))
+      {
+        vtkSMPropertyHelper(bar, "Visibility").Set(0);
+        bar->UpdateVTKObjects();
+      }
+    }
+    if (previousShown || shown)
+    {
+      // ParaView titles it: the array's name, and a component channel's
+      // component name or number.
+      vtkSMPVRepresentationProxy::SetScalarBarVisibility(target, view, true);
+    }
   }
   this->InUpdate = false;
 }

@@ -34,6 +34,7 @@
 
 #include "mcvolParaViewRepresentationModule.h" // For export macro
 #include "vtkSMRepresentationProxy.h"
+#include "vtkWeakPointer.h" // For vtkWeakPointer
 
 #include <map>    // For std::map
 #include <string> // For std::string
@@ -70,6 +71,13 @@ public:
   int UpdateChannelLookupTables();
 
   void UpdateVTKObjects() override;
+
+  /**
+   * Watches the view: after each of its renders the information properties
+   * (TotalSamples, EstimatedPSNR, Converged, ProgressText, ...) are read
+   * again, so that Python's rep.TotalSamples is the current value.
+   */
+  void ViewUpdated(vtkSMProxy* view) override;
 
 protected:
   vtkSMMultiChannelVolumeRepresentationProxy();
@@ -108,6 +116,9 @@ protected:
   bool DefaultChannelsChosen = false;
   bool DefaultRangesFetched = false;
   std::map<std::string, std::pair<double, double>> DefaultRanges;
+  void ViewRendered();
+  vtkWeakPointer<vtkSMProxy> ObservedView;
+  unsigned long ViewObserver = 0;
 
 
 private:

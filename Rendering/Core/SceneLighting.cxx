@@ -60,6 +60,30 @@ void Scene::setLighting(const LightingDesc& d)
     L.anisotropy[n] = g;
   }
   L.numLights = int(d.lights.size());
+  // One light per scattering event: probabilities in proportion to each
+  // light's radiance (at unit distance for point lights; any positive
+  // choice is unbiased, this one sends the shadow ray where most light is).
+  double total = 0.0;
+  int lastLit = -1;
+  for (int l = 0; l < L.numLights; ++l)
+  {
+    const Vec3f& e = L.lightRadiance[l];
+    total += double(e.x) + double(e.y) + double(e.z);
+    if (e.x + e.y + e.z > 0.f)
+    {
+      lastLit = l;
+    }
+  }
+  L.sampleOneLight = d.sampleOneLight && L.numLights > 1 && total > 0.0;
+  double running = 0.0;
+  for (int l = 0; l < L.numLights; ++l)
+  {
+    const Vec3f& e = L.lightRadiance[l];
+    const double share = total > 0.0 ? (double(e.x) + double(e.y) + double(e.z)) / total : 0.0;
+    running += share;
+    L.lightPdf[l] = float(share);
+    L.lightCdf[l] = l >= lastLit ? 1.f : float(running);
+  }
   L.ambient = Vec3f(float(d.ambient[0]), float(d.ambient[1]), float(d.ambient[2]));
   L.shadows = d.shadows;
   L.shadowEstimator = d.deltaShadows ? 1 : 0;

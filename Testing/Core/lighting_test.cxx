@@ -345,6 +345,51 @@ TEST(Lighting, SingleScatteringSlabIsAnalytic)
   }
 }
 
+// One light per scattering event (LightingDesc::sampleOneLight): three
+// directional lights from behind the viewer, of intensities E1, E2 and 0
+// (a light that is never chosen), on the slab above. The radiance is
+// (E1 + E2) p(-1) (1 - e^(-2 sigma L)) / 2, as with every light sampled:
+// one z-test on R. Exactly one shadow ray per scattering event, against
+// three (one per light, the dark one included) with every light sampled.
+TEST(Lighting, OneLightPerScatteringEventIsUnbiasedForOneShadowRay)
+{
+  const double alpha = kAlpha;
+  const double sigma = 0.15, L = 12.0, E1 = 1.5, E2 = 0.5;
+  Scene scene;
+  TestVolume v;
+  slabScene(scene, v, sigma);
+  const Camera cam = orthoAlongZ(8, 8, 1, 4, 1, 4, 20, 40);
+  const std::unique_ptr<Renderer> rp = testRenderer();
+  LightingDesc ld;
+  for (double E : { E1, E2, 0.0 })
+  {
+    LightDesc light;
+    light.vector[0] = 0;
+    light.vector[1] = 0;
+    light.vector[2] = 1;
+    light.intensity = E;
+    ld.lights.push_back(light);
+  }
+  ld.albedo = { 1.f };
+  ld.anisotropy = { 0.f };
+  ld.sampleOneLight = true;
+  scene.setLighting(ld);
+  RenderCounters c;
+  const MeanSE R = pixelStatistic(
+    *rp, scene, cam, 64, [](float x, float, float, float) { return double(x); }, &c);
+  const double p = 1.0 / (4.0 * M_PI);
+  const double expectR = (E1 + E2) * p * (1.0 - std::exp(-2.0 * sigma * L)) / 2.0;
+  std::printf("one light of three: R %.5f +- %.5f (expected %.5f)\n", R.mean, R.se, expectR);
+  EXPECT_GT(normalTwoSided((R.mean - expectR) / R.se), alpha) << "R " << R.mean << " expected " << expectR;
+  EXPECT_GT(c.scatteringEvents, 0u);
+  EXPECT_EQ(c.shadowRays, c.scatteringEvents) << "one shadow ray per scattering event, whatever the lights";
+  ld.sampleOneLight = false;
+  scene.setLighting(ld);
+  RenderCounters all;
+  pixelStatistic(*rp, scene, cam, 4, [](float x, float, float, float) { return double(x); }, &all);
+  EXPECT_EQ(all.shadowRays, 3 * all.scatteringEvents) << "every light: one shadow ray each";
+}
+
 // White furnace: an albedo-1 white medium under uniform ambient radiance A,
 // with multiple scattering, returns A wherever the camera ray collides:
 // E[R - A alpha] = 0 (z-test, 2 scenes).

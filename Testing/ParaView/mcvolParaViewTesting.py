@@ -147,6 +147,8 @@ def show(source, view):
     rep.SamplesPerRender = 8
     rep.InteractiveFrameTime = 0  # fixed batches: the tests count samples
     rep.MaximumTotalSamples = 32
+    rep.TargetError = 0  # the tests count samples to the cap
+    rep.ProgressAnnotation = 0  # the baselines are of the volume alone
     return rep
 
 

@@ -97,6 +97,12 @@ struct LightingDesc
   int maxDepth = 1;          ///< scattering events per path (1 = single scattering)
   bool gradientShading = false;
   float shininess = 32.f;
+  /// Next-event estimation towards one light per scattering event, chosen
+  /// with probability proportional to its radiance (r + g + b of colour
+  /// times intensity) and weighted by 1 / probability: the same expectation
+  /// as sampling every light, for one shadow ray instead of one per light.
+  /// False (default): every light, one shadow ray each.
+  bool sampleOneLight = false;
 };
 
 /**

@@ -343,7 +343,24 @@ MCVOL_HOT Vec4f traceLitSample(const SceneView& s, Tracker tracker, Vec3f o, Vec
       grad = extinctionGradient<Mode>(s, s.active, s.numActive, x, c);
       gradLen = length(grad);
     }
-    for (int l = 0; l < L.numLights; ++l)
+    // Every light, or one chosen by its share of the radiance and weighted
+    // by the inverse of that share (the same expectation, one shadow ray).
+    int lightBegin = 0;
+    int lightEnd = L.numLights;
+    float lightWeight = 1.f;
+    if (L.sampleOneLight)
+    {
+      const float u = rng.next();
+      int pick = 0;
+      while (pick + 1 < L.numLights && !(u < L.lightCdf[pick]))
+      {
+        ++pick;
+      }
+      lightBegin = pick;
+      lightEnd = L.lightPdf[pick] > 0.f ? pick + 1 : pick;
+      lightWeight = L.lightPdf[pick] > 0.f ? 1.f / L.lightPdf[pick] : 0.f;
+    }
+    for (int l = lightBegin; l < lightEnd; ++l)
     {
       Vec3f wl, dl;
       float dist = 3.4e38f;
@@ -377,7 +394,7 @@ MCVOL_HOT Vec4f traceLitSample(const SceneView& s, Tracker tracker, Vec3f o, Vec
         ++c.shadowRays;
         T = optimizedShadow<Mode>(s, x, dl, minf(boxExit(s.volume, x, dl), dist), est, rng, sc);
       }
-      radiance += throughput * L.lightRadiance[l] * (f * T * falloff);
+      radiance += throughput * L.lightRadiance[l] * (f * T * falloff * lightWeight);
     }
     if (L.ambient.x > 0.f || L.ambient.y > 0.f || L.ambient.z > 0.f)
     {

@@ -104,6 +104,14 @@ struct LightingView
   int lightType[kMaxLights];       ///< 0: directional, 1: point
   Vec3f lightVector[kMaxLights];   ///< directional: unit world direction towards the light; point: world position
   Vec3f lightRadiance[kMaxLights]; ///< colour times intensity (point lights: at unit distance)
+  /// Next-event estimation towards one light per scattering event
+  /// (LightingDesc::sampleOneLight, with more than one light): light l is
+  /// the first whose lightCdf[l] exceeds a uniform number, and is weighted
+  /// by 1 / lightPdf[l]. Lights of zero radiance have lightPdf 0 and are
+  /// never chosen; the last light with radiance has lightCdf 1.
+  bool sampleOneLight = false;
+  float lightCdf[kMaxLights];
+  float lightPdf[kMaxLights];
   Vec3f ambient;                   ///< radiance arriving from every direction (an environment)
   float albedo[kMaxChannels];      ///< share of a channel's real collisions that scatter
   float anisotropy[kMaxChannels];  ///< Henyey-Greenstein g per channel
