@@ -31,6 +31,14 @@ bool FindChannelArrays(vtkImageData* image, const ChannelSelection& selection, B
       vtkDataArray* array = image->GetPointData()->GetArray(name.c_str());
       if (!array)
       {
+        vtkAbstractArray* other = image->GetPointData()->GetAbstractArray(name.c_str());
+        if (other)
+        {
+          error << "Channel array \"" << name << "\" is a point array of " << other->GetClassName()
+                << ", which holds no numbers; a channel needs a numeric array ("
+                << "unsigned char, short, unsigned short, float or double).";
+          return false;
+        }
         error << "Channel array \"" << name << "\" is not a point data array of the input.";
         return false;
       }
