@@ -11,6 +11,8 @@ MCVOL_PACKAGES=(
   qtbase5-dev qttools5-dev libqt5svg5-dev libqt5x11extras5-dev libqt5opengl5-dev
   # tests: an X server for OpenGL, GoogleTest sources, numpy/matplotlib/scikit-image
   xvfb xauth googletest python3-numpy python3-matplotlib python3-skimage python3-tifffile
+  # the scene parser's and readers' fuzz test (Testing/Python/TestFuzzScenes.py)
+  python3-hypothesis
   # real data for the gallery test (TestGallery, TestReaders): brain templates and atlases (16 MB)
   mricron-data
   # ParaView's VTK links VTK::glew and VTK::tiff through these -dev packages' targets
