@@ -29,6 +29,7 @@ import numpy as np
 try:
     from hypothesis import HealthCheck, Phase, given, settings
     from hypothesis import strategies as st
+    from hypothesis.configuration import set_hypothesis_home_dir
 except ImportError:
     print("python3-hypothesis is not installed (scripts/deps.sh installs it)")
     sys.exit(125)
@@ -51,6 +52,9 @@ PRESETS = Presets(os.path.join(TOP, "Data", "presets.json"))
 EXAMPLE_LIMIT = 10
 
 t = Checker()
+# Hypothesis keeps caches in a folder: a temporary one, not the source tree.
+hypothesis_home = tempfile.mkdtemp(prefix="mcvol-hypothesis-")
+set_hypothesis_home_dir(hypothesis_home)
 
 
 class Hang(Exception):
@@ -159,13 +163,13 @@ fuzz_settings = dict(derandomize=True, deadline=None, database=None, phases=[Pha
                      suppress_health_check=list(HealthCheck))
 
 
-@settings(max_examples=600, **fuzz_settings)
+@settings(max_examples=400, **fuzz_settings)
 @given(st.integers(0, len(BASE_SCENES) - 1), st.lists(edit, min_size=1, max_size=4))
 def fuzz_mutated_scenes(index, edits):
     record_scene("mutated scene", mutate(BASE_SCENES[index], edits))
 
 
-@settings(max_examples=300, **fuzz_settings)
+@settings(max_examples=200, **fuzz_settings)
 @given(json_values)
 def fuzz_free_scenes(value):
     record_scene("free-form scene", value)
@@ -333,7 +337,7 @@ def apply_bytes(data, edits, cut):
     return bytes(b)
 
 
-@settings(max_examples=900, **fuzz_settings)
+@settings(max_examples=700, **fuzz_settings)
 @given(st.sampled_from(NAMES), st.lists(byte_edit, min_size=1, max_size=6), st.one_of(st.none(), st.integers(0, 10**6)))
 def fuzz_files(name, edits, cut):
     record_file("mutated", name, apply_bytes(BASE_FILES[name][0], edits, cut))
@@ -348,6 +352,7 @@ print("files: %s" % dict(sorted(file_outcomes.items())))
 for name in NAMES:
     t.check(file_outcomes.get("%s error" % name, 0) > 0, "%s: some mutations are refused with a message" % name)
 
+shutil.rmtree(hypothesis_home, ignore_errors=True)
 if t.failures:
     print("failing inputs kept in", work)
 else:
