@@ -4,8 +4,9 @@
 //   mcvol-soak precision [--max-log2 N]     the running mean (Integrator.h,
 //       accumulate) fed batches of known samples, against the same mean in
 //       double: its error at every power of two up to 2^N samples per pixel,
-//       for batches of 8, 64 and 4096 samples; and the same for the formula
-//       mcvol used before (the mean scaled by previous / n, rounded)
+//       for batches of 8, 64 and 4096 samples ("scaled": mcvol's mean *
+//       previous / n + sum / n), and the same for the alternative that moves
+//       the mean by its rounded correction ("correction")
 //   mcvol-soak render [--spp N] [--size WxH]     a progressive CPU render of
 //       figure3 on a small image to N samples per pixel (default 2^20), twice
 //       with different seeds: at every power of two, the RMS difference of
@@ -61,7 +62,7 @@ int Precision(int maxLog2)
 {
   std::printf("section,formula,batch,samples,float_mean,double_mean,abs_error,error_in_float_ulps\n");
   for (int batch : { 8, 64, 4096 })
-  for (bool previousFormula : { false, true })
+  for (bool correction : { false, true })
   {
     float rgba[4] = { 0, 0, 0, 0 };
     double exact = 0.0;
@@ -80,13 +81,12 @@ int Precision(int maxLog2)
       const float f = static_cast<float>(sum);
       mcvol::Vec4f s;
       s.r = s.g = s.b = s.a = f;
-      if (previousFormula)
+      if (correction)
       {
-        // The running mean as mcvol scaled it before: mean * previous / n
-        // + sum / n, for comparison.
+        // The alternative: the mean moved by its rounded correction,
+        // (sum - batch * mean) / n.
         const float inv = 1.f / float(n + batch);
-        const float keep = float(n) * inv;
-        rgba[0] = rgba[0] * keep + s.r * inv;
+        rgba[0] += (s.r - float(batch) * rgba[0]) * inv;
       }
       else
       {
@@ -99,7 +99,7 @@ int Precision(int maxLog2)
       {
         const double err = std::abs(double(rgba[0]) - exact);
         const double ulp = std::nextafter(float(exact), 2.f) - float(exact);
-        std::printf("precision,%s,%d,%llu,%.9f,%.9f,%.3g,%.1f\n", previousFormula ? "scaled" : "correction", batch, n,
+        std::printf("precision,%s,%d,%llu,%.9f,%.9f,%.3g,%.1f\n", correction ? "correction" : "scaled", batch, n,
           double(rgba[0]), exact, err, err / ulp);
         nextLog2 += 2;
       }

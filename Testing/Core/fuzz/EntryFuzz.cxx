@@ -6,6 +6,7 @@
 #include "mcvol/ray/DDA.h"
 #include "mcvol/ray/RayGen.h"
 
+#include <cfloat>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -237,7 +238,8 @@ void RunOne(const uint8_t* data, size_t size)
       lo[a] = g.lo[a];
       hi[a] = g.lo[a] + float(g.dims[a]) * g.cellSize[a];
     }
-    if (intersectBox(lo, hi, o, d, t0, t1))
+    // The DDA's contract: a finite end (generateRay gives no other).
+    if (intersectBox(lo, hi, o, d, t0, t1) && t1 <= FLT_MAX)
     {
       Walk(g, o, d, t0, t1);
     }

@@ -128,13 +128,6 @@ struct DDA
     {
       a = 2;
     }
-    if (this->step[a] == 0)
-    {
-      // No axis to step along (a zero or NaN direction): the ray never
-      // leaves its cell, whatever tEnd is (an infinite one included).
-      this->done = true;
-      return false;
-    }
     this->cell[a] += this->step[a];
     if (this->cell[a] < 0 || this->cell[a] >= this->Dims[a])
     {

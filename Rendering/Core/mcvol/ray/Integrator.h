@@ -186,29 +186,14 @@ MCVOL_FUNC uint32_t addedEvenSamples(uint32_t previous, int added)
 }
 
 /// Folds a render's per-pixel sum into the running mean of `previous` samples.
-/// The mean moves by its correction, (sum - added * mean) / (previous +
-/// added): only the correction is rounded, so the mean keeps converging past
-/// 2^24 samples. (Scaling the mean by previous / (previous + added), rounded
-/// to a float near 1, drifts: with batches of 8 samples it was 5e-4 off at
-/// 2^20 samples per pixel, against 1.3e-6 now; mcvol-soak precision,
-/// Documentation/user-guide/numerical-limits.md.) The first render writes
-/// the mean without reading what the pixel held.
 MCVOL_FUNC void accumulate(float* rgba, const Vec4f& sum, uint32_t previous, int added)
 {
   const float inv = 1.f / float(previous + uint32_t(added));
-  if (previous == 0u)
-  {
-    rgba[0] = sum.r * inv;
-    rgba[1] = sum.g * inv;
-    rgba[2] = sum.b * inv;
-    rgba[3] = sum.a * inv;
-    return;
-  }
-  const float k = float(added);
-  rgba[0] += (sum.r - k * rgba[0]) * inv;
-  rgba[1] += (sum.g - k * rgba[1]) * inv;
-  rgba[2] += (sum.b - k * rgba[2]) * inv;
-  rgba[3] += (sum.a - k * rgba[3]) * inv;
+  const float keep = float(previous) * inv;
+  rgba[0] = rgba[0] * keep + sum.r * inv;
+  rgba[1] = rgba[1] * keep + sum.g * inv;
+  rgba[2] = rgba[2] * keep + sum.b * inv;
+  rgba[3] = rgba[3] * keep + sum.a * inv;
 }
 
 /// Folds a render's even-sample sum into the even half's running mean
