@@ -49,7 +49,7 @@ list(TRANSFORM _mcvol_stage_sources PREPEND "${_mcvol_rendering_dir}/VTK/")
 set(_mcvol_stage_headers ${_mcvol_stage_sources})
 list(TRANSFORM _mcvol_stage_sources APPEND ".cxx")
 list(TRANSFORM _mcvol_stage_headers APPEND ".h")
-list(APPEND _mcvol_stage_headers "${_mcvol_rendering_dir}/VTK/ScalarTypeMap.h")
+list(APPEND _mcvol_stage_headers "${_mcvol_rendering_dir}/VTK/ScalarTypeMap.h" "${_mcvol_rendering_dir}/VTK/Settings.h")
 
 vtk_module_add_module(mcvol::RenderingMonteCarlo
   CLASSES ${classes}

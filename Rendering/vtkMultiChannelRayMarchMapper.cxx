@@ -3,6 +3,7 @@
 
 #include "vtkObjectFactory.h"
 
+#include "VTK/Settings.h"
 #include "mcvol/MarchSetup.h"
 #include "mcvol/ray/RayMarch.h"
 #include "mcvol/Renderer.h"
@@ -85,4 +86,16 @@ void vtkMultiChannelRayMarchMapper::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "TerminationTransmittance: " << this->TerminationTransmittance << "\n";
   os << indent << "EmptySpaceSkipping: " << this->EmptySpaceSkipping << "\n";
   os << indent << "CompositingModel: " << this->GetCompositingModelAsString() << "\n";
+}
+
+//------------------------------------------------------------------------------
+void vtkMultiChannelRayMarchMapper::SetStepSize(double value)
+{
+  mcvol::adapter::SetClamped(this, "SetStepSize", value, 0.0, VTK_DOUBLE_MAX, this->StepSize);
+}
+
+//------------------------------------------------------------------------------
+void vtkMultiChannelRayMarchMapper::SetTerminationTransmittance(double value)
+{
+  mcvol::adapter::SetClamped(this, "SetTerminationTransmittance", value, 0.0, 0.999, this->TerminationTransmittance);
 }

@@ -66,7 +66,8 @@ public:
    * the Nyquist rate of the paper: half the smallest voxel spacing.
    * GetLastStepSize() gives the step the last render used.
    */
-  vtkSetClampMacro(StepSize, double, 0.0, VTK_DOUBLE_MAX);
+  /// Clamped to [0.0, VTK_DOUBLE_MAX]; NaN is an error (the value stays).
+  virtual void SetStepSize(double value);
   vtkGetMacro(StepSize, double);
   vtkGetMacro(LastStepSize, double);
   ///@}
@@ -89,7 +90,8 @@ public:
    * most this much per pixel and component (composite blending: this much per
    * channel). 0 disables it.
    */
-  vtkSetClampMacro(TerminationTransmittance, double, 0.0, 0.999);
+  /// Clamped to [0.0, 0.999]; NaN is an error (the value stays).
+  virtual void SetTerminationTransmittance(double value);
   vtkGetMacro(TerminationTransmittance, double);
   ///@}
 

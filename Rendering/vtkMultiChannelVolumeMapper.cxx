@@ -25,6 +25,7 @@
 #include "VTK/FrameCompositor.h"
 #include "VTK/LevelOfDetail.h"
 #include "VTK/RenderBackend.h"
+#include "VTK/Settings.h"
 #include "VTK/TransferFunctionTables.h"
 #include "VTK/View.h"
 
@@ -143,6 +144,8 @@ struct vtkMultiChannelVolumeMapper::vtkInternals
   ChoiceKey ChoiceMadeFor;
   mcvol::EstimatorChoice Choice;
   std::string ChoiceReport = "no automatic choice made yet";
+  // The last CheckScale error GetBounds() reported (each cause once).
+  std::string ScaleError;
   std::string ChosenEstimator = "none"; // backing store of GetChosenEstimatorAsString
   int Choices = 0;                      // choices that rendered pilots
   // This render's batch was rendered during the choice's pilots and kept
@@ -940,6 +943,15 @@ double* vtkMultiChannelVolumeMapper::GetBounds()
       this->Bounds[2 * a + 1] = std::max(this->Bounds[2 * a + 1], xyz[a]);
     }
   }
+  // A volume VTK's camera cannot show is culled before Render() could say
+  // why: say it here, once per cause.
+  std::string error;
+  if (!mcvol::adapter::CheckScale(image->GetSpacing(), this->Bounds, error) &&
+    error != this->Internals->ScaleError)
+  {
+    vtkErrorMacro(<< error);
+  }
+  this->Internals->ScaleError = error;
   return this->Bounds;
 }
 
@@ -1169,6 +1181,14 @@ bool vtkMultiChannelVolumeMapper::UpdateScene(RenderPass& pass)
       // Visibility optimization: importance over the colour tables' ranges
       // (before the levels, which key on the tables' version).
       in.Tables.UpdateImportance(in.Functions, numChannels);
+      if (this->LastTransferFunctionUpdates > 0)
+      {
+        const std::string empty = in.Tables.EmptyFunctions(numChannels);
+        if (!empty.empty())
+        {
+          vtkWarningMacro(<< empty);
+        }
+      }
     }
 
     // Level 0 renders the Scene of the data; a level L > 0 its own Scene of
@@ -1432,6 +1452,12 @@ bool vtkMultiChannelVolumeMapper::SetUpView(RenderPass& pass)
   {
     vtkErrorMacro("vtkMultiChannelVolumeMapper draws with OpenGL and needs a "
                   "vtkOpenGLRenderWindow.");
+    return false;
+  }
+  // GetBounds() checks the volume's scale and reports a problem once.
+  this->GetBounds();
+  if (!this->Internals->ScaleError.empty())
+  {
     return false;
   }
   std::string error;
@@ -1804,5 +1830,97 @@ void vtkMultiChannelVolumeMapper::PrintSelf(ostream& os, vtkIndent indent)
       os << indent << "Channel " << c << ": Color " << f.Colors[c].Get() << ", ScalarOpacity " << f.Opacities[c].Get()
          << ", ScalarOpacityUnitDistance " << f.UnitDistances[c] << "\n";
     }
+  }
+}
+
+//------------------------------------------------------------------------------
+void vtkMultiChannelVolumeMapper::SetInteractiveUpdateRate(double value)
+{
+  mcvol::adapter::SetClamped(this, "SetInteractiveUpdateRate", value, 0.0, VTK_DOUBLE_MAX, this->InteractiveUpdateRate);
+}
+
+//------------------------------------------------------------------------------
+void vtkMultiChannelVolumeMapper::SetMinimumSamplesPerVoxel(double value)
+{
+  mcvol::adapter::SetClamped(this, "SetMinimumSamplesPerVoxel", value, 0.0, 1e6, this->MinimumSamplesPerVoxel);
+}
+
+//------------------------------------------------------------------------------
+void vtkMultiChannelVolumeMapper::SetMarchSamplesPerVoxel(double value)
+{
+  mcvol::adapter::SetClamped(this, "SetMarchSamplesPerVoxel", value, 0.01, 1024.0, this->MarchSamplesPerVoxel);
+}
+
+//------------------------------------------------------------------------------
+void vtkMultiChannelVolumeMapper::SetInteractiveFrameTime(double value)
+{
+  mcvol::adapter::SetClamped(this, "SetInteractiveFrameTime", value, 0.0, 3600.0, this->InteractiveFrameTime);
+}
+
+//------------------------------------------------------------------------------
+void vtkMultiChannelVolumeMapper::SetTargetError(double value)
+{
+  mcvol::adapter::SetClamped(this, "SetTargetError", value, 0.0, VTK_DOUBLE_MAX, this->TargetError);
+}
+
+//------------------------------------------------------------------------------
+void vtkMultiChannelVolumeMapper::SetShininess(double value)
+{
+  mcvol::adapter::SetClamped(this, "SetShininess", value, 0.0, 1e4, this->Shininess);
+}
+
+//------------------------------------------------------------------------------
+void vtkMultiChannelVolumeMapper::SetDeviationWeight(double value)
+{
+  mcvol::adapter::SetClamped(this, "SetDeviationWeight", value, 1e-6, 1e12, this->DeviationWeight);
+}
+
+//------------------------------------------------------------------------------
+void vtkMultiChannelVolumeMapper::SetOcclusionWeight(double value)
+{
+  mcvol::adapter::SetClamped(this, "SetOcclusionWeight", value, 0.0, 1e12, this->OcclusionWeight);
+}
+
+//------------------------------------------------------------------------------
+void vtkMultiChannelVolumeMapper::SetClutterWeight(double value)
+{
+  mcvol::adapter::SetClamped(this, "SetClutterWeight", value, 0.0, 1e12, this->ClutterWeight);
+}
+
+//------------------------------------------------------------------------------
+void vtkMultiChannelVolumeMapper::SetImportanceEmphasis(double value)
+{
+  mcvol::adapter::SetClamped(this, "SetImportanceEmphasis", value, 0.0, 1e3, this->ImportanceEmphasis);
+}
+
+//------------------------------------------------------------------------------
+void vtkMultiChannelVolumeMapper::SetImportanceMergeDistance(double value)
+{
+  mcvol::adapter::SetClamped(this, "SetImportanceMergeDistance", value, 0.0, 1e6, this->ImportanceMergeDistance);
+}
+
+//------------------------------------------------------------------------------
+void vtkMultiChannelVolumeMapper::SetMemoryBudget(double value)
+{
+  mcvol::adapter::SetClamped(this, "SetMemoryBudget", value, 0.0, VTK_DOUBLE_MAX, this->MemoryBudget);
+}
+
+//------------------------------------------------------------------------------
+void vtkMultiChannelVolumeMapper::SetAmbientRadiance(double r, double g, double b)
+{
+  const double rgb[3] = { r, g, b };
+  for (double v : rgb)
+  {
+    if (!(v >= 0.0) || !std::isfinite(v))
+    {
+      vtkErrorMacro("SetAmbientRadiance: (" << r << ", " << g << ", " << b
+                                            << ") must be finite and >= 0; the radiance stays.");
+      return;
+    }
+  }
+  if (this->AmbientRadiance[0] != r || this->AmbientRadiance[1] != g || this->AmbientRadiance[2] != b)
+  {
+    std::copy(rgb, rgb + 3, this->AmbientRadiance);
+    this->Modified();
   }
 }

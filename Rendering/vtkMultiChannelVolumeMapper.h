@@ -262,7 +262,8 @@ public:
    */
   void SetInteractiveRendering(int mode) { this->InteractiveRendering = mode < -1 ? -1 : (mode > 1 ? 1 : mode); }
   vtkGetMacro(InteractiveRendering, int);
-  vtkSetClampMacro(InteractiveUpdateRate, double, 0.0, VTK_DOUBLE_MAX);
+  /// Clamped to [0.0, VTK_DOUBLE_MAX]; NaN is an error (the value stays).
+  virtual void SetInteractiveUpdateRate(double value);
   vtkGetMacro(InteractiveUpdateRate, double);
   /// Whether the last render was interactive (see SetInteractiveRendering).
   vtkGetMacro(LastRenderInteractive, bool);
@@ -298,7 +299,8 @@ public:
    * effect on the collision estimator. A change
    * restarts the progressive image.
    */
-  vtkSetClampMacro(MinimumSamplesPerVoxel, double, 0.0, 1e6);
+  /// Clamped to [0.0, 1e6]; NaN is an error (the value stays).
+  virtual void SetMinimumSamplesPerVoxel(double value);
   vtkGetMacro(MinimumSamplesPerVoxel, double);
   ///@}
 
@@ -311,7 +313,8 @@ public:
    * on the other
    * estimators. A change restarts the progressive image.
    */
-  vtkSetClampMacro(MarchSamplesPerVoxel, double, 0.01, 1024.0);
+  /// Clamped to [0.01, 1024.0]; NaN is an error (the value stays).
+  virtual void SetMarchSamplesPerVoxel(double value);
   vtkGetMacro(MarchSamplesPerVoxel, double);
   ///@}
 
@@ -389,7 +392,8 @@ public:
    * rounding of the running mean. GetLastSamplesPerRender() gives the last
    * batch. The budget covers tracing, not drawing or uploads.
    */
-  vtkSetClampMacro(InteractiveFrameTime, double, 0.0, 3600.0);
+  /// Clamped to [0.0, 3600.0]; NaN is an error (the value stays).
+  virtual void SetInteractiveFrameTime(double value);
   vtkGetMacro(InteractiveFrameTime, double);
   vtkGetMacro(LastSamplesPerRender, int);
   ///@}
@@ -476,7 +480,8 @@ public:
    * still caps the total (whichever comes first). 0 (the default): off.
    * Like every mapper parameter, a new value restarts the image.
    */
-  vtkSetClampMacro(TargetError, double, 0.0, VTK_DOUBLE_MAX);
+  /// Clamped to [0.0, VTK_DOUBLE_MAX]; NaN is an error (the value stays).
+  virtual void SetTargetError(double value);
   vtkGetMacro(TargetError, double);
   ///@}
 
@@ -585,7 +590,10 @@ public:
   void SetChannelAnisotropy(int channel, double g);
   double GetChannelAnisotropy(int channel);
   /// Environment radiance arriving from every direction (default 0.2 grey).
-  vtkSetVector3Macro(AmbientRadiance, double);
+  /// Each component finite and >= 0; anything else (NaN, Inf, negative) is
+  /// refused with an error and the radiance stays.
+  virtual void SetAmbientRadiance(double r, double g, double b);
+  virtual void SetAmbientRadiance(const double rgb[3]) { this->SetAmbientRadiance(rgb[0], rgb[1], rgb[2]); }
   vtkGetVector3Macro(AmbientRadiance, double);
   enum ShadowModes
   {
@@ -602,7 +610,8 @@ public:
   vtkSetMacro(GradientShading, bool);
   vtkGetMacro(GradientShading, bool);
   vtkBooleanMacro(GradientShading, bool);
-  vtkSetClampMacro(Shininess, double, 0.0, 1e4);
+  /// Clamped to [0.0, 1e4]; NaN is an error (the value stays).
+  virtual void SetShininess(double value);
   vtkGetMacro(Shininess, double);
   ///@}
 
@@ -722,20 +731,25 @@ public:
   void SetChannelImportance(int channel, vtkPiecewiseFunction* importance);
   vtkPiecewiseFunction* GetChannelImportance(int channel);
   /// p: deviation from the data's extinction (> 0, default 1).
-  vtkSetClampMacro(DeviationWeight, double, 1e-6, 1e12);
+  /// Clamped to [1e-6, 1e12]; NaN is an error (the value stays).
+  virtual void SetDeviationWeight(double value);
   vtkGetMacro(DeviationWeight, double);
   /// q: occlusion by what lies in front (default 70).
-  vtkSetClampMacro(OcclusionWeight, double, 0.0, 1e12);
+  /// Clamped to [0.0, 1e12]; NaN is an error (the value stays).
+  virtual void SetOcclusionWeight(double value);
   vtkGetMacro(OcclusionWeight, double);
   /// r: clutter behind (default 30).
-  vtkSetClampMacro(ClutterWeight, double, 0.0, 1e12);
+  /// Clamped to [0.0, 1e12]; NaN is an error (the value stays).
+  virtual void SetClutterWeight(double value);
   vtkGetMacro(ClutterWeight, double);
   /// lambda: emphasis of important regions (default 1).
-  vtkSetClampMacro(ImportanceEmphasis, double, 0.0, 1e3);
+  /// Clamped to [0.0, 1e3]; NaN is an error (the value stays).
+  virtual void SetImportanceEmphasis(double value);
   vtkGetMacro(ImportanceEmphasis, double);
   /// Merge distance d of the per-ray segment lists, in the same units
   /// (0, the default: two strata of a pass).
-  vtkSetClampMacro(ImportanceMergeDistance, double, 0.0, 1e6);
+  /// Clamped to [0.0, 1e6]; NaN is an error (the value stays).
+  virtual void SetImportanceMergeDistance(double value);
   vtkGetMacro(ImportanceMergeDistance, double);
   /// Stratified importance samples per camera ray and refinement pass
   /// (1-64, default 32); the first 4 renders of an image refine.
@@ -891,7 +905,8 @@ public:
    * queried (the backend API has no call for it): set the budget to what
    * the device can hold.
    */
-  vtkSetClampMacro(MemoryBudget, double, 0.0, VTK_DOUBLE_MAX);
+  /// Clamped to [0.0, VTK_DOUBLE_MAX]; NaN is an error (the value stays).
+  virtual void SetMemoryBudget(double value);
   vtkGetMacro(MemoryBudget, double);
   ///@}
 

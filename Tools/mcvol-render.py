@@ -92,8 +92,17 @@ def default_presets_file():
     return os.path.join(os.path.dirname(here), "Data", "presets.json")
 
 
+class OneLineParser(argparse.ArgumentParser):
+    """Argument errors on one line, as every other user error (the usage is
+    in --help)."""
+
+    def error(self, message):
+        print("%s: %s (%s --help shows the options)" % (self.prog, message, self.prog), file=sys.stderr)
+        sys.exit(2)
+
+
 def main(argv=None):
-    parser = argparse.ArgumentParser(
+    parser = OneLineParser(
         prog=PROG,
         description="Renders a multi-channel volume scene file with vtkMultiChannelVolumeMapper "
         "(Monte Carlo, multi-density Woodcock tracking). Scene format: Documentation/scene-format.md.",
@@ -175,6 +184,8 @@ def main(argv=None):
             continue
         if opt != "-o" and not fn.lower().endswith(".pfm"):
             parser.error("%s: expected a .pfm file name, got '%s'" % (opt, fn))
+        if os.path.isdir(fn):
+            parser.error("%s: '%s' is a folder; give a file name" % (opt, fn))
         folder = os.path.dirname(os.path.abspath(fn))
         if not os.path.isdir(folder):
             parser.error("%s: folder does not exist: %s" % (opt, folder))
@@ -206,6 +217,10 @@ def main(argv=None):
             data = json.loads(text)
         except ValueError as e:
             print("%s: invalid JSON: %s" % (name, e), file=sys.stderr)
+            return 2
+        except RecursionError:
+            print("%s: invalid scene: arrays or objects nested deeper than Python can read (a scene needs a few "
+                  "levels)" % name, file=sys.stderr)
             return 2
 
     log = (lambda msg: None) if args.quiet else (lambda msg: print(msg, file=sys.stderr))

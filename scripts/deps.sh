@@ -13,6 +13,8 @@ MCVOL_PACKAGES=(
   xvfb xauth googletest python3-numpy python3-matplotlib python3-skimage python3-tifffile
   # OME-Zarr input (mcvol.omezarr decodes with numcodecs; the tests write with zarr)
   python3-zarr
+  # the scene parser's and readers' fuzz test (Testing/Python/TestFuzzScenes.py)
+  python3-hypothesis
   # real data for the gallery test (TestGallery, TestReaders): brain templates and atlases (16 MB)
   mricron-data
   # ParaView's VTK links VTK::glew and VTK::tiff through these -dev packages' targets

@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "Accumulation.h"
 
+#include "vtkMatrix4x4.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -11,12 +13,43 @@ namespace mcvol
 namespace adapter
 {
 //------------------------------------------------------------------------------
+bool SameRays(const double a[16], const double b[16], int width, int height)
+{
+  if (std::equal(a, a + 16, b))
+  {
+    return true;
+  }
+  double bInverse[16];
+  vtkMatrix4x4::Invert(b, bInverse);
+  for (int corner = 0; corner < 8; ++corner)
+  {
+    const double ndc[4] = { corner & 1 ? 1.0 : -1.0, corner & 2 ? 1.0 : -1.0, corner & 4 ? 1.0 : -1.0, 1.0 };
+    double world[4];
+    vtkMatrix4x4::MultiplyPoint(a, ndc, world);
+    double back[4];
+    vtkMatrix4x4::MultiplyPoint(bInverse, world, back);
+    if (!(back[3] != 0.0) || !std::isfinite(back[3]))
+    {
+      return false;
+    }
+    const double dx = (back[0] / back[3] - ndc[0]) * 0.5 * width;
+    const double dy = (back[1] / back[3] - ndc[1]) * 0.5 * height;
+    const double dz = back[2] / back[3] - ndc[2];
+    if (!(std::abs(dx) <= kSameRayPixels && std::abs(dy) <= kSameRayPixels && std::abs(dz) <= kSameRayDepth))
+    {
+      return false;
+    }
+  }
+  return true;
+}
+
+//------------------------------------------------------------------------------
 bool AccumulationKey::operator==(const AccumulationKey& o) const
 {
   return this->MapperMTime == o.MapperMTime && this->TablesVersion == o.TablesVersion &&
     this->PropertyMTime == o.PropertyMTime && this->DataMTime == o.DataMTime && this->LightsMTime == o.LightsMTime &&
     this->Width == o.Width && this->Height == o.Height &&
-    std::equal(std::begin(this->InvViewProj), std::end(this->InvViewProj), std::begin(o.InvViewProj)) &&
+    SameRays(this->InvViewProj, o.InvViewProj, this->Width, this->Height) &&
     std::equal(std::begin(this->WorldToIndex), std::end(this->WorldToIndex), std::begin(o.WorldToIndex)) &&
     this->Backend == o.Backend && this->Level == o.Level && this->LevelVersion == o.LevelVersion &&
     this->InteractiveEstimator == o.InteractiveEstimator;

@@ -42,6 +42,21 @@ struct AccumulationKey
   bool operator==(const AccumulationKey& o) const;
 };
 
+/**
+ * Whether the cameras of two NDC -> world matrices (AccumulationKey::
+ * InvViewProj) trace the same rays in a width x height image: the corners of
+ * the view frustum of `a`, projected by `b`, land within kSameRayPixels of
+ * where they are in `a` and within kSameRayDepth in NDC depth. Cameras set
+ * by different routes to the same view differ in the last bits
+ * (vtkWindowToImageFilter's re-render recomputes the view angle through a
+ * truncated pi: a relative 3e-8); such a difference moves no ray visibly and
+ * keeps the image. Each render compares with the camera the image was
+ * started with, so many small moves add up to a restart.
+ */
+constexpr double kSameRayPixels = 1e-3;
+constexpr double kSameRayDepth = 1e-6;
+bool SameRays(const double a[16], const double b[16], int width, int height);
+
 /// The key of the image being accumulated, and the depth it was traced
 /// against.
 class Accumulation

@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <sstream>
 
 namespace mcvol
@@ -30,6 +31,14 @@ bool FindChannelArrays(vtkImageData* image, const ChannelSelection& selection, B
       vtkDataArray* array = image->GetPointData()->GetArray(name.c_str());
       if (!array)
       {
+        vtkAbstractArray* other = image->GetPointData()->GetAbstractArray(name.c_str());
+        if (other)
+        {
+          error << "Channel array \"" << name << "\" is a point array of " << other->GetClassName()
+                << ", which holds no numbers; a channel needs a numeric array ("
+                << "unsigned char, short, unsigned short, float or double).";
+          return false;
+        }
         error << "Channel array \"" << name << "\" is not a point data array of the input.";
         return false;
       }
@@ -100,6 +109,34 @@ bool BindChannel(
   source.stride = array->GetNumberOfComponents();
   return true;
 }
+
+// A 64-bit digest of each channel array's bytes (FNV-1a over 8-byte words,
+// then the tail), for telling values written in place from a Modified()
+// that changed nothing. One pass over the data, as the range computation.
+std::vector<unsigned long long> DigestArrays(const BoundChannels& channels)
+{
+  std::vector<unsigned long long> out;
+  for (int c = 0; c < channels.Count; ++c)
+  {
+    vtkDataArray* array = channels.Arrays[c];
+    const auto* bytes = static_cast<const unsigned char*>(array->GetVoidPointer(0));
+    const size_t n = static_cast<size_t>(array->GetNumberOfValues()) * static_cast<size_t>(array->GetDataTypeSize());
+    unsigned long long h = 1469598103934665603ull;
+    size_t i = 0;
+    for (; i + 8 <= n; i += 8)
+    {
+      unsigned long long word;
+      std::memcpy(&word, bytes + i, 8);
+      h = (h ^ word) * 1099511628211ull;
+    }
+    for (; i < n; ++i)
+    {
+      h = (h ^ bytes[i]) * 1099511628211ull;
+    }
+    out.push_back(h);
+  }
+  return out;
+}
 } // namespace
 
 //------------------------------------------------------------------------------
@@ -133,7 +170,7 @@ bool BindChannels(vtkImageData* image, const ChannelSelection& selection, BoundC
   }
 
   out.DataMTime = 0;
-  out.ImageMTime = image->GetMTime();
+  out.ImageMTime = std::max(image->vtkObject::GetMTime(), image->GetPointData()->vtkObject::GetMTime());
   std::copy(image->GetOrigin(), image->GetOrigin() + 3, out.Geometry.begin());
   std::copy(image->GetSpacing(), image->GetSpacing() + 3, out.Geometry.begin() + 3);
   std::copy(
@@ -166,15 +203,30 @@ ChannelData::Change ChannelData::Detect(Scene& scene, vtkImageData* image, Bound
   // place (users often call image->Modified() rather than the array's).
   // Only for the same image object: a new image holding the same arrays
   // (ParaView delivers a fresh shallow copy for every parallel render)
-  // changed nothing the arrays' times would not show.
+  // changed nothing the arrays' times would not show. Such a mark is checked
+  // against the values: the first after a change of the arrays is taken as a
+  // change (nothing to compare with yet) and records a digest of the bytes;
+  // later ones change something only when the digest differs.
   const bool sameImage = this->LastImage == image;
-  const bool imageValuesChanged =
-    sameImage && channels.ImageMTime != this->ImageMTime && channels.Geometry == this->Geometry;
+  const bool marked = sameImage && !volumeChanged && channels.ImageMTime != this->ImageMTime &&
+    channels.Geometry == this->Geometry && channels.DataMTime == this->DataMTime;
+  bool imageValuesChanged = false;
+  if (marked)
+  {
+    std::vector<unsigned long long> digests = DigestArrays(channels);
+    imageValuesChanged = !this->DigestsValid || digests != this->Digests;
+    this->Digests.swap(digests);
+    this->DigestsValid = true;
+  }
+  else if (volumeChanged || channels.DataMTime != this->DataMTime)
+  {
+    this->DigestsValid = false;
+  }
   this->LastImage = image;
   const bool dataChanged = volumeChanged || channels.DataMTime != this->DataMTime || imageValuesChanged;
   this->ImageMTime = channels.ImageMTime;
   this->Geometry = channels.Geometry;
-  if (imageValuesChanged && channels.DataMTime == this->DataMTime)
+  if (imageValuesChanged)
   {
     // The arrays were not marked modified, so their cached ranges are
     // stale: mark them (what the writer should have done) and take the

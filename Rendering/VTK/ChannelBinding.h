@@ -48,6 +48,10 @@ struct BoundChannels
   /// its origin, spacing or direction do, which needs no rebuild (those reach
   /// the renderer through the camera's worldToIndex).
   vtkMTimeType DataMTime = 0;
+  /// The image's and its point data's own times (Modified() on either),
+  /// without their arrays': a writer that changed values in place may have
+  /// marked only these; so do pipeline steps that change nothing the
+  /// channels hold (ParaView's colouring sets the active scalars).
   vtkMTimeType ImageMTime = 0;
   std::array<double, 15> Geometry{}; ///< origin, spacing, direction
 };
@@ -109,8 +113,13 @@ private:
   std::array<ChannelSource, kMaxChannels> Sources{};
   std::vector<vtkSmartPointer<vtkDataArray>> Arrays; // keeps the channel data alive
   vtkMTimeType DataMTime = 0;                        // of the arrays: their values
-  vtkMTimeType ImageMTime = 0;                       // of the image: its values or its geometry
+  vtkMTimeType ImageMTime = 0;                       // the image's and point data's own
   std::array<double, 15> Geometry{};                 // origin, spacing, direction of ImageMTime
+  // A digest of the channel arrays' bytes, taken when the image was marked
+  // modified but its arrays were not: the next such mark compares with it,
+  // and a change restarts only if the values differ.
+  std::vector<unsigned long long> Digests;
+  bool DigestsValid = false;
   std::array<std::array<double, 2>, kMaxChannels> Ranges{};
   // The input image of the last render (compared, never dereferenced).
   const void* LastImage = nullptr;

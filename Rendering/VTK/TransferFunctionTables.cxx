@@ -239,5 +239,32 @@ bool TransferFunctionTables::UpdateChannel(
   ++this->TablesVersion;
   return true;
 }
+//------------------------------------------------------------------------------
+std::string TransferFunctionTables::EmptyFunctions(int numChannels) const
+{
+  std::ostringstream msg;
+  for (int c = 0; c < numChannels && c < static_cast<int>(this->Functions.size()); ++c)
+  {
+    const ChannelFunctions& f = this->Functions[size_t(c)];
+    auto* rgb = vtkColorTransferFunction::SafeDownCast(f.Color);
+    auto* gray = vtkPiecewiseFunction::SafeDownCast(f.Color);
+    const bool noColor = (rgb && rgb->GetSize() == 0) || (gray && gray->GetSize() == 0);
+    const bool noOpacity = f.Opacity && f.Opacity->GetSize() == 0;
+    if (noOpacity)
+    {
+      msg << "Channel " << c << "'s scalar opacity function has no points: the channel is transparent. ";
+    }
+    else if (noColor)
+    {
+      msg << "Channel " << c << "'s colour function has no points: the channel is black. ";
+    }
+  }
+  std::string text = msg.str();
+  if (!text.empty())
+  {
+    text += "Add points (AddPoint, AddRGBPoint) to show it.";
+  }
+  return text;
+}
 } // namespace adapter
 } // namespace mcvol

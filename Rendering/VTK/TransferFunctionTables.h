@@ -105,6 +105,11 @@ public:
   /// The Scene holds no tables any more (new volume or an error).
   void Forget();
 
+  /// The channels whose colour or opacity function has no points (a
+  /// function without points reads 0 everywhere: transparent, or black), in
+  /// words for a warning; empty when every function has a point.
+  std::string EmptyFunctions(int numChannels) const;
+
   /// The table last given to the Scene for channel c (the levels of detail
   /// pre-classify with the same tables, so level 0 and level L agree).
   const TransferFunctionDesc& Table(int c) const { return this->Tables[size_t(c)]; }

@@ -32,6 +32,38 @@ Viewport GetViewport(vtkRenderer* ren)
 }
 
 //------------------------------------------------------------------------------
+bool CheckScale(const double spacing[3], const double bounds[6], std::string& error)
+{
+  double size = 0.0, far = 0.0;
+  for (int a = 0; a < 3; ++a)
+  {
+    size = std::max(size, bounds[2 * a + 1] - bounds[2 * a]);
+    far = std::max({ far, std::abs(bounds[2 * a]), std::abs(bounds[2 * a + 1]) });
+  }
+  const double finest = std::min({ std::abs(spacing[0]), std::abs(spacing[1]), std::abs(spacing[2]) });
+  std::ostringstream msg;
+  if (!(far <= kMaximumOriginInSpacings * finest))
+  {
+    msg << "The volume lies too far from the world origin for its voxel size: its bounds reach " << far
+        << " with a smallest spacing of " << finest
+        << ", and double precision cannot place rays there within 1/64 of a voxel (at most 2^46 spacings from the "
+           "origin render). Move the image's origin (or the prop's position) closer to 0.";
+    error = msg.str();
+    return false;
+  }
+  if (!(size >= kMinimumVolumeSize))
+  {
+    msg << "The volume is " << size << " world units across: VTK's camera does not show anything smaller than "
+        << kMinimumVolumeSize
+        << " (its clipping range is at least 1e-20 thick), so nothing would be drawn. Scale the spacing up "
+           "(and the transfer functions' unit distance with it).";
+    error = msg.str();
+    return false;
+  }
+  return true;
+}
+
+//------------------------------------------------------------------------------
 bool ComputeCamera(vtkRenderer* ren, vtkVolume* vol, vtkImageData* image, const int extent[6], const Viewport& viewport,
   Camera& camera, std::string& error)
 {
@@ -43,7 +75,12 @@ bool ComputeCamera(vtkRenderer* ren, vtkVolume* vol, vtkImageData* image, const 
   vtkNew<vtkMatrix4x4> ndcToWorld;
   if (worldToNDC->Determinant() == 0.0)
   {
-    error = "The camera's projection is singular.";
+    std::ostringstream msg;
+    const double* clip = cam->GetClippingRange();
+    msg << "The camera's projection is singular (clipping range " << clip[0] << " to " << clip[1] << ", view angle "
+        << cam->GetViewAngle() << ", parallel scale " << cam->GetParallelScale()
+        << "): set a clipping range with near < far and a non-zero view angle or parallel scale.";
+    error = msg.str();
     return false;
   }
   vtkMatrix4x4::Invert(worldToNDC, ndcToWorld);

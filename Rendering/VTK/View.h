@@ -37,6 +37,20 @@ struct Viewport
 
 Viewport GetViewport(vtkRenderer* ren);
 
+/**
+ * Whether VTK's camera and double precision can place rays on the volume's
+ * voxels: the volume must be at least kMinimumVolumeSize across (VTK's camera
+ * keeps its clipping range at least 1e-20 thick and culls smaller props, so
+ * nothing would be drawn), and no farther from the world origin than
+ * kMaximumOriginInSpacings of its smallest spacing (beyond, a double cannot
+ * place a point within 1/64 of a voxel). `bounds` are the image's, as
+ * vtkMultiChannelVolumeMapper::GetBounds gives them. False with `error`
+ * saying why and what to change.
+ */
+constexpr double kMinimumVolumeSize = 1e-20;
+constexpr double kMaximumOriginInSpacings = 70368744177664.0; // 2^46
+bool CheckScale(const double spacing[3], const double bounds[6], std::string& error);
+
 /// Rays from the active camera into the image's continuous index space
 /// (voxel 0 at the extent's start). False, with `error`, for a singular
 /// camera, prop matrix, spacing or direction.

@@ -95,6 +95,11 @@ def render(dataset, mode, tracker, spp=SPP, seed=7):
     ren.GetActiveCamera().Elevation(20)
     ren.ResetCameraClippingRange()
     win.Render()
+    # The baselines hold the image that vtkWindowToImageFilter's own render
+    # traced anew (spp samples, its camera's view angle recomputed through a
+    # truncated pi, which moves a few Monte Carlo paths): start over, so that
+    # its render traces the spp samples again rather than adding a batch.
+    mapper.ResetAccumulation()
     grab = vtkWindowToImageFilter()
     grab.SetInput(win)
     grab.ReadFrontBufferOff()

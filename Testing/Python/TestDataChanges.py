@@ -100,6 +100,33 @@ def main():
             "in-place values + Modified(): %d tables rebuilt, expected 1" % mapper.GetLastTransferFunctionUpdates())
     t.check(rgba2[:, :, 3].max() < 5, "after lowering every value below the step the volume should vanish")
 
+    # The values are compared from then on: image.Modified() (or a touch of
+    # the point data, as ParaView's colouring sets the active scalars) with
+    # the values unchanged keeps the samples; values written in place again
+    # still restart.
+    vtk_to_numpy(arr)[:] += 40.0
+    img.Modified()
+    win.Render()
+    for _ in range(3):
+        win.Render()
+    before = mapper.GetTotalSamples()
+    img.Modified()
+    win.Render()
+    t.check(mapper.GetTotalSamples() == before + 4,
+            "image.Modified() with unchanged values keeps the samples (%d -> %d)" % (before, mapper.GetTotalSamples()))
+    img.GetPointData().Modified()
+    win.Render()
+    t.check(mapper.GetTotalSamples() == before + 8,
+            "a touch of the point data keeps the samples (%d -> %d)" % (before + 4, mapper.GetTotalSamples()))
+    vtk_to_numpy(arr)[0] += 1.0
+    img.Modified()
+    win.Render()
+    t.check(mapper.GetTotalSamples() == 4,
+            "one voxel written in place + image.Modified() restarts (%d)" % mapper.GetTotalSamples())
+    vtk_to_numpy(arr)[0] -= 1.0
+    img.Modified()
+    win.Render()
+
     # Zero spacing: an error, nothing drawn.
     errors.clear()
     img.SetSpacing(1.0, 0.0, 1.0)

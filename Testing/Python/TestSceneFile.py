@@ -366,6 +366,43 @@ def main():
         t.check("Traceback" not in r.stderr, "%s: traceback printed" % name)
         t.check(not os.path.exists(out), "%s: an image was written" % name)
 
+    # User errors beyond the scene's keys: status 2, one line, no image.
+    folder_vti = os.path.join(bad_dir, "folder.vti")
+    os.makedirs(folder_vti, exist_ok=True)
+    deep = os.path.join(bad_dir, "deep.json")
+    with open(deep, "w") as f:
+        f.write('{"input": {"demo": "figure3"}, "camera": {"position": ' + "[" * 100000 + "]" * 100000 + "}}")
+    nested = os.path.join(bad_dir, "nested.json")
+    with open(nested, "w") as f:
+        f.write('{"input": {"demo": "figure3"}, "camera": {"position": ' + "[" * 40 + "]" * 40 + "}}")
+    figure3 = os.path.join(SOURCE, "Data", "figure3.vti")
+    user_errors = [
+        ("nesting beyond Python's recursion", [deep], "nested deeper than Python can read"),
+        ("nesting beyond 32 levels", [nested], "nested more than 32 levels"),
+        ("-o names a folder", [nested.replace("nested", "ok"), "-o", bad_dir], "is a folder"),
+        ("a data file that is a folder", [{"input": "folder.vti"}], "is a folder, not a data file"),
+        ("a data file that is a folder, on the command line", [folder_vti], "is a folder, not a data file"),
+        ("origin 1e30", [{"input": {"file": figure3, "origin": [1e30, 1e30, 1e30]}}], "from the world origin"),
+        ("spacing 1e-25", [{"input": {"file": figure3, "spacing": [1e-25, 1e-25, 1e-25]}}], "world units across"),
+    ]
+    with open(nested.replace("nested", "ok"), "w") as f:
+        json.dump({"input": {"demo": "figure3"}}, f)
+    for name, args, expected in user_errors:
+        out = os.path.join(bad_dir, "user-error.png")
+        if isinstance(args[0], dict):
+            fn = os.path.join(bad_dir, "user-error.json")
+            with open(fn, "w") as f:
+                json.dump(args[0], f)
+            args = [fn] + args[1:]
+        if "-o" not in args:
+            args = args + ["-o", out]
+        r = run(program, args + ["--spp", "1", "--size", "16x16"])
+        lines = r.stderr.strip().splitlines()
+        t.check(r.returncode == 2, "%s: exit status %d, expected 2 (%s)" % (name, r.returncode, r.stderr.strip()[:300]))
+        t.check(len(lines) == 1 and expected in r.stderr,
+                "%s: expected one line with %r, got %r" % (name, expected, r.stderr.strip()[:300]))
+        t.check(not os.path.exists(out), "%s: an image was written" % name)
+
     # Invalid JSON and bad arguments: status 2 too.
     fn = os.path.join(bad_dir, "invalid.json")
     with open(fn, "w") as f:

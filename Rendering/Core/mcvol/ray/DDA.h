@@ -18,6 +18,10 @@ MCVOL_HOT bool intersectBox(Vec3f lo, Vec3f hi, Vec3f o, Vec3f d, float& t0, flo
 {
   for (int a = 0; a < 3; ++a)
   {
+    if (!(o[a] == o[a]) || !(d[a] == d[a]))
+    {
+      return false; // NaN: no ray (it would pass every comparison below)
+    }
     if (d[a] == 0.f)
     {
       if (o[a] < lo[a] || o[a] > hi[a])
@@ -76,7 +80,9 @@ struct DDA
     for (int a = 0; a < 3; ++a)
     {
       const float x = (p[a] - g.lo[a]) * g.invCellSize[a];
-      int c = x >= 0.f ? int(x) : -1;
+      // Compared before the conversion: a float beyond int's range (a ray
+      // starting far outside a fine grid) must not be converted.
+      int c = x >= 0.f ? (x < float(g.dims[a]) ? int(x) : g.dims[a] - 1) : -1;
       c = clampi(c, 0, g.dims[a] - 1);
       this->cell[a] = c;
       this->Lo[a] = g.lo[a];

@@ -145,9 +145,21 @@ MCVOL_FUNC bool generateRay(
     t0 = ta > t0 ? ta : t0;
     t1 = tb < t1 ? tb : t1;
   }
-  if (!(t0 < t1))
+  // A camera or matrix with a NaN or an infinity (core callers pass them
+  // unchecked) gives no ray: such a ray would pass every comparison above,
+  // and a DDA with an infinite end never finishes. (x - x == 0 exactly when x
+  // is finite, in host and device code alike.)
+  const double span = t1 - t0;
+  if (!(t0 < t1) || !(span - span == 0.0))
   {
     return false;
+  }
+  for (int a = 0; a < 3; ++a)
+  {
+    if (!(o[a] - o[a] == 0.0) || !(d[a] - d[a] == 0.0))
+    {
+      return false;
+    }
   }
   ray.o = Vec3f(float(o[0] + d[0] * t0), float(o[1] + d[1] * t0), float(o[2] + d[2] * t0));
   ray.d = Vec3f(float(d[0]), float(d[1]), float(d[2]));

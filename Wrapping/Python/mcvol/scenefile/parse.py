@@ -107,6 +107,8 @@ def parse_file_input(v, path, scene_dir):
         if not os.path.exists(entry["file"]):
             raise SceneError(file_key, "folder not found: %s" % entry["file"])
         parse_omezarr_keys(v, path, entry)
+    elif os.path.isdir(entry["file"]):
+        raise SceneError(file_key, "%s is a folder, not a data file" % entry["file"])
     elif not os.path.isfile(entry["file"]):
         raise SceneError(file_key, "file not found: %s" % entry["file"])
     else:
@@ -371,6 +373,25 @@ def parse_camera(v):
     return cam
 
 
+MAX_NESTING = 32
+
+
+def check_depth(data):
+    """A scene nests a few levels (channels, their points, a point's values);
+    deeper nesting is refused before anything walks it (a value in a message
+    is printed recursively)."""
+    stack = [(data, 1)]
+    while stack:
+        v, depth = stack.pop()
+        if depth > MAX_NESTING:
+            raise SceneError("", "arrays or objects nested more than %d levels deep; a scene needs a few"
+                             % MAX_NESTING)
+        if isinstance(v, dict):
+            stack.extend((x, depth + 1) for x in v.values())
+        elif isinstance(v, list):
+            stack.extend((x, depth + 1) for x in v)
+
+
 def parse_scene(data, scene_dir, presets):
     """The scene as a dict with every setting filled in, defaults included.
 
@@ -380,6 +401,7 @@ def parse_scene(data, scene_dir, presets):
     against `scene_dir`, the scene file's folder. "step_voxels" has no key in
     the file: it is for the command line's --step-voxels.
     """
+    check_depth(data)
     check_keys(data, "", TOP_KEYS, required=("input",))
     s = {}
     if "description" in data:

@@ -32,6 +32,8 @@ VTK is imported inside the functions.
 import logging
 import os
 import struct
+import sys
+import tempfile
 
 from .errors import RenderError, SceneError
 from .schema import SUPPORTED_TYPES
@@ -94,18 +96,116 @@ def update(reader, key, filename, errors):
     capture = vtkStringOutputWindow()
     vtkOutputWindow.SetInstance(capture)
     vtkLogger.SetStderrVerbosity(vtkLogger.VERBOSITY_OFF)
+    # Some readers' libraries (MetaIO) print straight to the standard error:
+    # kept from the terminal, and their last line said if the read fails.
+    printed = tempfile.TemporaryFile()
+    saved = os.dup(2)
+    sys.stderr.flush()
+    os.dup2(printed.fileno(), 2)
     try:
         reader.Update()
     finally:
+        os.dup2(saved, 2)
+        os.close(saved)
         vtkOutputWindow.SetInstance(window)
         vtkLogger.SetStderrVerbosity(verbosity)
+    printed.seek(0)
+    stderr_lines = [one_line(x) for x in printed.read(65536).decode("utf-8", "replace").splitlines() if x.strip()]
+    printed.close()
     image = reader.GetOutput()
     message = one_line(errors.messages[start]) if len(errors.messages) > start else captured_error(capture.GetOutput())
     if message:
         raise SceneError(key, "cannot read '%s': %s" % (filename, message))
     if image is None or image.GetNumberOfPoints() == 0:
-        raise SceneError(key, "cannot read image data from '%s'" % filename)
+        raise SceneError(key, "cannot read image data from '%s'%s" % (
+            filename, ": " + stderr_lines[-1] if stderr_lines else ""))
     return image
+
+
+NRRD_TYPES = {
+    "signed char", "int8", "int8_t", "uchar", "unsigned char", "uint8", "uint8_t", "short", "short int",
+    "signed short", "signed short int", "int16", "int16_t", "ushort", "unsigned short", "unsigned short int",
+    "uint16", "uint16_t", "int", "signed int", "int32", "int32_t", "uint", "unsigned int", "uint32", "uint32_t",
+    "longlong", "long long", "long long int", "signed long long", "signed long long int", "int64", "int64_t",
+    "ulonglong", "unsigned long long", "unsigned long long int", "uint64", "uint64_t", "float", "double",
+}
+NRRD_ENCODINGS = {"raw", "txt", "text", "ascii", "hex", "gz", "gzip", "bz2", "bzip2"}
+
+
+def check_nrrd_header(entry):
+    """The NRRD header, checked field by field before vtkNrrdReader sees it:
+    that reader crashes on a "sizes" that is not numbers, and never returns
+    from a header whose last line runs into the end of the file."""
+    fn, key = entry["file"], entry["file_key"]
+    try:
+        with open(fn, "rb") as f:
+            head = f.read(65536)
+            rest = f.read(1)
+    except OSError as e:
+        raise SceneError(key, "cannot read '%s': %s" % (fn, one_line(e)))
+    text = head.replace(b"\r\n", b"\n")
+    ended = b"\n\n" in text
+    if not ended and (rest or not text.endswith(b"\n")):
+        raise SceneError(key, "'%s' ends inside its NRRD header (a header ends with a blank line before the data)"
+                         % fn)
+    lines = text.split(b"\n\n", 1)[0].split(b"\n")
+
+    def bad(what):
+        return SceneError(key, "'%s' is not a valid NRRD file: %s" % (fn, what))
+
+    if not lines[0].startswith(b"NRRD000") or lines[0][7:] not in (b"1", b"2", b"3", b"4", b"5"):
+        raise bad("no NRRD000N magic line")
+    fields = {}
+    for raw in lines[1:]:
+        if not raw or raw.startswith(b"#"):
+            continue
+        line = raw.decode("latin-1")
+        k, sep, v = line.partition(": ")
+        if not sep:
+            k, sep, v = line.partition(":=")
+            if not sep:
+                raise bad("header line '%s' is neither 'field: value' nor 'key:=value'" % one_line(line)[:60])
+            continue
+        fields[k.strip().lower()] = v.strip()
+
+    def integers(name, count=None, lo=0):
+        try:
+            values = [int(x) for x in fields[name].split()]
+        except ValueError:
+            values = None
+        if values is None or (count is not None and len(values) != count) or any(x < lo for x in values):
+            raise bad("\"%s: %s\" is not %s whole number(s) >= %d" % (
+                name, fields[name][:60], count if count is not None else "some", lo))
+        return values
+
+    for required in ("type", "dimension", "sizes", "encoding"):
+        if required not in fields:
+            raise bad("no \"%s\" field" % required)
+    (dimension,) = integers("dimension", 1, lo=1)
+    if dimension > 16:
+        raise bad("dimension %d (at most 16)" % dimension)
+    integers("sizes", dimension, lo=1)
+    if fields["type"].lower() not in NRRD_TYPES:
+        raise bad("type '%s' is not a NRRD type" % fields["type"][:40])
+    if fields["encoding"].lower() not in NRRD_ENCODINGS:
+        raise bad("encoding '%s' is not a NRRD encoding" % fields["encoding"][:40])
+    if "endian" in fields and fields["endian"].lower() not in ("little", "big"):
+        raise bad("endian '%s' is neither little nor big" % fields["endian"][:40])
+    for name in ("line skip", "lineskip"):
+        if name in fields:
+            integers(name, 1, lo=0)
+    for name in ("byte skip", "byteskip"):
+        if name in fields:
+            integers(name, 1, lo=-1)
+    for name in ("spacings", "thicknesses", "axis mins", "axismins", "axis maxs", "axismaxs"):
+        if name in fields:
+            values = fields[name].split()
+            try:
+                [float(x) for x in values]
+            except ValueError:
+                values = None
+            if values is None or len(values) != dimension:
+                raise bad("\"%s: %s\" is not %d numbers" % (name, fields[name][:60], dimension))
 
 
 def check_meta_size(entry):
@@ -141,6 +241,8 @@ def check_meta_size(entry):
     else:
         path = data if os.path.isabs(data) else os.path.join(os.path.dirname(fn), data)
         need = skip + nbytes
+        if os.path.isdir(path):
+            raise SceneError(key, "'%s' names its data file '%s', which is a folder" % (fn, path))
         if not os.path.isfile(path):
             raise SceneError(key, "'%s' names its data file '%s', which does not exist" % (fn, path))
     if os.path.getsize(path) < need:
@@ -224,6 +326,8 @@ def read_vtk_format(entry, errors):
         raise SceneError(entry["file_key"], "cannot read '%s' as %s" % (fn, os.path.splitext(fn)[1].lower()))
     if fmt == "meta":
         check_meta_size(entry)
+    elif fmt == "nrrd":
+        check_nrrd_header(entry)
     return update(reader, entry["file_key"], fn, errors)
 
 
@@ -232,12 +336,13 @@ def nifti_header(entry):
     header, read here: VTK's reader crashes on some types, and does not say
     how much of an uncompressed file is missing."""
     import gzip
+    import zlib
 
     fn, key = entry["file"], entry["file_key"]
     try:
         with (gzip.open if fn.lower().endswith(".gz") else open)(fn, "rb") as f:
             head = f.read(540)
-    except (OSError, EOFError) as e:
+    except (OSError, EOFError, zlib.error) as e:
         raise SceneError(key, "cannot read '%s': %s" % (fn, one_line(e)))
     for order in "<>":
         size = struct.unpack(order + "i", head[:4])[0] if len(head) >= 4 else 0
@@ -455,8 +560,15 @@ def read_tiff(entry, errors):
                 name_scalars(image, entry["name"])
                 return image
             shape = (pages[0].imagewidth, pages[0].imagelength, len(pages))
-    except (tifffile.TiffFileError, OSError, ValueError, IndexError, SyntaxError) as e:  # SyntaxError: bad OME-XML
-        raise SceneError(key, "cannot read '%s' as TIFF: %s" % (fn, one_line(e)))
+    except SceneError:
+        raise
+    except MemoryError:
+        raise SceneError(key, "cannot read '%s' as TIFF: its header asks for more memory than there is" % fn)
+    except Exception as e:  # noqa: B902
+        # tifffile parses untrusted bytes: a damaged tag surfaces as any
+        # exception (TiffFileError, ValueError, TypeError, struct.error,
+        # SyntaxError from bad OME-XML, ...). Each means the file is broken.
+        raise SceneError(key, "cannot read '%s' as TIFF: %s" % (fn, one_line(e) or type(e).__name__))
     from vtkmodules.vtkIOImage import vtkTIFFReader
 
     reader = vtkTIFFReader()
@@ -532,7 +644,38 @@ def read_input(entry, errors):
     if not all(0.0 < s < float("inf") for s in image.GetSpacing()):
         raise SceneError(entry["key"], "'%s' has voxel spacing %s: give \"spacing\"" % (
             entry["file"], " ".join("%g" % s for s in image.GetSpacing())))
+    check_scale(entry, image)
     return image
+
+
+# What VTK's camera and double precision can show (Rendering/VTK/View.h,
+# CheckScale): a volume at least this many world units across, and no
+# farther from the origin than 2^46 of its smallest spacings.
+MINIMUM_VOLUME_SIZE = 1e-20
+MAXIMUM_ORIGIN_IN_SPACINGS = 2.0 ** 46
+
+
+def check_scale(entry, image):
+    """The volume's size and position, checked as the mapper checks them, so
+    that a scene says which input and key to change."""
+    dims, spacing = image.GetDimensions(), image.GetSpacing()
+    corners = []
+    for k in range(8):
+        ijk = [(dims[a] - 1 if k >> a & 1 else 0) for a in range(3)]
+        xyz = [0.0, 0.0, 0.0]
+        image.TransformContinuousIndexToPhysicalPoint(ijk, xyz)
+        corners.append(xyz)
+    size = max(max(c[a] for c in corners) - min(c[a] for c in corners) for a in range(3))
+    size = max(size, max(spacing) if max(dims) == 1 else 0.0)
+    far = max(abs(v) for c in corners for v in c)
+    finest = min(spacing)
+    if not far <= MAXIMUM_ORIGIN_IN_SPACINGS * finest:
+        raise SceneError(entry["key"], "'%s' lies %g from the world origin with a smallest spacing of %g: beyond "
+                         "2^46 spacings double precision cannot place rays on its voxels; give an \"origin\" nearer 0"
+                         % (entry["file"], far, finest))
+    if not size >= MINIMUM_VOLUME_SIZE:
+        raise SceneError(entry["key"], "'%s' is %g world units across: VTK's camera shows nothing smaller than %g; "
+                         "give a larger \"spacing\"" % (entry["file"], size, MINIMUM_VOLUME_SIZE))
 
 
 def grid(image):
