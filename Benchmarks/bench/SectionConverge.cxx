@@ -103,7 +103,10 @@ void runConverge(Bench& bench)
     configs.erase(std::remove_if(configs.begin(), configs.end(),
                     [](const Config& c) { return c.automatic || c.estimator != mcvol::Estimator::Collision; }),
       configs.end());
-    configs.front().name += " (the default when lit)";
+    if (!configs.empty())
+    {
+      configs.front().name += " (the default when lit)";
+    }
   }
   if (o.onlyAutomatic)
   {

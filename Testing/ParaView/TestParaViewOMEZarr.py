@@ -74,6 +74,7 @@ checks.check(points[0] == 200 and points[1] == 0 and points[-4] == 2000 and poin
              "GFP: transparent at the window's start, opaque towards its end (%s)" % points)
 rep.Backend = "CPU"
 rep.Seed = 3
+rep.ProgressAnnotation = 0  # the corner checks read the volume alone
 rep.SamplesPerRender = 8
 rep.InteractiveFrameTime = 0
 rep.MaximumTotalSamples = 32
