@@ -172,14 +172,8 @@ void runVisibility(Bench& bench)
   // (3) Light rays (paper Fig. 12): one light; samples of each light ray's
   // list against the error at 64 spp (reference: 1000 samples, refSpp).
   {
-    mcvol::LightingDesc ld;
-    mcvol::LightDesc sun;
-    sun.vector[0] = 1;
-    sun.vector[1] = 2;
-    sun.vector[2] = 1.5;
-    sun.intensity = 4.0;
-    ld.lights.push_back(sun);
-    ld.albedo.assign(size_t(nch), 0.8f);
+    mcvol::LightingDesc ld = lightingPreset("shadows", nch);
+    ld.anisotropy.clear(); // isotropic scattering
     s.scene.setLighting(ld);
     mcvol::ImportanceDesc ref1000 = imp;
     ref1000.lightRaySamples = 1000;

@@ -28,12 +28,11 @@ import statistics
 import vtkmodules.vtkRenderingOpenGL2  # noqa: F401
 from vtkmodules.util.misc import calldata_type
 from vtkmodules.vtkCommonCore import VTK_STRING, vtkCommand, vtkFloatArray
-from vtkmodules.vtkCommonDataModel import vtkPiecewiseFunction
-from vtkmodules.vtkRenderingCore import vtkColorTransferFunction, vtkRenderer, vtkRenderWindow, vtkVolume, vtkVolumeProperty
+from vtkmodules.vtkRenderingCore import vtkRenderer, vtkRenderWindow, vtkVolume
 from vtkmodules.util.numpy_support import vtk_to_numpy
 
 from mcvol import vtkMultiChannelDemoSource, vtkMultiChannelRayMarchMapper, vtkMultiChannelVolumeMapper
-from mcvolTesting import Checker, use_test_backend
+from mcvolTesting import Checker, suggested_property, use_test_backend
 
 SIZE = 24
 K = 8
@@ -46,16 +45,8 @@ src.SetDataset("microscopy")
 src.SetDimensions(24, 24, 8)
 src.Update()
 n = src.GetNumberOfOutputChannels()
-prop = vtkVolumeProperty()
-prop.IndependentComponentsOn()
-prop.SetInterpolationTypeToLinear()
+prop = suggested_property(src)
 prop.ShadeOn()
-for c in range(n):
-    ctf, otf, u = vtkColorTransferFunction(), vtkPiecewiseFunction(), [0.0]
-    src.GetSuggestedTransferFunction(c, ctf, otf, u)
-    prop.SetColor(c, ctf)
-    prop.SetScalarOpacity(c, otf)
-    prop.SetScalarOpacityUnitDistance(c, u[0])
 spacing = min(src.GetOutput().GetSpacing())
 
 window = vtkRenderWindow()

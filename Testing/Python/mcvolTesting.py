@@ -19,6 +19,25 @@ def use_test_backend(mapper):
     else:
         mapper.SetBackendToCPU()
 
+def suggested_property(src):
+    """A vtkVolumeProperty with independent components, linear
+    interpolation and, per channel, the colour, opacity and unit distance
+    that `src` (an updated vtkMultiChannelDemoSource) suggests."""
+    from vtkmodules.vtkCommonDataModel import vtkPiecewiseFunction
+    from vtkmodules.vtkRenderingCore import vtkColorTransferFunction, vtkVolumeProperty
+
+    prop = vtkVolumeProperty()
+    prop.IndependentComponentsOn()
+    prop.SetInterpolationTypeToLinear()
+    for c in range(src.GetNumberOfOutputChannels()):
+        ctf, otf, u = vtkColorTransferFunction(), vtkPiecewiseFunction(), [0.0]
+        src.GetSuggestedTransferFunction(c, ctf, otf, u)
+        prop.SetColor(c, ctf)
+        prop.SetScalarOpacity(c, otf)
+        prop.SetScalarOpacityUnitDistance(c, u[0])
+    return prop
+
+
 def offscreen_view(mapper, prop, size=(64, 64)):
     """`mapper` with `prop` as the one volume of a renderer in an off-screen
     window of `size` (no multisampling), the camera reset to the volume: the
