@@ -12,9 +12,11 @@
 #include "pqServerManagerModel.h"
 #include "vtkCommand.h"
 #include "vtkEventQtSlotConnect.h"
+#include "vtkMultiChannelVolumeRepresentation.h"
 #include "vtkSMProperty.h"
 #include "vtkSMPropertyHelper.h"
 #include "vtkSMProxy.h"
+#include "vtkSMSessionProxyManager.h"
 
 #include <QApplication>
 #include <QDockWidget>
@@ -23,10 +25,20 @@
 
 #include <algorithm>
 #include <cstring>
+#include <string>
 
 namespace
 {
 const char* const kRepresentationType = "Multi-Channel Volume (Monte Carlo)";
+
+// The representation ParaView shows (UniformGridRepresentation) holds ours
+// as a subproxy and exposes its properties; an exposed property belongs to
+// the subproxy (vtkSMProxy::GetSubProxy is not public).
+vtkSMProxy* multiChannelSubproxy(vtkSMProxy* representation)
+{
+  vtkSMProperty* ours = representation->GetProperty("ChannelBlendMode");
+  return ours ? ours->GetParent() : nullptr;
+}
 }
 
 //------------------------------------------------------------------------------
@@ -98,19 +110,27 @@ void pqMultiChannelRefinement::shutdown()
 }
 
 //------------------------------------------------------------------------------
-void pqMultiChannelRefinement::viewRendered()
+vtkSMProxy* pqMultiChannelRefinement::progressProbe(vtkSMProxy* representation)
 {
-  void* view = this->sender();
-  if (this->Pending.value(view, false))
+  auto found = this->Probes.find(representation);
+  if (found != this->Probes.end())
   {
-    this->OwnRenders[view] = this->OwnRenders.value(view, 0) + 1;
+    return found.value();
   }
-  else
+  vtkSMProxy* ours = multiChannelSubproxy(representation);
+  vtkSMSessionProxyManager* pxm = representation->GetSessionProxyManager();
+  vtkSmartPointer<vtkSMProxy> probe;
+  if (ours && pxm)
   {
-    // A render we did not ask for: the image may have started over.
-    this->OwnRenders[view] = 0;
+    probe.TakeReference(pxm->NewProxy("mcvol_misc", "MultiChannelProgressProbe"));
   }
-  this->Pending[view] = false;
+  if (probe)
+  {
+    vtkSMPropertyHelper(probe, "Representation").Set(ours);
+    probe->UpdateVTKObjects();
+  }
+  this->Probes[representation] = probe;
+  return probe;
 }
 
 //------------------------------------------------------------------------------
@@ -126,18 +146,12 @@ void pqMultiChannelRefinement::refine()
   }
   bool rendered = false;
   QString statusLine;
+  QMap<void*, vtkSmartPointer<vtkSMProxy>> probesInUse;
   const QList<pqRenderView*> views = core->getServerManagerModel()->findItems<pqRenderView*>();
   for (pqRenderView* view : views)
   {
     bool needsRender = false;
     const bool remote = view->getServer() && view->getServer()->isRemote();
-    if (remote && !this->Pending.contains(view))
-    {
-      // Count renders: ours are flagged in Pending before they start.
-      QObject::connect(view, &pqView::endRender, this, &pqMultiChannelRefinement::viewRendered,
-        Qt::UniqueConnection);
-      this->Pending[view] = false;
-    }
     for (pqRepresentation* repr : view->getRepresentations())
     {
       vtkSMProxy* proxy = repr ? repr->getProxy() : nullptr;
@@ -153,25 +167,42 @@ void pqMultiChannelRefinement::refine()
       {
         continue;
       }
+      // Where the data is: the representation itself in builtin mode, its
+      // probe on the server of a remote session.
+      vtkSMProxy* info = proxy;
       if (remote)
       {
-        const int spp = std::max(1, vtkSMPropertyHelper(proxy, "SamplesPerRender").GetAsInt());
-        const int maximum = vtkSMPropertyHelper(proxy, "MaximumTotalSamples").GetAsInt();
-        const int wanted = maximum > 0 ? (maximum + spp - 1) / spp - 1 : 1 << 30;
-        if (this->OwnRenders.value(view, 0) < wanted)
+        info = this->progressProbe(proxy);
+        if (!info)
         {
-          needsRender = true;
+          continue;
         }
-        continue;
+        probesInUse[proxy] = info;
       }
-      proxy->UpdatePropertyInformation();
-      const int converged = vtkSMPropertyHelper(proxy, "Converged").GetAsInt();
-      const int samples = vtkSMPropertyHelper(proxy, "TotalSamples").GetAsInt();
-      const char* status = vtkSMPropertyHelper(proxy, "ChannelStatus").GetAsString();
+      info->UpdatePropertyInformation();
+      const int converged = vtkSMPropertyHelper(info, "Converged").GetAsInt();
+      const int samples = vtkSMPropertyHelper(info, "TotalSamples").GetAsInt();
+      const char* status = vtkSMPropertyHelper(info, "ChannelStatus").GetAsString();
       if (view == pqActiveObjects::instance().activeView() &&
         (statusLine.isEmpty() || repr == pqActiveObjects::instance().activeRepresentation()))
       {
-        statusLine = progressLine(proxy, samples, converged, status);
+        statusLine = progressLine(info, samples, converged, status);
+      }
+      bool annotationChanged = false;
+      if (remote)
+      {
+        // The client's copy draws the corner annotation: give it the
+        // server's words.
+        vtkSMProxy* ours = multiChannelSubproxy(proxy);
+        auto* local =
+          vtkMultiChannelVolumeRepresentation::SafeDownCast(ours ? ours->GetClientSideObject() : nullptr);
+        const char* text = vtkSMPropertyHelper(info, "ProgressText").GetAsString();
+        if (local)
+        {
+          const std::string words = text ? text : "";
+          annotationChanged = local->GetRemoteProgressSummary() != words;
+          local->SetRemoteProgressSummary(words);
+        }
       }
       auto last = this->LastSamples.find(proxy);
       const bool stalled = last != this->LastSamples.end() && last.value() == samples;
@@ -184,17 +215,17 @@ void pqMultiChannelRefinement::refine()
       {
         this->LastSamples.remove(proxy);
       }
+      // A finished image whose annotation still shows the last step's words.
+      needsRender = needsRender || annotationChanged;
     }
     if (needsRender)
     {
-      if (remote)
-      {
-        this->Pending[view] = true;
-      }
       view->forceRender();
       rendered = true;
     }
   }
+  // Probes of representations that are gone or hidden go too.
+  this->Probes.swap(probesInUse);
   this->showStatus(statusLine);
   // Nothing to do: look again a little later rather than spin.
   this->Timer.setInterval(rendered ? 0 : 100);

@@ -12,12 +12,12 @@
  * between renders, and any change (camera, property, transfer function)
  * starts the mapper's image over, so refinement simply resumes from there.
  *
- * Connected to a pvserver the client holds no data and cannot read the
- * server's sample count (the representation reports -1), so the plugin
- * counts instead: after any render it did not ask for (interaction, a
- * property change) it renders ceil(Maximum Total Samples / Samples Per
- * Render) - 1 more times, the number that reaches the maximum from a fresh
- * image.
+ * Connected to a pvserver the client holds no data, and ParaView reads a
+ * representation's information properties from the client's copy; the
+ * progress is read on the server instead, through a
+ * vtkMultiChannelProgressProbe proxy per representation, and its text is
+ * handed to the client's copy, whose corner annotation then shows the
+ * server's progress.
  *
  * Setting Edit Channel on the active representation opens the colour map
  * editor (the representation points it at the channel's functions).
@@ -35,8 +35,8 @@
 #include <QTimer>
 
 #include "vtkNew.h"
+#include "vtkSmartPointer.h"
 
-class pqView;
 class vtkEventQtSlotConnect;
 class vtkSMProxy;
 
@@ -54,7 +54,6 @@ public:
 
 private Q_SLOTS:
   void refine();
-  void viewRendered();
   void watchActiveRepresentation();
   void openColorMapEditor();
 
@@ -71,10 +70,10 @@ private:
   // Samples seen per representation proxy after the last render this class
   // asked for: no progress means there is nothing to refine (an error).
   QMap<void*, int> LastSamples;
-  // Remote sessions: renders this class asked for since the last render it
-  // did not ask for, per view; and whether a render of ours is under way.
-  QMap<void*, int> OwnRenders;
-  QMap<void*, bool> Pending;
+  // Remote sessions: the probe that reads each representation proxy's
+  // progress on the server (vtkMultiChannelProgressProbe).
+  vtkSMProxy* progressProbe(vtkSMProxy* representation);
+  QMap<void*, vtkSmartPointer<vtkSMProxy>> Probes;
 };
 
 #endif

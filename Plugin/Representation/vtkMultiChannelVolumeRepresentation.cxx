@@ -202,11 +202,15 @@ void vtkMultiChannelVolumeRepresentation::SetProgressAnnotation(bool on)
 //------------------------------------------------------------------------------
 std::string vtkMultiChannelVolumeRepresentation::BuildProgressSummary()
 {
-  // Nothing where this process holds no data (the client of a pvserver) or
-  // the representation is hidden.
-  if (!this->ProgressAnnotation || !this->Cache || !this->GetVisibility())
+  if (!this->ProgressAnnotation || !this->GetVisibility())
   {
     return std::string();
+  }
+  if (!this->HoldsData())
+  {
+    // This process holds no data (the client of a pvserver): the server's
+    // words, if the GUI has fetched them.
+    return this->RemoteProgressSummary;
   }
   if (!this->ChannelStatus.empty())
   {
@@ -660,11 +664,19 @@ void vtkMultiChannelVolumeRepresentation::SetChannelImportanceFunction(int chann
 }
 
 //------------------------------------------------------------------------------
+bool vtkMultiChannelVolumeRepresentation::HoldsData()
+{
+  // The client of a pvserver runs the pipeline on an empty image.
+  vtkDataSet* data = vtkDataSet::SafeDownCast(this->Cache);
+  return data && data->GetNumberOfPoints() > 0;
+}
+
+//------------------------------------------------------------------------------
 int vtkMultiChannelVolumeRepresentation::GetTotalSamples()
 {
   // -1: this process holds no data and renders none (the client of a
   // pvserver); the render server's image is not known here.
-  if (!this->Cache)
+  if (!this->HoldsData())
   {
     return -1;
   }
@@ -676,7 +688,7 @@ double vtkMultiChannelVolumeRepresentation::GetEstimatedError()
 {
   // As GetTotalSamples: nothing known without data, nothing drawn while the
   // channels are incomplete.
-  if (!this->Cache || !this->ChannelStatus.empty())
+  if (!this->HoldsData() || !this->ChannelStatus.empty())
   {
     return -1.0;
   }
@@ -685,7 +697,7 @@ double vtkMultiChannelVolumeRepresentation::GetEstimatedError()
 
 double vtkMultiChannelVolumeRepresentation::GetEstimatedPSNR()
 {
-  if (!this->Cache || !this->ChannelStatus.empty())
+  if (!this->HoldsData() || !this->ChannelStatus.empty())
   {
     return -1.0;
   }
@@ -694,7 +706,7 @@ double vtkMultiChannelVolumeRepresentation::GetEstimatedPSNR()
 
 int vtkMultiChannelVolumeRepresentation::GetConverged()
 {
-  if (!this->Cache)
+  if (!this->HoldsData())
   {
     return -1;
   }

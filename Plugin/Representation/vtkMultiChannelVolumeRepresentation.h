@@ -263,14 +263,19 @@ public:
    * per pixel, the estimated PSNR and "refining" or "converged", or why
    * nothing is drawn (ChannelStatus). It is read from the mapper as the
    * view draws its annotations, after the volume, so it describes the image
-   * it sits on. Shown only where this process holds the data (in
-   * the GUI on its builtin: server, pvpython, pvbatch; not on the client of
-   * a pvserver).
+   * it sits on. A process that holds no data (the client of a pvserver)
+   * shows the text it was last given by SetRemoteProgressSummary, which the
+   * GUI reads from the server through vtkMultiChannelProgressProbe after
+   * every render.
    */
   void SetProgressAnnotation(bool on);
   vtkGetMacro(ProgressAnnotation, bool);
   /// The annotation's text as it would be drawn now (empty when hidden).
   std::string BuildProgressSummary();
+  /// The rendering process's text, for a copy that holds no data. Not a
+  /// change of the representation: nothing restarts.
+  void SetRemoteProgressSummary(const std::string& text) { this->RemoteProgressSummary = text; }
+  const std::string& GetRemoteProgressSummary() const { return this->RemoteProgressSummary; }
   /// The same, for the information property ProgressText.
   const char* GetProgressSummary();
   ///@}
@@ -285,6 +290,8 @@ protected:
   bool AddToView(vtkView* view) override;
   bool RemoveFromView(vtkView* view) override;
   void UpdateChannelImportance(int numChannels);
+  /// Whether this process has data to render (not the client of a pvserver).
+  bool HoldsData();
 
   int ChannelSource = ARRAYS;
   unsigned int Seed = 0;
@@ -323,6 +330,7 @@ protected:
   bool ProgressAnnotation = true;
   vtkSmartPointer<vtkTextActor> ProgressActor;
   std::string ProgressSummaryValue;
+  std::string RemoteProgressSummary;
 
 private:
   vtkMultiChannelVolumeRepresentation(const vtkMultiChannelVolumeRepresentation&) = delete;

@@ -29,6 +29,11 @@ rep.ChannelBlendMode = "Max"
 for _ in range(8):
     simple.Render(view)
 print("samples: %d (client copy)" % T.info(rep, "TotalSamples"))
+# Read where the image is (the server in client-server mode).
+from mcvol.paraview_progress import progress  # noqa: E402
+
+p = progress(rep)
+print("progress: samples %d converged %d psnr-positive %d" % (p.samples, p.converged, p.psnr > 0))
 simple.SaveScreenshot(out, view, ImageResolution=[200, 200], TransparentBackground=0)
 
 if len(sys.argv) > 3:
