@@ -22,10 +22,9 @@ rep.ChannelSource = "Components of One Array"
 rep.ChannelComponentsArray = "channels"
 T.set_channel_functions(["channels:0", "channels:1", "channels:2"])
 rep.ChannelBlendMode = "Max"
-# The client of a pvserver holds no data: its copy of the representation
-# reports -1 samples; the server's image is refined by rendering
-# MaximumTotalSamples / SamplesPerRender times (32 / 8); more renders
-# redraw the finished image.
+# Every Render() refines the server's image by SamplesPerRender (8) up to
+# MaximumTotalSamples (32); more renders redraw the finished image. The
+# client's copy of the representation holds no data and reports -1 samples.
 for _ in range(8):
     simple.Render(view)
 print("samples: %d (client copy)" % T.info(rep, "TotalSamples"))
