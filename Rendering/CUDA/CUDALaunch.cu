@@ -109,15 +109,22 @@ void launchOptimized(BlendMode mode, bool lit, const SceneView& s, const CameraV
 /// unlit one of the estimator's code (unlitEstimator()). The unlit kernels
 /// contain none of the lighting code and the collision kernels none of the
 /// expected-value estimator's, which saves registers; for plain scenes
-/// (`plain`) the unlit kernels come from CUDALaunchPlain.cu, compiled without
-/// the pre-classified and cubic sampling.
+/// (`plain`) the kernels come from CUDALaunchPlain.cu, compiled without the
+/// pre-classified and cubic sampling.
 void launchRender(BlendMode mode, bool count, bool lit, bool plain, const SceneView& s, const CameraView& cam,
   const FrameParams& fp, const RenderLaunch& k)
 {
   const int unlit = unlitEstimator(fp.estimator, mode, lit, false, s.marchControlVariates);
-  if (plain && !lit)
+  if (plain && !(lit && mode == BlendMode::Composite))
   {
-    launchPlainUnlit(mode, unlit, count, s, cam, fp, k);
+    if (lit)
+    {
+      launchPlainLit(mode, count, s, cam, fp, k);
+    }
+    else
+    {
+      launchPlainUnlit(mode, unlit, count, s, cam, fp, k);
+    }
     return;
   }
   withBlendMode(mode,

@@ -4,7 +4,7 @@
 // launcher, shared by the two translation units that compile them:
 // - CUDALaunch.cu: every kernel, for every scene (pre-classified channels,
 //   cubic interpolation, lighting, the visibility optimization);
-// - CUDALaunchPlain.cu: the unlit kernels again, compiled with
+// - CUDALaunchPlain.cu: the unlit and the lit kernels again, compiled with
 //   MCVOL_DEVICE_PLAIN_CHANNELS, for scenes of scalar channels with linear or
 //   nearest interpolation (the common case; CUDARenderer::setPlainKernels,
 //   on by default). There channelOptics() has no out-of-line call for
@@ -194,4 +194,8 @@ void launchUnlit(
 /// with the plain compilation of the kernels.
 void launchPlainUnlit(BlendMode mode, int unlit, bool count, const SceneView& s, const CameraView& cam,
   const FrameParams& fp, const RenderLaunch& k);
+/// CUDALaunchPlain.cu: the lit kernel for the blend mode known at run time
+/// (not composite), with the plain compilation.
+void launchPlainLit(
+  BlendMode mode, bool count, const SceneView& s, const CameraView& cam, const FrameParams& fp, const RenderLaunch& k);
 } // namespace mcvol

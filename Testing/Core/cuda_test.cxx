@@ -22,6 +22,8 @@
 #include <functional>
 #include <limits>
 #include <sstream>
+#include <utility>
+#include <vector>
 
 using namespace mcvol;
 using namespace mcvol::test;
@@ -830,9 +832,39 @@ TEST(CudaAccumulation, DisplayImageIsTheRoundedMean)
   g.finish();
 }
 
+namespace
+{
+/// One render of `scene` by the plain or the general kernels.
+std::vector<float> plainOrGeneral(const Scene& scene, const Camera& cam, bool plain, Estimator e)
+{
+  CUDARenderer g;
+  g.setPlainKernels(plain);
+  EXPECT_EQ(g.plainKernels(), plain);
+  Accumulator acc;
+  RenderSettings rs;
+  rs.seed = 5;
+  rs.samplesPerPixel = 4;
+  rs.estimator = e;
+  g.render(scene, cam, rs, nullptr, acc);
+  return std::vector<float>(acc.rgba(), acc.rgba() + size_t(cam.width) * cam.height * 4);
+}
+
+/// The largest difference of two images, and the sum of the first.
+std::pair<double, double> worstAndSum(const std::vector<float>& a, const std::vector<float>& b)
+{
+  double worst = 0.0, sum = 0.0;
+  for (size_t i = 0; i < a.size(); ++i)
+  {
+    worst = std::max(worst, double(std::fabs(a[i] - b[i])));
+    sum += a[i];
+  }
+  return { worst, sum };
+}
+} // namespace
+
 // The plain kernels (CUDARenderer::setPlainKernels, the default) compute the
 // same image as the general ones for a plain scene, for every estimator and
-// every blend mode, and are not taken for a cubic scene.
+// every blend mode, unlit and lit, and are not taken for a cubic scene.
 TEST(CudaRender, PlainKernelsEqualGeneral)
 {
   EXPECT_TRUE(CUDARenderer().plainKernels()); // on by default
@@ -848,28 +880,40 @@ TEST(CudaRender, PlainKernelsEqualGeneral)
         v.configure(scene, mode);
         scene.setInterpolation(interp);
         scene.update();
-        std::vector<float> img[2];
-        for (int plain = 0; plain < 2; ++plain)
-        {
-          CUDARenderer g;
-          g.setPlainKernels(plain == 1);
-          EXPECT_EQ(g.plainKernels(), plain == 1);
-          Accumulator acc;
-          RenderSettings rs;
-          rs.seed = 5;
-          rs.samplesPerPixel = 4;
-          rs.estimator = e;
-          g.render(scene, cam, rs, nullptr, acc);
-          img[plain].assign(acc.rgba(), acc.rgba() + size_t(cam.width) * cam.height * 4);
-        }
-        double worst = 0.0, sum = 0.0;
-        for (size_t i = 0; i < img[0].size(); ++i)
-        {
-          worst = std::max(worst, double(std::fabs(img[0][i] - img[1][i])));
-          sum += img[0][i];
-        }
+        const auto [worst, sum] =
+          worstAndSum(plainOrGeneral(scene, cam, false, e), plainOrGeneral(scene, cam, true, e));
         EXPECT_GT(sum, 1.0) << toString(mode);
         EXPECT_LE(worst, 1e-5) << toString(mode) << " " << toString(e) << " " << toString(interp);
+      }
+    }
+  }
+  // Lit: shadows and ambient, no shadows, two scattering events (composite
+  // blending takes no lighting on this backend).
+  for (BlendMode mode : { BlendMode::Density, BlendMode::Max, BlendMode::Mix })
+  {
+    for (int variant = 0; variant < 3; ++variant)
+    {
+      for (Interpolation interp : { Interpolation::Linear, Interpolation::Cubic })
+      {
+        Scene scene;
+        v.configure(scene, mode);
+        scene.setInterpolation(interp);
+        LightingDesc ld;
+        LightDesc sun;
+        sun.vector[0] = 1;
+        sun.vector[1] = 2;
+        sun.vector[2] = 0.5;
+        sun.intensity = 2;
+        ld.lights = { sun };
+        ld.ambient[0] = ld.ambient[1] = ld.ambient[2] = 0.2;
+        ld.shadows = variant != 1;
+        ld.maxDepth = variant == 2 ? 2 : 1;
+        scene.setLighting(ld);
+        scene.update();
+        const auto [worst, sum] = worstAndSum(
+          plainOrGeneral(scene, cam, false, Estimator::Collision), plainOrGeneral(scene, cam, true, Estimator::Collision));
+        EXPECT_GT(sum, 1.0) << "lit " << toString(mode);
+        EXPECT_LE(worst, 1e-5) << "lit " << toString(mode) << " variant " << variant << " " << toString(interp);
       }
     }
   }

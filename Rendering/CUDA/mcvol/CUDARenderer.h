@@ -146,8 +146,8 @@ public:
   void setSampling(CudaSampling s);
   CudaSampling sampling() const;
   /**
-   * On by default: unlit renders of plain scenes (scalar channels, linear or
-   * nearest interpolation) launch kernels compiled without the pre-classified
+   * On by default: renders of plain scenes (scalar channels, linear or
+   * nearest interpolation), unlit and lit, launch kernels compiled without the pre-classified
    * and cubic sampling (CUDALaunchPlain.cu): fewer registers per thread, so
    * more rays in flight and shorter frames. The image is the same either way
    * (CudaRender.PlainKernelsEqualGeneral). Off, for comparisons.
