@@ -123,8 +123,9 @@ int main(int argc, char** argv)
   {
     g->setSampling(o.sampling == "global" ? mcvol::CudaSampling::Global : mcvol::CudaSampling::Texture);
     g->setBlockSize(o.blockX, o.blockY);
+    g->setPlainKernels(!o.generalKernels);
     device = g->deviceDescription() + "; sampling " + o.sampling + "; block " + std::to_string(o.blockX) + "x" +
-      std::to_string(o.blockY);
+      std::to_string(o.blockY) + (o.generalKernels ? "; general kernels" : "");
   }
 #endif
   const bool hostAccel = !(r->device() && r->device()->buildsAccelerationOnDevice());

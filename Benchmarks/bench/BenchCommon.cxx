@@ -66,6 +66,9 @@ ArgParser makeParser(Options& o)
           throw std::invalid_argument("--sampling takes texture or global");
         }
       })
+    .add("--general-kernels", 0, "",
+      "CUDA: render plain scenes with the general kernels, not their plain compilation (for comparisons)",
+      [&](const Args&) { o.generalKernels = true; })
     .add("--block", 2, "X Y", "CUDA: render-kernel block size (default 8 8)",
       [&](const Args& v)
       {

@@ -39,6 +39,7 @@ struct Options
   std::string csv;
   std::string label; ///< e.g. "NYX-like", printed with the dataset
   std::string sampling = "texture";
+  bool generalKernels = false; ///< CUDA: the general kernels for plain scenes too
   int blockX = 8;
   int blockY = 8;
   double psnr = 35.0;
