@@ -54,6 +54,21 @@ private:
   uint64_t S;
 };
 
+/// One directional light (intensity `intensity`, from (1, 2, 0.5)) with
+/// shadows, and a grey sky of radiance `ambient`: the lit test scenes' light.
+inline LightingDesc sunAndSky(double intensity, double ambient)
+{
+  LightingDesc ld;
+  LightDesc sun;
+  sun.vector[0] = 1;
+  sun.vector[1] = 2;
+  sun.vector[2] = 0.5;
+  sun.intensity = intensity;
+  ld.lights = { sun };
+  ld.ambient[0] = ld.ambient[1] = ld.ambient[2] = ambient;
+  return ld;
+}
+
 // ---------------------------------------------------------------- statistics
 
 /// Regularised upper incomplete gamma Q(a, x).

@@ -898,14 +898,7 @@ TEST(CudaRender, PlainKernelsEqualGeneral)
         Scene scene;
         v.configure(scene, mode);
         scene.setInterpolation(interp);
-        LightingDesc ld;
-        LightDesc sun;
-        sun.vector[0] = 1;
-        sun.vector[1] = 2;
-        sun.vector[2] = 0.5;
-        sun.intensity = 2;
-        ld.lights = { sun };
-        ld.ambient[0] = ld.ambient[1] = ld.ambient[2] = 0.2;
+        LightingDesc ld = sunAndSky(2, 0.2);
         ld.shadows = variant != 1;
         ld.maxDepth = variant == 2 ? 2 : 1;
         scene.setLighting(ld);

@@ -589,14 +589,7 @@ TEST(Lighting, CompositeIsEachChannelLitAlone)
 {
   const DemoVolume v = makeDemo("cosmology", { 16, 16, 16 });
   const Camera cam = orbitCamera(v.dims, v.spacing, 12, 12, 30, 20);
-  LightingDesc ld;
-  LightDesc sun;
-  sun.vector[0] = 1;
-  sun.vector[1] = 2;
-  sun.vector[2] = 0.5;
-  sun.intensity = 2;
-  ld.lights = { sun };
-  ld.ambient[0] = ld.ambient[1] = ld.ambient[2] = 0.2;
+  LightingDesc ld = sunAndSky(2, 0.2);
   ld.albedo = { 0.9f, 0.6f, 0.8f, 0.3f };
   MarchSettings ms;
   ms.step = 0.25;
