@@ -46,8 +46,9 @@ void renderRows(const SceneView& s, const CameraView& cam, const FrameParams& fp
   const int pass = pool ? pool->passes : 0;
   const int unlit = unlitEstimator(fp.estimator, Mode, Lit, Optimized, s.marchControlVariates);
   const uint32_t total = previous + uint32_t(fp.samplesPerPixel);
-  const uint32_t previousEven = evenSampleCount(previous);
-  const bool addsEven = addedEvenSamples(previous, fp.samplesPerPixel) > 0u;
+  // The even half is neither read nor written by a render that adds no
+  // sample of even index (as on the device).
+  const bool addsEven = out.even && addedEvenSamples(previous, fp.samplesPerPixel) > 0u;
 #pragma omp parallel num_threads(threads > 0 ? threads : omp_get_max_threads()) \
   reduction(+ : dda, tentative, real, samples, scattering, shadowRays, gradients, importance, overflows)
   {
@@ -60,8 +61,8 @@ void renderRows(const SceneView& s, const CameraView& cam, const FrameParams& fp
         const size_t p = size_t(y) * size_t(W) + size_t(x);
         const float z = depth ? depth[p] : 1.f;
         Vec4d sum = loadSum(out.sums + 4 * p, previous);
-        Vec4d evenSum = out.even ? loadSum(out.evenSums + 4 * p, previousEven) : Vec4d();
-        Vec4d* evenOut = out.even ? &evenSum : nullptr;
+        Vec4d evenSum = addsEven ? loadSum(out.evenSums + 4 * p, evenSampleCount(previous)) : Vec4d();
+        Vec4d* evenOut = addsEven ? &evenSum : nullptr;
         if (Optimized)
         {
           ImportanceSegment* seg = pool->segments.data() + p * size_t(kImportanceCapacity);
@@ -98,7 +99,7 @@ void renderRows(const SceneView& s, const CameraView& cam, const FrameParams& fp
           }
         }
         storeSum(out.mean + 4 * p, out.sums + 4 * p, sum, total);
-        if (out.even && addsEven)
+        if (addsEven)
         {
           storeSum(out.even + 4 * p, out.evenSums + 4 * p, evenSum, evenSampleCount(total));
         }
