@@ -1,12 +1,13 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // mcvol-soak: long progressive accumulation, past 2^24 samples per pixel.
 //
-//   mcvol-soak precision [--max-log2 N]     the running mean (Integrator.h,
-//       accumulate) fed batches of known samples, against the same mean in
-//       double: its error at every power of two up to 2^N samples per pixel,
-//       for batches of 8, 64 and 4096 samples ("scaled": mcvol's mean *
-//       previous / n + sum / n), and the same for the alternative that moves
-//       the mean by its rounded correction ("correction")
+//   mcvol-soak precision [--max-log2 N]     the image's accumulation
+//       (Integrator.h: loadSum, addSample, storeSum) fed batches of known
+//       samples, against their exact mean: its error at every other power
+//       of two up to 2^N samples per pixel, for batches of 8, 64 and 4096
+//       samples ("double-sum"), and the same for a float running mean
+//       scaled by previous / n ("float-mean", what a float accumulation
+//       buffer gives)
 //   mcvol-soak render [--spp N] [--size WxH]     a progressive CPU render of
 //       figure3 on a small image to N samples per pixel (default 2^20), twice
 //       with different seeds: at every power of two, the RMS difference of
@@ -46,66 +47,70 @@ long ResidentKiB()
   return -1;
 }
 
-/// A deterministic stream of per-sample values in [0, 1] (a pixel's alpha
-/// and colour are such): uniform from a 64-bit LCG.
+/// A deterministic stream of per-sample values in [0, 1) (a pixel's alpha
+/// and colour are such), multiples of 2^-24 so that each is a float and
+/// their sum is exact in integers: uniform from a 64-bit LCG.
 struct Stream
 {
   unsigned long long s = 0x9E3779B97F4A7C15ull;
-  double Next()
+  unsigned Next()
   {
     s = s * 6364136223846793005ull + 1442695040888963407ull;
-    return double(s >> 11) * 0x1p-53;
+    return unsigned(s >> 40); // 24 bits
   }
 };
 
 int Precision(int maxLog2)
 {
-  std::printf("section,formula,batch,samples,float_mean,double_mean,abs_error,error_in_float_ulps\n");
+  std::printf("section,formula,batch,samples,mean,exact_mean,abs_error,error_in_float_ulps\n");
   for (int batch : { 8, 64, 4096 })
-  for (bool correction : { false, true })
+  for (bool floatMean : { false, true })
   {
-    float rgba[4] = { 0, 0, 0, 0 };
-    double exact = 0.0;
+    float mean[4] = { 0, 0, 0, 0 };
+    double sums[4] = { 0, 0, 0, 0 };
+    unsigned long long exact = 0; // the samples' sum in units of 2^-24
     Stream stream;
     unsigned long long n = 0;
     int nextLog2 = 10;
     const auto start = std::chrono::steady_clock::now();
-    unsigned long long calls = 0;
     while (nextLog2 <= maxLog2)
     {
-      double sum = 0.0;
+      mcvol::Vec4d sum = mcvol::loadSum(sums, uint32_t(n));
+      float batchSum = 0.f;
       for (int k = 0; k < batch; ++k)
       {
-        sum += stream.Next();
+        const unsigned units = stream.Next();
+        exact += units;
+        const float x = float(units) * 0x1p-24f;
+        mcvol::addSample(sum, mcvol::Vec4f{ x, x, x, x });
+        batchSum += x;
       }
-      const float f = static_cast<float>(sum);
-      mcvol::Vec4f s;
-      s.r = s.g = s.b = s.a = f;
-      if (correction)
+      if (floatMean)
       {
-        // The alternative: the mean moved by its rounded correction,
-        // (sum - batch * mean) / n.
+        // A float running mean: scaled by previous / n, the batch's float
+        // sum added over n.
         const float inv = 1.f / float(n + batch);
-        rgba[0] += (s.r - float(batch) * rgba[0]) * inv;
+        mean[0] = mean[0] * (float(n) * inv) + batchSum * inv;
       }
       else
       {
-        mcvol::accumulate(rgba, s, uint32_t(n), batch);
+        mcvol::storeSum(mean, sums, sum, uint32_t(n + batch));
       }
-      ++calls;
-      exact += (sum - batch * exact) / double(n + batch);
       n += batch;
       if (n >= (1ull << nextLog2))
       {
-        const double err = std::abs(double(rgba[0]) - exact);
-        const double ulp = std::nextafter(float(exact), 2.f) - float(exact);
-        std::printf("precision,%s,%d,%llu,%.9f,%.9f,%.3g,%.1f\n", correction ? "correction" : "scaled", batch, n,
-          double(rgba[0]), exact, err, err / ulp);
+        const long double want = (long double)(exact) * 0x1p-24L / (long double)(n);
+        const double err = double(std::fabs((long double)(mean[0]) - want));
+        const float w = float(want);
+        const double ulp = std::nextafter(w, 2.f) - w;
+        std::printf("precision,%s,%d,%llu,%.9f,%.9f,%.3g,%.2f\n", floatMean ? "float-mean" : "double-sum", batch, n,
+          double(mean[0]), double(want), err, err / ulp);
         nextLog2 += 2;
       }
     }
     const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    std::fprintf(stderr, "batch %d: %llu calls, %.2f s (stream and double reference included)\n", batch, calls, secs);
+    std::fprintf(stderr, "batch %d %s: %.2f s (stream and reference included)\n", batch,
+      floatMean ? "float-mean" : "double-sum", secs);
   }
   return 0;
 }

@@ -1870,6 +1870,12 @@ void vtkMultiChannelVolumeMapper::SetShininess(double value)
 }
 
 //------------------------------------------------------------------------------
+void vtkMultiChannelVolumeMapper::SetLightIntensityScale(double value)
+{
+  mcvol::adapter::SetClamped(this, "SetLightIntensityScale", value, 0.0, 1e6, this->LightIntensityScale);
+}
+
+//------------------------------------------------------------------------------
 void vtkMultiChannelVolumeMapper::SetDeviationWeight(double value)
 {
   mcvol::adapter::SetClamped(this, "SetDeviationWeight", value, 1e-6, 1e12, this->DeviationWeight);

@@ -634,7 +634,7 @@ public:
    * sample where lights cast different shadows. The ray-marching mapper
    * always sums every light (it is deterministic).
    */
-  vtkSetClampMacro(LightIntensityScale, double, 0.0, 1e6);
+  virtual void SetLightIntensityScale(double value);
   vtkGetMacro(LightIntensityScale, double);
   enum LightSamplingModes
   {

@@ -22,11 +22,21 @@ struct ImportanceFrame
   uint32_t seed = 0;
 };
 
+/// The Accumulator's buffers a render writes: the mean and the sums (and the
+/// error estimate's even half of each, null when it is off).
+struct PixelSums
+{
+  float* mean = nullptr;
+  double* sums = nullptr;
+  float* even = nullptr;
+  double* evenSums = nullptr;
+};
+
 /// Optimized is a compile-time choice, as Lit: the unoptimized rows contain
 /// none of the optimization's code (its off state costs nothing).
 template <BlendMode Mode, bool Lit, bool Optimized>
-void renderRows(const SceneView& s, const CameraView& cam, const FrameParams& fp, const float* depth, float* rgba,
-  float* even, uint32_t previous, int threads, const ImportanceFrame& imp, RenderCounters* counters)
+void renderRows(const SceneView& s, const CameraView& cam, const FrameParams& fp, const float* depth,
+  const PixelSums& out, uint32_t previous, int threads, const ImportanceFrame& imp, RenderCounters* counters)
 {
   uint64_t dda = 0, tentative = 0, real = 0, samples = 0, scattering = 0, shadowRays = 0, gradients = 0;
   uint64_t importance = 0, overflows = 0;
@@ -35,6 +45,10 @@ void renderRows(const SceneView& s, const CameraView& cam, const FrameParams& fp
   Accumulator::ImportancePool* pool = Optimized ? imp.pool : nullptr;
   const int pass = pool ? pool->passes : 0;
   const int unlit = unlitEstimator(fp.estimator, Mode, Lit, Optimized, s.marchControlVariates);
+  const uint32_t total = previous + uint32_t(fp.samplesPerPixel);
+  // The even half is neither read nor written by a render that adds no
+  // sample of even index (as on the device).
+  const bool addsEven = out.even && addedEvenSamples(previous, fp.samplesPerPixel) > 0u;
 #pragma omp parallel num_threads(threads > 0 ? threads : omp_get_max_threads()) \
   reduction(+ : dda, tentative, real, samples, scattering, shadowRays, gradients, importance, overflows)
   {
@@ -46,8 +60,9 @@ void renderRows(const SceneView& s, const CameraView& cam, const FrameParams& fp
       {
         const size_t p = size_t(y) * size_t(W) + size_t(x);
         const float z = depth ? depth[p] : 1.f;
-        Vec4f sum, evenSum;
-        Vec4f* evenOut = even ? &evenSum : nullptr;
+        Vec4d sum = loadSum(out.sums + 4 * p, previous);
+        Vec4d evenSum = addsEven ? loadSum(out.evenSums + 4 * p, evenSampleCount(previous)) : Vec4d();
+        Vec4d* evenOut = addsEven ? &evenSum : nullptr;
         if (Optimized)
         {
           ImportanceSegment* seg = pool->segments.data() + p * size_t(kImportanceCapacity);
@@ -63,19 +78,30 @@ void renderRows(const SceneView& s, const CameraView& cam, const FrameParams& fp
           ri.segments = seg;
           ri.count = count;
           ri.total = pool->totals[p];
-          sum = renderPixel<Mode, Lit, true>(s, cam, fp, x, y, z, c, &ri, evenOut);
+          renderPixel<Mode, Lit, true>(s, cam, fp, x, y, z, c, sum, &ri, evenOut);
         }
         else
         {
-          sum = unlit == 1 ? renderPixel<Mode, Lit, false, 1>(s, cam, fp, x, y, z, c, nullptr, evenOut)
-            : unlit == 2   ? renderPixel<Mode, Lit, false, 2>(s, cam, fp, x, y, z, c, nullptr, evenOut)
-            : unlit == 3   ? renderPixel<Mode, Lit, false, 3>(s, cam, fp, x, y, z, c, nullptr, evenOut)
-                           : renderPixel<Mode, Lit>(s, cam, fp, x, y, z, c, nullptr, evenOut);
+          switch (unlit)
+          {
+            case 1:
+              renderPixel<Mode, Lit, false, 1>(s, cam, fp, x, y, z, c, sum, nullptr, evenOut);
+              break;
+            case 2:
+              renderPixel<Mode, Lit, false, 2>(s, cam, fp, x, y, z, c, sum, nullptr, evenOut);
+              break;
+            case 3:
+              renderPixel<Mode, Lit, false, 3>(s, cam, fp, x, y, z, c, sum, nullptr, evenOut);
+              break;
+            default:
+              renderPixel<Mode, Lit>(s, cam, fp, x, y, z, c, sum, nullptr, evenOut);
+              break;
+          }
         }
-        accumulate(rgba + 4 * p, sum, previous, fp.samplesPerPixel);
-        if (even)
+        storeSum(out.mean + 4 * p, out.sums + 4 * p, sum, total);
+        if (addsEven)
         {
-          accumulateEven(even + 4 * p, evenSum, previous, fp.samplesPerPixel);
+          storeSum(out.even + 4 * p, out.evenSums + 4 * p, evenSum, evenSampleCount(total));
         }
       }
       dda += c.ddaSteps;
@@ -113,19 +139,19 @@ void renderRows(const SceneView& s, const CameraView& cam, const FrameParams& fp
 /// The unlit kernel unless the scene asks for lighting (compile-time choice:
 /// the unlit kernel contains none of the lighting code).
 template <BlendMode Mode>
-void rows(bool lit, const SceneView& s, const CameraView& cam, const FrameParams& fp, const float* depth, float* rgba,
-  float* even, uint32_t previous, int threads, const ImportanceFrame& imp, RenderCounters* counters)
+void rows(bool lit, const SceneView& s, const CameraView& cam, const FrameParams& fp, const float* depth,
+  const PixelSums& out, uint32_t previous, int threads, const ImportanceFrame& imp, RenderCounters* counters)
 {
   const bool optimized = imp.pool != nullptr;
   if (lit)
   {
-    optimized ? renderRows<Mode, true, true>(s, cam, fp, depth, rgba, even, previous, threads, imp, counters)
-              : renderRows<Mode, true, false>(s, cam, fp, depth, rgba, even, previous, threads, imp, counters);
+    optimized ? renderRows<Mode, true, true>(s, cam, fp, depth, out, previous, threads, imp, counters)
+              : renderRows<Mode, true, false>(s, cam, fp, depth, out, previous, threads, imp, counters);
   }
   else
   {
-    optimized ? renderRows<Mode, false, true>(s, cam, fp, depth, rgba, even, previous, threads, imp, counters)
-              : renderRows<Mode, false, false>(s, cam, fp, depth, rgba, even, previous, threads, imp, counters);
+    optimized ? renderRows<Mode, false, true>(s, cam, fp, depth, out, previous, threads, imp, counters)
+              : renderRows<Mode, false, false>(s, cam, fp, depth, out, previous, threads, imp, counters);
   }
 }
 } // namespace
@@ -164,25 +190,28 @@ void CPURenderer::render(const Scene& scene, const Camera& camera, const RenderS
     imp.refine = imp.pool->passes < s.importance.refinePasses;
     imp.seed = settings.seed;
   }
-  float* rgba = accum.rgba();
-  float* even = accum.evenRGBA(); // null: no error estimate wanted
+  PixelSums out;
+  out.sums = accum.sums();
+  out.mean = accum.rgba();
+  out.even = accum.evenRGBA(); // null: no error estimate wanted
+  out.evenSums = out.even ? accum.evenSums() : nullptr;
   const uint32_t previous = accum.samples();
   switch (s.blend.mode)
   {
     case BlendMode::Max:
-      rows<BlendMode::Max>(lit, s, cam, fp, depth, rgba, even, previous, this->Threads, imp, counters);
+      rows<BlendMode::Max>(lit, s, cam, fp, depth, out, previous, this->Threads, imp, counters);
       break;
     case BlendMode::Mix:
-      rows<BlendMode::Mix>(lit, s, cam, fp, depth, rgba, even, previous, this->Threads, imp, counters);
+      rows<BlendMode::Mix>(lit, s, cam, fp, depth, out, previous, this->Threads, imp, counters);
       break;
     case BlendMode::Composite:
-      rows<BlendMode::Composite>(lit, s, cam, fp, depth, rgba, even, previous, this->Threads, imp, counters);
+      rows<BlendMode::Composite>(lit, s, cam, fp, depth, out, previous, this->Threads, imp, counters);
       break;
     case BlendMode::Density:
     default:
-      rows<BlendMode::Density>(lit, s, cam, fp, depth, rgba, even, previous, this->Threads, imp, counters);
+      rows<BlendMode::Density>(lit, s, cam, fp, depth, out, previous, this->Threads, imp, counters);
       break;
   }
-  accum.addSamples(uint32_t(settings.samplesPerPixel));
+  accum.addSamples(uint32_t(settings.samplesPerPixel), true);
 }
 } // namespace mcvol

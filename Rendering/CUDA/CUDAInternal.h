@@ -20,6 +20,7 @@
 
 namespace mcvol
 {
+struct RenderLaunch;
 inline void check(cudaError_t e, const char* what)
 {
   if (e != cudaSuccess)
@@ -249,6 +250,12 @@ struct CUDARenderer::Internal
   /// error estimate; AccumEven: it is in step with Accum.
   DeviceBuffer<float4> Even;
   bool AccumEven = false;
+  /// Each pixel's sum of its samples (RGBA, Accumulator::sums), and the even
+  /// half's; AccumSumsCurrent: they hold Accum's samples (the ray marcher
+  /// writes Accum alone).
+  DeviceBuffer<double> AccumSums;
+  DeviceBuffer<double> EvenSums;
+  bool AccumSumsCurrent = false;
   bool SkipEvenReadBack = false; ///< set by render() for RenderSettings::readBackEven off
   bool PlainKernels = true;      ///< setPlainKernels()
   bool DeviceLevels = true;      ///< setDeviceLevels()
@@ -350,10 +357,11 @@ struct CUDARenderer::Internal
   const float* deviceDepth(const float* depth, size_t pixels);
   /// The Scene's importance tables on the device (uploaded when they changed).
   const float* deviceImportanceTables(const Scene& scene);
-  /// render(): makes Accum (and Even, when `accum` keeps the error estimate)
-  /// hold `accum`'s image, continuing the device copy when it is current;
-  /// returns Even's pointer, or null.
-  float4* deviceAccumulation(Accumulator& accum, size_t pixels);
+  /// render(): makes Accum and AccumSums (and Even and EvenSums, when
+  /// `accum` keeps the error estimate) hold `accum`'s image, continuing the
+  /// device copy when it is current, and points the launch's buffers at
+  /// them (even ones null without the estimate).
+  void deviceAccumulation(Accumulator& accum, size_t pixels, RenderLaunch& launch);
   /// render() with the visibility optimization: the view's importance
   /// fields, the device tables and segment lists of `accum` (restarted with
   /// its image); returns its pool and fills `launch`.

@@ -28,8 +28,8 @@ namespace
 template <BlendMode Mode, bool Lit>
 __global__ void renderOptimizedKernel(const __grid_constant__ SceneView s, const __grid_constant__ CameraView cam,
   const __grid_constant__ FrameParams fp, const float* __restrict__ depth, float4* __restrict__ accum,
-  float4* __restrict__ even, uint32_t previous, unsigned long long* __restrict__ counters,
-  ImportanceSegment* __restrict__ segments, uint8_t* __restrict__ counts, float* __restrict__ totals, int refinePass)
+  double* __restrict__ sums, float4* __restrict__ even, double* __restrict__ evenSums, uint32_t previous,
+  unsigned long long* __restrict__ counters, ImportanceSegment* __restrict__ segments, uint8_t* __restrict__ counts, float* __restrict__ totals, int refinePass)
 {
   const int x = int(blockIdx.x * blockDim.x + threadIdx.x);
   const int y = int(blockIdx.y * blockDim.y + threadIdx.y);
@@ -54,13 +54,7 @@ __global__ void renderOptimizedKernel(const __grid_constant__ SceneView s, const
     ri.segments = seg;
     ri.count = count;
     ri.total = total;
-    Vec4f evenSum;
-    const Vec4f sum = renderPixel<Mode, Lit, true>(s, cam, fp, x, y, z, c, &ri, even ? &evenSum : nullptr);
-    accumulatePixel(accum + p, sum, previous, fp.samplesPerPixel);
-    if (even)
-    {
-      accumulateEvenPixel(even + p, evenSum, previous, fp.samplesPerPixel);
-    }
+    renderIntoPixel<Mode, Lit, true, 0>(s, cam, fp, x, y, z, p, c, &ri, accum, sums, even, evenSums, previous);
   }
   // Always counted (one atomic per warp and counter): the overflow count is
   // needed whatever the caller asked for.
@@ -100,7 +94,8 @@ void launchOptimized(BlendMode mode, bool lit, const SceneView& s, const CameraV
         [&](auto l)
         {
           renderOptimizedKernel<decltype(m)::value, decltype(l)::value><<<k.grid, k.block, 0, k.stream>>>(
-            s, cam, fp, k.depth, k.accum, k.even, k.previous, k.counters, o.segments, o.counts, o.totals, o.refinePass);
+            s, cam, fp, k.depth, k.accum, k.sums, k.even, k.evenSums, k.previous, k.counters, o.segments, o.counts,
+            o.totals, o.refinePass);
         });
     });
 }
@@ -210,13 +205,13 @@ size_t checkPilotJobs(const Camera& camera, std::vector<PilotJob>& jobs)
 
 /// Each replicate's means at its checkpoints from the round's one-sample
 /// images (`host`, in launch order) and its counters (`c`, a block of 9 per
-/// job), folded as render() folds a chunk of samples into the running mean
-/// (accumulate()).
+/// job), summed as render() sums a pixel's samples (addSample(), storeSum()):
+/// the same means as renders of the checkpoints' samples.
 void foldPilotMeans(std::vector<PilotJob>& jobs, const float* host, const unsigned long long* c, size_t pixels)
 {
   const size_t P = pixels;
   size_t image = 0;
-  std::vector<float> sums(4 * P);
+  std::vector<Vec4d> sums(P);
   for (size_t j = 0; j < jobs.size(); ++j)
   {
     PilotJob& job = jobs[j];
@@ -225,25 +220,23 @@ void foldPilotMeans(std::vector<PilotJob>& jobs, const float* host, const unsign
     {
       job.means[r].clear();
       std::vector<float> mean(4 * P, 0.f);
+      std::fill(sums.begin(), sums.end(), Vec4d());
       int done = 0;
       for (int upTo : job.checkpoints)
       {
-        // The samples summed image by image: each pixel's samples are added
-        // in the same order as pixel by pixel, but each image is read once,
-        // in memory order.
-        std::fill(sums.begin(), sums.end(), 0.f);
+        // Each pixel's samples are added in their order, as pixel by pixel,
+        // but each image is read once, in memory order.
         for (int k = done; k < upTo; ++k)
         {
           const float* v = host + 4 * (image + size_t(k)) * P;
-          for (size_t i = 0; i < 4 * P; ++i)
+          for (size_t p = 0; p < P; ++p)
           {
-            sums[i] += v[i];
+            addSample(sums[p], Vec4f{ v[4 * p], v[4 * p + 1], v[4 * p + 2], v[4 * p + 3] });
           }
         }
         for (size_t p = 0; p < P; ++p)
         {
-          const Vec4f sum{ sums[4 * p], sums[4 * p + 1], sums[4 * p + 2], sums[4 * p + 3] };
-          accumulate(mean.data() + 4 * p, sum, uint32_t(done), upTo - done);
+          storeSum(mean.data() + 4 * p, nullptr, sums[p], uint32_t(upTo));
         }
         done = upTo;
         job.means[r].push_back(mean);
@@ -322,12 +315,12 @@ const float* CUDARenderer::Internal::deviceImportanceTables(const Scene& scene)
   return this->ImportanceTables.ptr;
 }
 
-float4* CUDARenderer::Internal::deviceAccumulation(Accumulator& accum, size_t pixels)
+void CUDARenderer::Internal::deviceAccumulation(Accumulator& accum, size_t pixels, RenderLaunch& launch)
 {
-  // Continue the device mean only if it is this Accumulator's, at its sample
-  // count; otherwise start from the host's. The even-sample mean of the
-  // error estimate goes with it, when the Accumulator keeps one (AccumEven:
-  // the device copy is in step).
+  // Continue the device image only if it is this Accumulator's, at its
+  // sample count, with its sums; otherwise start from the host's. The
+  // even-sample mean of the error estimate goes with it, when the
+  // Accumulator keeps one (AccumEven: the device copy is in step).
   const size_t P = pixels;
   const bool wantEven = accum.hasEven();
   if (accum.pendingOnDevice() && this->AccumId != accum.id())
@@ -336,20 +329,24 @@ float4* CUDARenderer::Internal::deviceAccumulation(Accumulator& accum, size_t pi
                            "false) and has since been replaced by another Accumulator's; call readBack() before "
                            "rendering another Accumulator");
   }
-  if (this->Accum.count != P)
+  if (this->Accum.count != P || this->AccumSums.count != 4 * P)
   {
     this->Accum.resize(P);
+    this->AccumSums.resize(4 * P);
     this->AccumId = 0;
   }
-  if (wantEven && this->Even.count != P)
+  if (wantEven && (this->Even.count != P || this->EvenSums.count != 4 * P))
   {
     this->Even.resize(P);
+    this->EvenSums.resize(4 * P);
     this->AccumEven = false;
   }
-  if (this->AccumId != accum.id() || this->AccumSamples != accum.samples() || (wantEven && !this->AccumEven))
+  if (this->AccumId != accum.id() || this->AccumSamples != accum.samples() || (wantEven && !this->AccumEven) ||
+    !this->AccumSumsCurrent)
   {
     if (accum.samples() == 0)
     {
+      // The sums are not read at 0 samples (loadSum()).
       MCVOL_CUDA(cudaMemsetAsync(this->Accum.ptr, 0, this->Accum.bytes()));
       if (wantEven)
       {
@@ -358,17 +355,31 @@ float4* CUDARenderer::Internal::deviceAccumulation(Accumulator& accum, size_t pi
     }
     else
     {
+      if (accum.pendingOnDevice())
+      {
+        // This image's mean is here without its sums (the ray marcher's):
+        // to the host, where the sums are derived from it.
+        MCVOL_CUDA(cudaMemcpy(accum.rgbaForOverwrite(), this->Accum.ptr, this->Accum.bytes(), cudaMemcpyDeviceToHost));
+        accum.setPendingOnDevice(false);
+      }
+      const double* sums = accum.sums();
       MCVOL_CUDA(cudaMemcpy(this->Accum.ptr, accum.rgba(), this->Accum.bytes(), cudaMemcpyHostToDevice));
+      MCVOL_CUDA(cudaMemcpy(this->AccumSums.ptr, sums, this->AccumSums.bytes(), cudaMemcpyHostToDevice));
       if (wantEven)
       {
         MCVOL_CUDA(cudaMemcpy(this->Even.ptr, accum.evenRGBA(), this->Even.bytes(), cudaMemcpyHostToDevice));
+        MCVOL_CUDA(cudaMemcpy(this->EvenSums.ptr, accum.evenSums(), this->EvenSums.bytes(), cudaMemcpyHostToDevice));
       }
     }
     this->AccumId = accum.id();
   }
   // Renders without the split leave the device's even image behind.
   this->AccumEven = wantEven;
-  return wantEven ? this->Even.ptr : nullptr;
+  this->AccumSumsCurrent = true;
+  launch.accum = this->Accum.ptr;
+  launch.sums = this->AccumSums.ptr;
+  launch.even = wantEven ? this->Even.ptr : nullptr;
+  launch.evenSums = wantEven ? this->EvenSums.ptr : nullptr;
 }
 
 Accumulator::ImportancePool& CUDARenderer::Internal::deviceImportance(
@@ -428,8 +439,7 @@ void CUDARenderer::render(const Scene& scene, const Camera& camera, const Render
 
   const size_t P = size_t(camera.width) * size_t(camera.height);
   RenderLaunch k;
-  k.even = in.deviceAccumulation(accum, P);
-  k.accum = in.Accum.ptr;
+  in.deviceAccumulation(accum, P, k);
   k.depth = in.deviceDepth(depth, P);
   k.previous = accum.samples();
   k.counters = in.Counters.ptr;

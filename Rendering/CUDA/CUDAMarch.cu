@@ -112,6 +112,7 @@ void CUDARenderer::march(const Scene& scene, const Camera& camera, const MarchSe
   accum.reset();
   in.Accum.resize(P);
   in.AccumId = 0;
+  in.AccumSumsCurrent = false; // the march writes the mean alone
   const float* devDepth = in.deviceDepth(depth, P);
   const bool count = counters != nullptr;
   if (count)

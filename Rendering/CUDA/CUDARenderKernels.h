@@ -32,34 +32,48 @@ struct RenderLaunch
   cudaStream_t stream = 0;                ///< 0: the legacy default stream
   const float* depth = nullptr;           ///< window depth per pixel, or null
   float4* accum = nullptr;                ///< running mean
+  double* sums = nullptr;                 ///< the mean's per-pixel sums (RGBA), or null: previous is 0
   float4* even = nullptr;                 ///< even-sample mean of the error estimate, or null
+  double* evenSums = nullptr;             ///< its sums (with even)
   uint32_t previous = 0;                  ///< samples already in the mean
   unsigned long long* counters = nullptr; ///< work counters (counting kernels)
 };
 
 namespace
 {
-/// The core's running mean (accumulate()) on one pixel of the device image.
-__device__ MCVOL_FORCE_INLINE void accumulatePixel(float4* pixel, const Vec4f& sum, uint32_t previous, int added)
+/// The core's accumulation on pixel p of the device image: its sum of
+/// `previous` samples (loadSum(); zero without a sums buffer).
+__device__ MCVOL_FORCE_INLINE Vec4d pixelSum(const double* sums, size_t p, uint32_t previous)
 {
-  const float4 old = *pixel;
-  float v[4] = { old.x, old.y, old.z, old.w };
-  accumulate(v, sum, previous, added);
-  *pixel = make_float4(v[0], v[1], v[2], v[3]);
+  return loadSum(sums ? sums + 4 * p : nullptr, previous);
 }
 
-/// The even half of the error estimate (accumulateEven()) on one pixel of
-/// the device's even-sample image.
-__device__ MCVOL_FORCE_INLINE void accumulateEvenPixel(float4* pixel, const Vec4f& sum, uint32_t previous, int added)
+/// Stores pixel p's sum of `samples` samples and its mean (storeSum()).
+__device__ MCVOL_FORCE_INLINE void storePixel(float4* mean, double* sums, size_t p, const Vec4d& sum, uint32_t samples)
 {
-  if (addedEvenSamples(previous, added) == 0u)
+  float v[4];
+  storeSum(v, sums ? sums + 4 * p : nullptr, sum, samples);
+  mean[p] = make_float4(v[0], v[1], v[2], v[3]);
+}
+
+/// Renders pixel (x, y) into the running mean and sums, and the error
+/// estimate's even half when `even` is not null; the even half is neither
+/// read nor written by a render that adds no sample of even index.
+template <BlendMode Mode, bool Lit, bool Optimized, int Unlit>
+__device__ MCVOL_FORCE_INLINE void renderIntoPixel(const SceneView& s, const CameraView& cam, const FrameParams& fp,
+  int x, int y, float z, size_t p, RayCounters& c, const RayImportance* ri, float4* accum, double* sums, float4* even,
+  double* evenSums, uint32_t previous)
+{
+  const bool addsEven = even && addedEvenSamples(previous, fp.samplesPerPixel) > 0u;
+  Vec4d sum = pixelSum(sums, p, previous);
+  Vec4d evenSum = addsEven ? pixelSum(evenSums, p, evenSampleCount(previous)) : Vec4d();
+  renderPixel<Mode, Lit, Optimized, Unlit>(s, cam, fp, x, y, z, c, sum, ri, addsEven ? &evenSum : nullptr);
+  const uint32_t total = previous + uint32_t(fp.samplesPerPixel);
+  storePixel(accum, sums, p, sum, total);
+  if (addsEven)
   {
-    return; // no sample of even index in this render: leave the pixel unread
+    storePixel(even, evenSums, p, evenSum, evenSampleCount(total));
   }
-  const float4 old = *pixel;
-  float v[4] = { old.x, old.y, old.z, old.w };
-  accumulateEven(v, sum, previous, added);
-  *pixel = make_float4(v[0], v[1], v[2], v[3]);
 }
 
 /// One thread per pixel: renderPixel() from the core, folded into the
@@ -69,8 +83,8 @@ __device__ MCVOL_FORCE_INLINE void accumulateEvenPixel(float4* pixel, const Vec4
 /// is the unlit estimator's code (unlitEstimator(), Integrator.h).
 template <BlendMode Mode, bool Count, bool Lit, int Unlit>
 __device__ __forceinline__ void renderKernelBody(const SceneView& s, const CameraView& cam, const FrameParams& fp,
-  const float* __restrict__ depth, float4* __restrict__ accum, float4* __restrict__ even, uint32_t previous,
-  unsigned long long* __restrict__ counters)
+  const float* __restrict__ depth, float4* __restrict__ accum, double* __restrict__ sums, float4* __restrict__ even,
+  double* __restrict__ evenSums, uint32_t previous, unsigned long long* __restrict__ counters)
 {
   const int x = int(blockIdx.x * blockDim.x + threadIdx.x);
   const int y = int(blockIdx.y * blockDim.y + threadIdx.y);
@@ -102,13 +116,7 @@ __device__ __forceinline__ void renderKernelBody(const SceneView& s, const Camer
   {
     const size_t p = size_t(y) * size_t(cam.width) + size_t(x);
     const float z = depth ? depth[p] : 1.f;
-    Vec4f evenSum;
-    const Vec4f sum = renderPixel<Mode, Lit, false, Unlit>(s, cam, f, x, y, z, c, nullptr, even ? &evenSum : nullptr);
-    accumulatePixel(accum + p, sum, previous, fp.samplesPerPixel);
-    if (even)
-    {
-      accumulateEvenPixel(even + p, evenSum, previous, fp.samplesPerPixel);
-    }
+    renderIntoPixel<Mode, Lit, false, Unlit>(s, cam, f, x, y, z, p, c, nullptr, accum, sums, even, evenSums, previous);
   }
   if (Count)
   {
@@ -140,9 +148,10 @@ __device__ __forceinline__ void renderKernelBody(const SceneView& s, const Camer
 template <BlendMode Mode, bool Count, bool Lit, int Unlit = 0>
 __global__ void renderKernel(const __grid_constant__ SceneView s, const __grid_constant__ CameraView cam,
   const __grid_constant__ FrameParams fp, const float* __restrict__ depth, float4* __restrict__ accum,
-  float4* __restrict__ even, uint32_t previous, unsigned long long* __restrict__ counters)
+  double* __restrict__ sums, float4* __restrict__ even, double* __restrict__ evenSums, uint32_t previous,
+  unsigned long long* __restrict__ counters)
 {
-  renderKernelBody<Mode, Count, Lit, Unlit>(s, cam, fp, depth, accum, even, previous, counters);
+  renderKernelBody<Mode, Count, Lit, Unlit>(s, cam, fp, depth, accum, sums, even, evenSums, previous, counters);
 }
 
 /// Launches renderKernel<Mode, Count, Lit, Unlit> with `count` as Count.
@@ -154,7 +163,8 @@ void launchRenderKernel(
     [&](auto counted)
     {
       renderKernel<Mode, decltype(counted)::value, Lit, Unlit>
-        <<<k.grid, k.block, 0, k.stream>>>(s, cam, fp, k.depth, k.accum, k.even, k.previous, k.counters);
+        <<<k.grid, k.block, 0, k.stream>>>(
+          s, cam, fp, k.depth, k.accum, k.sums, k.even, k.evenSums, k.previous, k.counters);
     });
 }
 

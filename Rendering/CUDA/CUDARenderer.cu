@@ -259,7 +259,8 @@ CudaMemoryStats CUDARenderer::memory() const
   }
   m.macrocellBytes = this->In->Ranges.bytes();
   m.majorantBytes = this->In->Majorants.bytes();
-  m.imageBytes = this->In->Accum.bytes() + this->In->Even.bytes() + this->In->Depth.bytes() + this->In->Display.bytes();
+  m.imageBytes = this->In->Accum.bytes() + this->In->Even.bytes() + this->In->AccumSums.bytes() +
+    this->In->EvenSums.bytes() + this->In->Depth.bytes() + this->In->Display.bytes();
   for (const auto& li : this->In->LevelInputs)
   {
     m.levelInputBytes += li->data.bytes();

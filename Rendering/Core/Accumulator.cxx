@@ -23,6 +23,7 @@ void Accumulator::resize(int width, int height)
     }
     this->EvenValid = this->EstimateError;
     this->Samples = 0;
+    this->SumsValid = true;
     this->Pending = false;
     this->EvenPending = false;
     this->ClearRGBA = false;
@@ -48,6 +49,7 @@ void Accumulator::reset()
   }
   this->EvenValid = this->EstimateError;
   this->Samples = 0;
+  this->SumsValid = true; // at 0 samples the sums are not read
   this->Pending = false;
   this->EvenPending = false;
   // The segment lists belong to the image: a new image refines anew.
@@ -73,6 +75,7 @@ void Accumulator::clearHost() const
 float* Accumulator::rgbaForOverwrite()
 {
   this->ClearRGBA = false;
+  this->SumsValid = false;
   return this->RGBA.data();
 }
 
@@ -83,7 +86,53 @@ float* Accumulator::evenRGBAForOverwrite()
     return nullptr;
   }
   this->ClearEven = false;
+  this->SumsValid = false;
   return this->Even.data();
+}
+
+namespace
+{
+/// Sums of `n` samples whose mean is `mean`.
+void sumsFromMean(std::vector<double>& sums, const float* mean, size_t count, uint32_t n)
+{
+  sums.resize(count);
+  for (size_t i = 0; i < count; ++i)
+  {
+    sums[i] = double(mean[i]) * double(n);
+  }
+}
+} // namespace
+
+double* Accumulator::sums()
+{
+  this->settle();
+  if (this->Sum.size() != this->RGBA.size())
+  {
+    this->Sum.assign(this->RGBA.size(), 0.0);
+    this->EvenSum.clear();
+    this->SumsValid = this->Samples == 0;
+  }
+  if (this->EvenValid && this->EvenSum.size() != this->Even.size())
+  {
+    this->EvenSum.assign(this->Even.size(), 0.0);
+    this->SumsValid = this->SumsValid && this->Samples == 0;
+  }
+  if (!this->SumsValid)
+  {
+    sumsFromMean(this->Sum, this->RGBA.data(), this->RGBA.size(), this->Samples);
+    if (this->EvenValid)
+    {
+      sumsFromMean(this->EvenSum, this->Even.data(), this->Even.size(), evenSamples(this->Samples));
+    }
+    this->SumsValid = true;
+  }
+  return this->Sum.data();
+}
+
+double* Accumulator::evenSums()
+{
+  this->sums();
+  return this->EvenValid ? this->EvenSum.data() : nullptr;
 }
 
 void Accumulator::setErrorEstimation(bool on)
@@ -102,6 +151,7 @@ void Accumulator::setErrorEstimation(bool on)
   }
   else
   {
+    std::vector<double>().swap(this->EvenSum);
     std::vector<float>().swap(this->Even);
     this->ClearEven = false;
     this->EvenValid = false;

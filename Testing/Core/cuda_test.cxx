@@ -732,7 +732,7 @@ TEST(CudaClassified, HalfPrecisionAgreesWithCpu)
 }
 
 // Progressive accumulation on the device: k renders of one sample with the
-// image left on the device equal one render of k samples; a host reset
+// image left on the device equal one render of k samples, bit for bit; a host reset
 // restarts the device mean; the CPU's progressive mean matches too.
 TEST(CudaAccumulation, ProgressiveDeviceMeanAndReset)
 {
@@ -755,7 +755,8 @@ TEST(CudaAccumulation, ProgressiveDeviceMeanAndReset)
   const std::vector<float> once = renderImage(g, scene, cam, 8, 9);
   for (size_t i = 0; i < once.size(); ++i)
   {
-    ASSERT_NEAR(progressive.rgba()[i], once[i], 2e-6f) << "value " << i;
+    // Bit for bit: each sample joins the pixel's double sum in order.
+    ASSERT_EQ(progressive.rgba()[i], once[i]) << "value " << i;
   }
   // An image left on the device is replaced by another Accumulator's render:
   // reading it back, or rendering on, is an error, not a stale image.
@@ -783,6 +784,58 @@ TEST(CudaAccumulation, ProgressiveDeviceMeanAndReset)
   {
     ASSERT_EQ(progressive.rgba()[i], once[i]) << "value " << i;
   }
+}
+
+// As render_test's Accumulation.KeepsConvergingPast2To24Samples, on the
+// device: a 2^25-sample image set up on the host (its sums derived from the
+// mean and uploaded), then 64 renders of one sample, read back each time
+// for one image and left on the device until the last for the other. Image A (mean 0.5)
+// must equal 0.5 x 2^25 / N + B (B: the same samples on a zero mean) within
+// one float spacing at 0.5; a float running mean stalls at 0.5, 9.5e-7 off.
+TEST(CudaAccumulation, KeepsConvergingPast2To24Samples)
+{
+  const TypedVolume v(ScalarType::UInt8, 3, 30, 28, 26);
+  Scene scene;
+  v.configure(scene, BlendMode::Density);
+  const Camera cam = orbitCamera(v.dims, std::array<double, 3>{ 1, 1, 1 }.data(), 24, 24, 30, 20);
+  const size_t n = size_t(cam.width) * cam.height * 4;
+  const uint32_t preset = 1u << 25;
+  const int renders = 64;
+  CUDARenderer g;
+  Accumulator a, b;
+  for (Accumulator* acc : { &a, &b })
+  {
+    acc->resize(cam.width, cam.height);
+    float* mean = acc->rgbaForOverwrite();
+    std::fill(mean, mean + n, acc == &a ? 0.5f : 0.f);
+    acc->addSamples(preset);
+  }
+  RenderSettings rs;
+  rs.seed = 3;
+  rs.samplesPerPixel = 1;
+  for (int k = 0; k < renders; ++k)
+  {
+    g.render(scene, cam, rs, nullptr, a);
+  }
+  rs.readBack = false;
+  for (int k = 0; k < renders; ++k)
+  {
+    g.render(scene, cam, rs, nullptr, b);
+  }
+  g.readBack(b);
+  ASSERT_EQ(a.samples(), preset + uint32_t(renders));
+  const double N = double(preset) + renders;
+  const double base = 0.5 * double(preset) / N;
+  double worst = 0;
+  size_t moved = 0;
+  for (size_t i = 0; i < n; ++i)
+  {
+    const double want = base + double(b.rgba()[i]);
+    worst = std::max(worst, std::fabs(double(a.rgba()[i]) - want));
+    moved += std::fabs(want - 0.5) > 2e-7 ? 1u : 0u;
+  }
+  EXPECT_LE(worst, 0x1p-24) << "the mean of 2^25 + 64 samples is off by more than its rounding";
+  EXPECT_GT(moved, n / 4) << "too few pixels whose mean must move";
 }
 
 // The display image (what the VTK mapper draws from a device backend): the

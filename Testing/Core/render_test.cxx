@@ -10,7 +10,10 @@
 // (Bonferroni) over its statistical checks; seeds are fixed.
 #include "TestUtil.h"
 
+#include "mcvol/ray/Integrator.h"
+
 #include <cstring>
+#include <numeric>
 
 using namespace mcvol;
 using namespace mcvol::test;
@@ -131,6 +134,133 @@ TEST(Reproducibility, ProgressiveEqualsOneRender)
     EXPECT_LE(maxDiff, 1e-5) << toString(t);
     EXPECT_GT(sum, 10.0) << "empty image";
   }
+}
+
+// Each sample is added to the pixel's sum of all the samples before it, so
+// the batching of samples into renders changes nothing, bit for bit: neither
+// the image nor the error estimate's even half.
+TEST(Reproducibility, BatchingDoesNotChangeImageBitForBit)
+{
+  const DemoVolume v = makeDemo("figure3", { 32, 32, 32 });
+  Scene scene;
+  configureDemo(scene, v, 8);
+  const Camera cam = demoCamera(v, 40, 40, 60, -15);
+  const size_t n = size_t(cam.width) * cam.height * 4;
+  CPURenderer r;
+  for (Estimator e : { Estimator::Collision, Estimator::ExpectedValue })
+  {
+    std::vector<float> ref, refEven;
+    double refMSE = 0;
+    for (const std::vector<int>& batches : { std::vector<int>{ 24 }, std::vector<int>(24, 1), { 5, 7, 12 },
+           { 8, 8, 8 } })
+    {
+      RenderSettings rs;
+      rs.seed = 5;
+      rs.estimator = e;
+      Accumulator acc;
+      for (int b : batches)
+      {
+        rs.samplesPerPixel = b;
+        r.render(scene, cam, rs, nullptr, acc);
+      }
+      ASSERT_EQ(acc.samples(), 24u);
+      ASSERT_NE(acc.evenRGBA(), nullptr);
+      std::vector<float> img(acc.rgba(), acc.rgba() + n), even(acc.evenRGBA(), acc.evenRGBA() + n);
+      if (ref.empty())
+      {
+        ref = img;
+        refEven = even;
+        refMSE = acc.estimatedMSE();
+        EXPECT_GT(std::accumulate(ref.begin(), ref.end(), 0.0), 10.0) << "empty image";
+        continue;
+      }
+      EXPECT_EQ(0, std::memcmp(ref.data(), img.data(), n * sizeof(float)))
+        << toString(e) << ": " << batches.size() << " batches differ from one render";
+      EXPECT_EQ(0, std::memcmp(refEven.data(), even.data(), n * sizeof(float)))
+        << toString(e) << ": even half, " << batches.size() << " batches";
+      EXPECT_EQ(acc.estimatedMSE(), refMSE) << toString(e);
+    }
+  }
+}
+
+// ------------------------------------------------------ long accumulation
+
+// Past 2^24 samples per pixel a float running mean stops taking samples
+// close to it (a float mean of 0.5 moves by at least half its spacing,
+// 3e-8, only for a step of more than 2^-25 x the difference: with one
+// sample per render and 2^25 samples, never). The image is a double sum
+// over the count, so it keeps converging. A 2^25-sample image is set up
+// without rendering it: a mean written through rgbaForOverwrite() and the
+// count through addSamples() (the sums are derived from them), then 64
+// renders of one sample each. Image B holds the same 64 samples on a zero
+// mean, so image A must equal 0.5 x 2^25 / N + B (N = 2^25 + 64) to within
+// the rounding of A (under one float spacing at 0.5, 6e-8); a stalled mean
+// stays at 0.5, 9.5e-7 off where the samples are 0 (the background) or 1.
+TEST(Accumulation, KeepsConvergingPast2To24Samples)
+{
+  const DemoVolume v = makeDemo("figure3", { 32, 32, 32 });
+  Scene scene;
+  configureDemo(scene, v, 8);
+  const Camera cam = demoCamera(v, 24, 24, 60, -15);
+  const size_t n = size_t(cam.width) * cam.height * 4;
+  const uint32_t preset = 1u << 25;
+  const int renders = 64;
+  CPURenderer r;
+  RenderSettings rs;
+  rs.seed = 3;
+  rs.samplesPerPixel = 1;
+  Accumulator a, b;
+  for (Accumulator* acc : { &a, &b })
+  {
+    acc->resize(cam.width, cam.height);
+    acc->setErrorEstimation(false);
+    float* mean = acc->rgbaForOverwrite();
+    std::fill(mean, mean + n, acc == &a ? 0.5f : 0.f);
+    acc->addSamples(preset);
+  }
+  for (int k = 0; k < renders; ++k)
+  {
+    r.render(scene, cam, rs, nullptr, a);
+    r.render(scene, cam, rs, nullptr, b);
+  }
+  const double N = double(preset) + renders;
+  const double base = 0.5 * double(preset) / N;
+  double worst = 0;
+  size_t moved = 0;
+  for (size_t i = 0; i < n; ++i)
+  {
+    const double want = base + double(b.rgba()[i]);
+    worst = std::max(worst, std::fabs(double(a.rgba()[i]) - want));
+    moved += std::fabs(want - 0.5) > 2e-7 ? 1u : 0u; // more than 3 float spacings from 0.5
+  }
+  EXPECT_LE(worst, 0x1p-24) << "the mean of 2^25 + 64 samples is off by more than its rounding";
+  EXPECT_GT(moved, n / 4) << "too few pixels whose mean must move";
+
+  // A synthetic stream through the same per-pixel sums (loadSum, addSample,
+  // storeSum): 2^25 samples of k / 2^16, in renders of 8. Their sum is
+  // exact in double, so the mean is the exact mean rounded once.
+  double stored[4] = { 0, 0, 0, 0 };
+  float streamMean[4] = { 0, 0, 0, 0 };
+  uint64_t exact = 0; // in units of 2^-16
+  uint32_t count = 0;
+  uint32_t state = 12345u;
+  while (count < preset)
+  {
+    Vec4d sum = loadSum(stored, count);
+    for (int k = 0; k < 8; ++k)
+    {
+      state = state * 1664525u + 1013904223u;
+      const uint32_t units = state >> 16; // 0 ... 2^16 - 1
+      exact += units;
+      const float x = float(units) * 0x1p-16f;
+      addSample(sum, Vec4f{ x, x, x, 1.f });
+    }
+    count += 8;
+    storeSum(streamMean, stored, sum, count);
+  }
+  const float want = float(double(exact) * 0x1p-16 / double(count));
+  EXPECT_EQ(streamMean[0], want);
+  EXPECT_EQ(streamMean[3], 1.f);
 }
 
 // ----------------------------------------------------------- blend modes

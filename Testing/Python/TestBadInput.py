@@ -15,6 +15,7 @@ behaviour (Documentation/user-guide/numerical-limits.md):
 
 import math
 import os
+import re
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
@@ -38,12 +39,32 @@ SETTERS = {
     vtkMultiChannelVolumeMapper: [
         "InteractiveUpdateRate", "MinimumSamplesPerVoxel", "MarchSamplesPerVoxel", "InteractiveFrameTime",
         "TargetError", "Shininess", "DeviationWeight", "OcclusionWeight", "ClutterWeight", "ImportanceEmphasis",
-        "ImportanceMergeDistance", "MemoryBudget"],
+        "ImportanceMergeDistance", "MemoryBudget", "LightIntensityScale"],
     vtkMultiChannelRayMarchMapper: ["StepSize", "TerminationTransmittance"],
 }
+
+
+def double_setters(cls, base):
+    """The Set...(double) methods `cls` declares beyond `base`, from the
+    C++ signatures in the wrapped methods' documentation."""
+    pattern = re.compile(r"C\+\+: (?:virtual )?void (Set\w+)\((?:double|float) \w*\)")
+    inherited = set(dir(base))
+    found = set()
+    for name in dir(cls):
+        if name.startswith("Set") and name not in inherited:
+            found.update(m.group(1)[3:] for m in pattern.finditer(getattr(cls, name).__doc__ or ""))
+    return found
+
+
+# The lists hold every double setter the classes declare.
+for cls, base in ((vtkMultiChannelVolumeMapper, vtkMultiChannelVolumeMapper.__bases__[0]),
+                  (vtkMultiChannelRayMarchMapper, vtkMultiChannelVolumeMapper)):
+    declared = double_setters(cls, base)
+    t.check(declared == set(SETTERS[cls]), "%s: double setters not checked for NaN: %s; listed but not found: %s"
+            % (cls.__name__, sorted(declared - set(SETTERS[cls])), sorted(set(SETTERS[cls]) - declared)))
 for cls, names in SETTERS.items():
-    # Every public Set...(double) of the class is listed (the channel and
-    # vector setters are checked below).
+    # Every public Set...(double) of the class is listed (checked above; the
+    # channel and vector setters are checked below).
     for name in names:
         mapper = cls()
         errors = ErrorCatcher(mapper)

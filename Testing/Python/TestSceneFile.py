@@ -349,7 +349,7 @@ def main():
         t.check(r.returncode == 0 and "32 spp" in r.stderr and "not reached (capped)" in r.stderr,
                 "an unreachable target stops at the cap: %d %r" % (r.returncode, r.stderr))
 
-    # Bad scenes: status 2, the key named, no traceback, no image.
+    # Bad scenes: status 2, one line naming the key, no traceback, no image.
     bad_dir = os.path.join(work, "bad")
     os.makedirs(bad_dir, exist_ok=True)
     for name, scene, expected in BAD_SCENES:
@@ -363,6 +363,7 @@ def main():
         r = run(program, [fn, "-o", out, "--spp", "1", "--size", "16x16"])
         t.check(r.returncode == 2, "%s: exit status %d, expected 2 (%s)" % (name, r.returncode, r.stderr.strip()))
         t.check(expected in r.stderr, "%s: message %r does not contain %r" % (name, r.stderr.strip(), expected))
+        t.check(len(r.stderr.strip().splitlines()) == 1, "%s: not one line: %r" % (name, r.stderr.strip()[:300]))
         t.check("Traceback" not in r.stderr, "%s: traceback printed" % name)
         t.check(not os.path.exists(out), "%s: an image was written" % name)
 
@@ -403,17 +404,29 @@ def main():
                 "%s: expected one line with %r, got %r" % (name, expected, r.stderr.strip()[:300]))
         t.check(not os.path.exists(out), "%s: an image was written" % name)
 
-    # Invalid JSON and bad arguments: status 2 too.
+    # Invalid JSON, a missing scene and bad arguments: status 2, one line,
+    # no image, too.
     fn = os.path.join(bad_dir, "invalid.json")
     with open(fn, "w") as f:
         f.write('{"input": {"demo": "figure3"},\n "blend": }\n')
-    r = run(program, [fn, "-o", os.path.join(bad_dir, "invalid.png")])
+    out = os.path.join(bad_dir, "invalid.png")
+    r = run(program, [fn, "-o", out])
     t.check(r.returncode == 2 and "invalid JSON" in r.stderr and "line 2" in r.stderr, "invalid JSON: %d %r" % (r.returncode, r.stderr))
+    t.check(len(r.stderr.strip().splitlines()) == 1 and not os.path.exists(out),
+            "invalid JSON: one line and no image (%r)" % r.stderr.strip()[:300])
+    out = os.path.join(bad_dir, "missing.png")
+    r = run(program, [os.path.join(bad_dir, "no-such-scene.json"), "-o", out])
+    t.check(r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1 and "no-such-scene.json" in r.stderr
+            and not os.path.exists(out), "a missing scene file: %d %r" % (r.returncode, r.stderr.strip()[:300]))
     if scenes:
         for extra, what in ((["--size", "64"], "--size"), (["--spp", "0"], "--spp"), (["--raw", "x.exr"], "--raw"),
-                            (["--step", "1"], "--reference"), (["--reference", "--step-voxels", "0"], "--step-voxels")):
-            r = run(program, [scenes[0], "-o", os.path.join(bad_dir, "arg.png")] + extra)
+                            (["--step", "1"], "--reference"), (["--reference", "--step-voxels", "0"], "--step-voxels"),
+                            (["--no-such-option"], "--no-such-option")):
+            out = os.path.join(bad_dir, "arg.png")
+            r = run(program, [scenes[0], "-o", out] + extra)
             t.check(r.returncode == 2 and what in r.stderr, "argument %s: %d %r" % (extra, r.returncode, r.stderr.strip()))
+            t.check(len(r.stderr.strip().splitlines()) == 1 and not os.path.exists(out),
+                    "argument %s: one line and no image (%r)" % (extra, r.stderr.strip()[:300]))
     t.finish()
 
 

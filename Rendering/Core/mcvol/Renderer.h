@@ -111,6 +111,10 @@ struct RenderCounters
 /**
  * Running mean of premultiplied RGBA per pixel. Each render adds K samples
  * per pixel; reset() starts over (the caller resets when the image changes).
+ * The mean is float (rgba()); beside it the host backend keeps each pixel's
+ * sum of samples in double (sums()), to which every sample is added, so the
+ * image keeps converging past 2^24 samples per pixel and does not depend on
+ * how the samples were batched.
  *
  * Error estimate (on by default, errorEstimation()): a second running mean
  * holds only the samples of even per-pixel index (half A; the odd ones, half
@@ -154,8 +158,25 @@ public:
   /// written by the first rgba()/evenRGBA()/estimatedMSE() (not thread-safe
   /// against concurrent first accesses; backends take the pointer once).
   bool hostClearPending() const { return this->ClearRGBA || this->ClearEven; }
-  /// Called by backends after adding `k` samples per pixel.
-  void addSamples(uint32_t k) { this->Samples += k; }
+  /// Called by backends after adding `k` samples per pixel. `sumsKept`:
+  /// the backend updated sums() (and evenSums()) with them; otherwise the
+  /// sums are derived from the mean again when next asked for.
+  void addSamples(uint32_t k, bool sumsKept = false)
+  {
+    this->Samples += k;
+    this->SumsValid = this->SumsValid && sumsKept;
+  }
+  /**
+   * Each pixel's sum of its samples() samples, RGBA in double, for a
+   * backend to continue (Integrator.h, loadSum() and storeSum()). When the
+   * mean was last written by other means (rgbaForOverwrite(), addSamples()
+   * without sumsKept), the sums are rebuilt from it first: mean x samples,
+   * which carries the mean's float rounding. Not read at 0 samples.
+   */
+  double* sums();
+  /// The even half's sums (as sums(), for evenRGBA()), or nullptr when
+  /// evenRGBA() is.
+  double* evenSums();
 
   /**
    * Keep the even-sample mean the error estimate needs (default on: one more
@@ -269,6 +290,9 @@ private:
   bool EstimateError = true;
   bool EvenValid = false; ///< Even holds the even samples of this image
   mutable std::vector<float> Even;
+  std::vector<double> Sum;     ///< sums(), allocated on first use
+  std::vector<double> EvenSum; ///< evenSums(), allocated on first use
+  bool SumsValid = true;       ///< Sum and EvenSum hold the current samples' sums
   ImportancePool Importance;
 };
 

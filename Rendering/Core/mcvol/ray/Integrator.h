@@ -50,15 +50,18 @@ struct FrameParams
 };
 
 /**
- * Sum of `samplesPerPixel` Monte Carlo samples of pixel (x, y), premultiplied
- * RGBA. Sample k of a pixel draws from Rng(pixel, firstSample + k, seed) (and,
- * with Sampler::Sobol, the pixel's scrambled Sobol' point of that sample
- * index), so the result depends on nothing but the pixel, the sample indices
- * and the seed.
+ * Adds `samplesPerPixel` Monte Carlo samples of pixel (x, y), premultiplied
+ * RGBA, to the pixel's running sum `sum` one at a time, in double precision
+ * (addSample()). Sample k of a pixel draws from Rng(pixel, firstSample + k,
+ * seed) (and, with Sampler::Sobol, the pixel's scrambled Sobol' point of
+ * that sample index), so the samples depend on nothing but the pixel, the
+ * sample indices and the seed; since each is added to the sum of all the
+ * pixel's earlier samples, the sum does not depend on how the samples were
+ * batched into renders either.
  * Optimized (a compile-time choice, as Lit) tracks through the visibility
  * optimization with the pixel's list `imp`; without it the tracking code is
  * exactly the unoptimized one (the null list folds away). `even` (optional)
- * receives the sum of the samples of even index firstSample + k, the half
+ * is the running sum of the samples of even index firstSample + k, the half
  * the error estimate keeps (Accumulator::estimatedMSE).
  * Unlit (a compile-time choice too, so that each kernel carries only its
  * estimator's code and registers; unlitEstimator() decides it): 1 scores
@@ -67,12 +70,11 @@ struct FrameParams
  * estimator.
  */
 template <BlendMode Mode, bool Lit = false, bool Optimized = false, int Unlit = 0>
-MCVOL_FUNC Vec4f renderPixel(const SceneView& s, const CameraView& cam, const FrameParams& fp, int x, int y,
-  float depth, RayCounters& c, const RayImportance* imp = nullptr, Vec4f* even = nullptr)
+MCVOL_FUNC void renderPixel(const SceneView& s, const CameraView& cam, const FrameParams& fp, int x, int y,
+  float depth, RayCounters& c, Vec4d& sum, const RayImportance* imp = nullptr, Vec4d* even = nullptr)
 {
   const RayImportance* ri = Optimized ? imp : nullptr;
   ShadowCounters sc;
-  Vec4f sum;
   const uint32_t pixel = uint32_t(y) * uint32_t(cam.width) + uint32_t(x);
   for (int k = 0; k < fp.samplesPerPixel; ++k)
   {
@@ -114,19 +116,12 @@ MCVOL_FUNC Vec4f renderPixel(const SceneView& s, const CameraView& cam, const Fr
     {
       v = traceSample<Mode>(s, fp.tracker, ray.o, ray.d, 0.f, ray.tmax, rng, c, ri);
     }
-    sum.r += v.r;
-    sum.g += v.g;
-    sum.b += v.b;
-    sum.a += v.a;
+    addSample(sum, v);
     if (even && ((fp.firstSample + uint32_t(k)) & 1u) == 0u)
     {
-      even->r += v.r;
-      even->g += v.g;
-      even->b += v.b;
-      even->a += v.a;
+      addSample(*even, v);
     }
   }
-  return sum;
 }
 
 /**
@@ -185,25 +180,50 @@ MCVOL_FUNC uint32_t addedEvenSamples(uint32_t previous, int added)
   return (previous + uint32_t(added) + 1u) / 2u - (previous + 1u) / 2u;
 }
 
-/// Folds a render's per-pixel sum into the running mean of `previous` samples.
-MCVOL_FUNC void accumulate(float* rgba, const Vec4f& sum, uint32_t previous, int added)
+/// Samples of even index among a pixel's first n: 0, 2, 4, ... < n.
+MCVOL_FUNC uint32_t evenSampleCount(uint32_t n)
 {
-  const float inv = 1.f / float(previous + uint32_t(added));
-  const float keep = float(previous) * inv;
-  rgba[0] = rgba[0] * keep + sum.r * inv;
-  rgba[1] = rgba[1] * keep + sum.g * inv;
-  rgba[2] = rgba[2] * keep + sum.b * inv;
-  rgba[3] = rgba[3] * keep + sum.a * inv;
+  return (n + 1u) / 2u;
 }
 
-/// Folds a render's even-sample sum into the even half's running mean
-/// (nothing when the render added no sample of even index).
-MCVOL_FUNC void accumulateEven(float* even, const Vec4f& sum, uint32_t previous, int added)
+/// A pixel's running sum before a render: the stored sum of its `previous`
+/// samples (4 doubles, RGBA), or zero for a new image (previous 0: the
+/// buffer is not read, so a reset needs no clearing) or no buffer (null).
+MCVOL_FUNC Vec4d loadSum(const double* stored, uint32_t previous)
 {
-  const uint32_t addedEven = addedEvenSamples(previous, added);
-  if (addedEven > 0u)
+  Vec4d sum;
+  if (stored && previous > 0u)
   {
-    accumulate(even, sum, (previous + 1u) / 2u, int(addedEven));
+    sum.r = stored[0];
+    sum.g = stored[1];
+    sum.b = stored[2];
+    sum.a = stored[3];
   }
+  return sum;
+}
+
+/**
+ * Stores a pixel's running sum of `samples` samples (into `stored`, unless
+ * null) and its mean, rounded once to float, into `mean`. The image is the
+ * sum in double over the sample count: each sample is added to the sum of
+ * all that came before it (renderPixel()), so the image keeps converging
+ * past 2^24 samples per pixel, where a float sum or a float running mean
+ * stops taking small samples (Documentation/user-guide/numerical-limits.md),
+ * and it is the same however the samples were batched.
+ */
+MCVOL_FUNC void storeSum(float* mean, double* stored, const Vec4d& sum, uint32_t samples)
+{
+  if (stored)
+  {
+    stored[0] = sum.r;
+    stored[1] = sum.g;
+    stored[2] = sum.b;
+    stored[3] = sum.a;
+  }
+  const double n = double(samples);
+  mean[0] = float(sum.r / n);
+  mean[1] = float(sum.g / n);
+  mean[2] = float(sum.b / n);
+  mean[3] = float(sum.a / n);
 }
 } // namespace mcvol

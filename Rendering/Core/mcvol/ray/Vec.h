@@ -66,6 +66,22 @@ struct Vec4f
   float r = 0.f, g = 0.f, b = 0.f, a = 0.f;
 };
 
+/// A pixel's running sum of premultiplied RGBA samples (Integrator.h).
+struct Vec4d
+{
+  double r = 0.0, g = 0.0, b = 0.0, a = 0.0;
+};
+
+/// Adds one sample to a running sum (in double: exact for a float sample
+/// until the sum is 2^29 times larger than it).
+MCVOL_FUNC void addSample(Vec4d& sum, const Vec4f& v)
+{
+  sum.r += double(v.r);
+  sum.g += double(v.g);
+  sum.b += double(v.b);
+  sum.a += double(v.a);
+}
+
 /// Premultiplied RGB `rgb` with alpha 1 - T (T: the transmittance left).
 MCVOL_FUNC Vec4f premultipliedRGBA(Vec3f rgb, float T)
 {
