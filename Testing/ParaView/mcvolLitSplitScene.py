@@ -1,0 +1,48 @@
+"""The lit scene of the parallel lighting tests: a volume whose pieces shadow
+each other when it is split over two ranks along z (its longest axis, which
+ParaView's extent translator and the tests' own split halve).
+
+An opaque block high in z (the occluder, z 44..54, in the upper piece) hangs
+over a slab low in z (z 6..14, in the lower piece) that covers the whole xy
+extent; one directional light shines straight down (-z), so the occluder's
+shadow falls onto the slab across the split at z = 32. The camera looks at
+the slab's lit top from above and to the side, past the occluder, so the
+shadow fills part of the image. Index space is world space (spacing 1,
+origin 0).
+"""
+import numpy as np
+
+DIMS = (40, 40, 64)  # x, y, z
+LIGHT_DIRECTION = (0.0, 0.0, 1.0)  # towards the light
+FOCAL = (20.0, 20.0, 22.0)
+CAMERA = (112.0, 14.0, 96.0)
+VIEW_UP = (0.0, 0.0, 1.0)
+VIEW_ANGLE = 30.0
+SIZE = 120
+ARRAY = "density"
+# Transfer function: value 0 transparent, 0.5 (slab) opacity 0.25,
+# 1 (occluder) opacity 0.6, grey-white.
+OPACITY_POINTS = [(0.0, 0.0), (0.5, 0.25), (1.0, 0.6)]
+COLOR = (0.9, 0.9, 0.85)
+
+
+def density():
+    """The scalar field, indexed [z, y, x] (x fastest when flattened)."""
+    nx, ny, nz = DIMS
+    d = np.zeros((nz, ny, nx), dtype=np.float32)
+    d[6:15, 2:38, 2:38] = 0.5
+    d[44:55, 12:29, 12:29] = 1.0
+    return d
+
+
+def image():
+    """The field as a vtkImageData with the point array ARRAY."""
+    from vtkmodules.vtkCommonDataModel import vtkImageData
+    from vtkmodules.util.numpy_support import numpy_to_vtk
+
+    img = vtkImageData()
+    img.SetDimensions(*DIMS)
+    arr = numpy_to_vtk(density().ravel(), deep=1)
+    arr.SetName(ARRAY)
+    img.GetPointData().SetScalars(arr)
+    return img
