@@ -46,3 +46,18 @@ def image():
     arr.SetName(ARRAY)
     img.GetPointData().SetScalars(arr)
     return img
+
+
+def msd_ratio(test, other, reference, mask=None):
+    """Mean squared difference test - reference over other - reference, and
+    its standard error by the delta method over pixels (the per-pixel
+    squared differences a_i and b_i: var(R) ~ var(a - R b) / (n mean(b)^2)).
+    Images are (h, w, channels); the colour channels (the first 3) count."""
+    a = ((test - reference)[..., :3] ** 2).mean(axis=2)
+    b = ((other - reference)[..., :3] ** 2).mean(axis=2)
+    if mask is not None:
+        a, b = a[mask], b[mask]
+    a, b = a.ravel(), b.ravel()
+    r = a.mean() / b.mean()
+    se = np.sqrt(np.var(a - r * b) / a.size) / b.mean()
+    return r, se
