@@ -3,12 +3,14 @@ tests at the mapper level: every rank renders its piece of the lit split
 scene (mcvolLitSplitScene) with one mapper, rank 0 composites the pieces'
 premultiplied float images front to back and saves the result (.npy).
 
-Usage: pvbatch --symmetric ParallelLitMapper.py OUT.npy MAPPER SEED LEVEL SPP DEPTH AMBIENT [FRAMES]
+Usage: pvbatch --symmetric ParallelLitMapper.py OUT.npy MAPPER SEED LEVEL SPP DEPTH AMBIENT [FRAMES [SCALE]]
   MAPPER  mc (vtkMultiChannelVolumeMapper) or march (vtkMultiChannelRayMarchMapper)
   LEVEL   the mapper's LightingStandInLevel: -1 off, 0 exact, k > 0 coarse
   SPP     samples per pixel (mc; march: ignored)
   DEPTH   MaxScatteringDepth; AMBIENT the ambient radiance (grey)
-  FRAMES  renders to time after the first (default 0): prints seconds per frame
+  FRAMES  renders to time after the first (default 0), each a new image of
+          SPP samples: prints seconds per frame
+  SCALE   voxels per axis times SCALE (default 1; benchmarks)
 The volume is split along z into N pieces that share their boundary planes
 (as ParaView's pieces do); VTK's global controller is the MPI one, so the
 mapper gathers its stand-in from all ranks. Rank 0 prints each rank's
@@ -34,18 +36,19 @@ out_path, mapper_kind = sys.argv[1], sys.argv[2]
 seed, level, spp, depth = int(sys.argv[3]), int(sys.argv[4]), int(sys.argv[5]), int(sys.argv[6])
 ambient = float(sys.argv[7])
 frames = int(sys.argv[8]) if len(sys.argv) > 8 else 0
+scale = int(sys.argv[9]) if len(sys.argv) > 9 else 1
 
 ctrl = vtkMultiProcessController.GetGlobalController()
 ranks = ctrl.GetNumberOfProcesses() if ctrl else 1
 rank = ctrl.GetLocalProcessId() if ctrl else 0
 
-whole = S.image()
-nz = S.DIMS[2]
+whole = S.image(scale)
+nx, ny, nz = (n * scale for n in S.DIMS)
 cuts = [round(k * (nz - 1) / ranks) for k in range(ranks + 1)]
 if ranks > 1:
     voi = vtkExtractVOI()
     voi.SetInputData(whole)
-    voi.SetVOI(0, S.DIMS[0] - 1, 0, S.DIMS[1] - 1, cuts[rank], cuts[rank + 1])
+    voi.SetVOI(0, nx - 1, 0, ny - 1, cuts[rank], cuts[rank + 1])
     voi.Update()
     data = voi.GetOutput()
 else:
@@ -101,7 +104,6 @@ win.Render()
 first = time.perf_counter() - start
 per_frame = 0.0
 if frames > 0:
-    m.SetProgressive(False) if hasattr(m, "SetProgressive") else None
     start = time.perf_counter()
     for _ in range(frames):
         m.Modified()  # a new image each frame: the gather is not repeated, the trace is

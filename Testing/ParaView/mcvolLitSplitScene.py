@@ -26,23 +26,27 @@ OPACITY_POINTS = [(0.0, 0.0), (0.5, 0.25), (1.0, 0.6)]
 COLOR = (0.9, 0.9, 0.85)
 
 
-def density():
-    """The scalar field, indexed [z, y, x] (x fastest when flattened)."""
-    nx, ny, nz = DIMS
+def density(scale=1):
+    """The scalar field, indexed [z, y, x] (x fastest when flattened); with
+    `scale` > 1 (benchmarks) every axis has `scale` times the voxels, at
+    1 / scale the spacing (the same world box and shapes)."""
+    nx, ny, nz = (n * scale for n in DIMS)
     d = np.zeros((nz, ny, nx), dtype=np.float32)
-    d[6:15, 2:38, 2:38] = 0.5
-    d[44:55, 12:29, 12:29] = 1.0
+    s = scale
+    d[6 * s:15 * s, 2 * s:38 * s, 2 * s:38 * s] = 0.5
+    d[44 * s:55 * s, 12 * s:29 * s, 12 * s:29 * s] = 1.0
     return d
 
 
-def image():
+def image(scale=1):
     """The field as a vtkImageData with the point array ARRAY."""
     from vtkmodules.vtkCommonDataModel import vtkImageData
     from vtkmodules.util.numpy_support import numpy_to_vtk
 
     img = vtkImageData()
-    img.SetDimensions(*DIMS)
-    arr = numpy_to_vtk(density().ravel(), deep=1)
+    img.SetDimensions(*(n * scale for n in DIMS))
+    img.SetSpacing(*([1.0 / scale] * 3))
+    arr = numpy_to_vtk(density(scale).ravel(), deep=1)
     arr.SetName(ARRAY)
     img.GetPointData().SetScalars(arr)
     return img
