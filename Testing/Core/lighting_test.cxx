@@ -666,15 +666,17 @@ struct SplitScene
     {
       for (int i = 0; i < kNx * kNy; ++i)
       {
-        // A thin, faint slab in the lower piece, a thicker one above it in
-        // the upper piece.
-        values[size_t(z) * kNx * kNy + size_t(i)] = (z >= 3 && z <= 5) || (z >= 15 && z <= 20) ? 0.5f : 0.f;
+        // A thin, faint slab in the lower piece, a thick, denser one above
+        // it in the upper piece.
+        values[size_t(z) * kNx * kNy + size_t(i)] = (z >= 3 && z <= 5) ? 0.5f : (z >= 15 && z <= 20) ? 1.f : 0.f;
       }
     }
     TransferFunctionDesc tf = flatTF(0.f, 0.9f, 0.85f, 0.8f, 1.f, 64);
     for (int k = 0; k < 64; ++k)
     {
-      tf.opacity[size_t(k)] = opacityFor(0.4 * k / 63.0, 1.0); // extinction 0.2 at 0.5
+      // Extinction 0.2 at 0.5 (the faint slab), 0.5 at 1 (the dense one).
+      const double v = k / 63.0;
+      tf.opacity[size_t(k)] = opacityFor(v <= 0.5 ? 0.4 * v : 0.2 + 0.6 * (v - 0.5), 1.0);
     }
     const int wholeDims[3] = { kNx, kNy, kNz };
     const int lowerDims[3] = { kNx, kNy, kSplit + 1 };
@@ -778,10 +780,12 @@ std::array<double, 3> lowerAgainstWhole(const SplitScene& s, int renders)
 // the whole volume rendered with the camera rays ending where the piece
 // ends (a window depth at its far side). The light shines down (+z is
 // towards it) and the camera looks up: the faint lower slab is lit through
-// the upper slab (optical depth 1.2; its shadow rays cross the upper
-// piece) and by the light that the upper slab scatters down (albedo 0.99,
-// up to 6 scattering events, no ambient light), which the lower slab's
-// scattered rays reach only through the stand-in. The image-mean difference of
+// the upper slab (optical depth 3; its shadow rays cross the upper piece)
+// and, mostly, by the light that the upper slab scatters forward, down
+// (albedo 0.99, anisotropy 0.8, up to 8 scattering events, no ambient
+// light), which the lower slab's scattered rays reach only through the
+// stand-in (without that continuation the image mean is 8 to 10 standard
+// errors low). The image-mean difference of
 // each colour component is tested (z, central limit over the pixels), 3
 // checks; power: without the stand-in every component is off by more than
 // 10 standard errors.
@@ -794,7 +798,8 @@ TEST(Lighting, StandInCarriesLightAcrossPieces)
   sun.intensity = 2;
   ld.lights = { sun };
   ld.albedo = { 0.99f };
-  ld.maxDepth = 6;
+  ld.anisotropy = { 0.8f };
+  ld.maxDepth = 8;
   SplitScene split(ld);
   const std::array<double, 3> alone = lowerAgainstWhole(split, 64);
   split.linkStandIn();
