@@ -7,8 +7,10 @@ variant's error against the serial image.
 
     python3 Benchmarks/studies/lighting_across_ranks.py --scale 4 --out Benchmarks/results/lighting-across-ranks
 
-Needs PV_PLUGIN_PATH-free pvbatch and the mcvol Python package on
-PYTHONPATH (build/lib/python3.11/site-packages). Writes ranks.csv (one row
+Needs pvbatch and mpiexec, the mcvol Python package on PYTHONPATH
+(build/lib/python3.11/site-packages; the script drives the mapper through
+its Python wrapping, not the plugin) and an X server (xvfb-run -a). Writes
+ranks.csv (one row
 per variant and rank) and error.csv (RMS colour difference of the
 composited image to the serial one, and to a second serial image of another
 seed, the Monte Carlo noise).
