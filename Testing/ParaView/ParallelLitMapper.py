@@ -16,6 +16,7 @@ The volume is split along z into N pieces that share their boundary planes
 mapper gathers its stand-in from all ranks. Rank 0 prints each rank's
 stand-in report, memory and gather time.
 """
+import os
 import sys
 import time
 
@@ -56,7 +57,11 @@ else:
 
 m = vtkMultiChannelRayMarchMapper() if mapper_kind == "march" else vtkMultiChannelVolumeMapper()
 m.SetInputData(data)
-m.SetBackendToCPU()
+# The CPU, or CUDA on the GPU machine (MCVOL_TEST_BACKEND=cuda, as the other tests).
+if os.environ.get("MCVOL_TEST_BACKEND", "").lower() == "cuda":
+    m.SetBackendToCUDA()
+else:
+    m.SetBackendToCPU()
 m.SetSeed(seed)
 m.SetSamplesPerPixel(spp)
 m.SetMaxScatteringDepth(depth)
