@@ -42,6 +42,7 @@ set(_mcvol_stages
   FrameCompositor
   LevelOfDetail
   RenderBackend
+  StandIn
   TransferFunctionTables
   View)
 set(_mcvol_stage_sources ${_mcvol_stages})

@@ -9,6 +9,7 @@
 #include "vtkMath.h"
 #include "vtkMatrix3x3.h"
 #include "vtkMatrix4x4.h"
+#include "vtkMultiProcessController.h"
 #include "vtkObjectFactory.h"
 #include "vtkOpenGLRenderWindow.h"
 #include "vtkPiecewiseFunction.h"
@@ -26,6 +27,7 @@
 #include "VTK/LevelOfDetail.h"
 #include "VTK/RenderBackend.h"
 #include "VTK/Settings.h"
+#include "VTK/StandIn.h"
 #include "VTK/TransferFunctionTables.h"
 #include "VTK/View.h"
 
@@ -101,6 +103,10 @@ struct vtkMultiChannelVolumeMapper::vtkInternals
   std::string LevelReport = "no render yet";
   std::string LevelWarning; // the last case warned about (warned once)
   std::string IgnoredSettings; // GetIgnoredSettings(): the last render's
+  // Lighting across processes: the stand-in of the whole volume, and the
+  // processes it is gathered from (null: the global controller).
+  mcvol::adapter::StandIn StandIn;
+  vtkSmartPointer<vtkMultiProcessController> Controller;
   std::vector<float> Depth; // this render's depth buffer (reused storage)
 
   // Samples per pixel of the batch being traced (0: SamplesPerPixel).
@@ -1029,6 +1035,7 @@ void vtkMultiChannelVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
     !this->EnsureBackend() ||                   // CPU or CUDA renderer
     !this->ChooseLevelOfDetail(pass) ||         // level asked for, automatic, or the one that fits
     !this->UpdateScene(pass) ||                 // volume, tables, grids, settings, lights
+    !this->UpdateStandIn(pass) ||               // lit, split over processes: the other pieces
     !this->SetUpView(pass))                     // camera rays, depth of opaque geometry
   {
     return;
@@ -1281,6 +1288,106 @@ bool vtkMultiChannelVolumeMapper::UpdateScene(RenderPass& pass)
     return false;
   }
   return true;
+}
+
+//------------------------------------------------------------------------------
+bool vtkMultiChannelVolumeMapper::UpdateStandIn(RenderPass& pass)
+{
+  vtkInternals& in = *this->Internals;
+  in.Scene.setOutside(nullptr);
+  vtkMultiProcessController* controller =
+    in.Controller ? in.Controller.Get() : vtkMultiProcessController::GetGlobalController();
+  // The same on every process (the settings and lights are), so that all
+  // take part in the gather or none does.
+  const bool wanted = this->LightingStandInLevel >= 0 && pass.Scene && pass.Scene->lit() && controller &&
+    controller->GetNumberOfProcesses() > 1;
+  if (!wanted)
+  {
+    if (in.StandIn.Builds() > 0)
+    {
+      in.StandIn.Release();
+    }
+    return true;
+  }
+  mcvol::adapter::StandIn::Input input;
+  input.Piece = &in.Scene;
+  pass.Image->GetExtent(input.Extent);
+  pass.Image->GetOrigin(input.Origin);
+  pass.Image->GetSpacing(input.Spacing);
+  input.DataMTime = pass.Channels.DataMTime;
+  input.TablesVersion = in.Tables.Version();
+  if (!pass.Classified)
+  {
+    for (int c = 0; c < pass.Channels.Count; ++c)
+    {
+      input.Functions.push_back(&in.Tables.Table(c));
+    }
+  }
+  input.Level = this->LightingStandInLevel;
+  input.MacrocellSize = this->MacrocellSize;
+  input.Interp = in.Scene.interpolation();
+  try
+  {
+    bool changed = false;
+    double scale[3], offset[3];
+    const mcvol::Scene* standIn = in.StandIn.Update(controller, input, changed, scale, offset);
+    if (changed)
+    {
+      in.Accumulation.RequestReset();
+    }
+    // Levels of detail above 0 render the piece alone.
+    if (standIn && pass.Level == 0)
+    {
+      in.Scene.setOutside(standIn, scale, offset);
+    }
+  }
+  catch (const std::exception& e)
+  {
+    vtkErrorMacro("Could not gather the stand-in for lighting across processes: " << e.what());
+    in.StandIn.Release();
+    return false;
+  }
+  return true;
+}
+
+//------------------------------------------------------------------------------
+void vtkMultiChannelVolumeMapper::SetController(vtkMultiProcessController* controller)
+{
+  if (this->Internals->Controller.Get() != controller)
+  {
+    this->Internals->Controller = controller;
+    this->Modified();
+  }
+}
+
+//------------------------------------------------------------------------------
+vtkMultiProcessController* vtkMultiChannelVolumeMapper::GetController()
+{
+  return this->Internals->Controller.Get();
+}
+
+//------------------------------------------------------------------------------
+double vtkMultiChannelVolumeMapper::GetLightingStandInMemory()
+{
+  return static_cast<double>(this->Internals->StandIn.Bytes());
+}
+
+//------------------------------------------------------------------------------
+double vtkMultiChannelVolumeMapper::GetLastLightingStandInGatherTime()
+{
+  return this->Internals->StandIn.LastGatherSeconds();
+}
+
+//------------------------------------------------------------------------------
+int vtkMultiChannelVolumeMapper::GetNumberOfLightingStandInGathers()
+{
+  return this->Internals->StandIn.Builds();
+}
+
+//------------------------------------------------------------------------------
+const char* vtkMultiChannelVolumeMapper::GetLightingStandInReport()
+{
+  return this->Internals->StandIn.Report().c_str();
 }
 
 //------------------------------------------------------------------------------
@@ -1781,6 +1888,8 @@ void vtkMultiChannelVolumeMapper::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "LevelOfDetail: " << this->LevelOfDetail
      << (this->LevelOfDetail == LEVEL_OF_DETAIL_AUTOMATIC ? " (automatic)" : "") << "\n";
   os << indent << "LevelOfDetailFilter: " << this->GetLevelOfDetailFilterAsString() << "\n";
+  os << indent << "LightingStandInLevel: " << this->LightingStandInLevel
+     << (this->LightingStandInLevel < 0 ? " (off)" : this->LightingStandInLevel == 0 ? " (exact)" : " (coarse)") << "\n";
   os << indent << "LevelOfDetailHalfPrecision: " << (this->LevelOfDetailHalfPrecision ? "On" : "Off") << "\n";
   os << indent << "MemoryBudget: " << this->MemoryBudget << " bytes" << (this->MemoryBudget > 0.0 ? "" : " (no cap)")
      << "\n";

@@ -103,6 +103,7 @@ class Scene;
 #endif
 
 class vtkColorTransferFunction;
+class vtkMultiProcessController;
 class vtkFloatArray;
 class vtkImageData;
 class vtkPiecewiseFunction;
@@ -927,6 +928,78 @@ public:
   vtkGetMacro(LastLevelOfDetailChannels, int);
   ///@}
 
+  enum LightingStandInLevels
+  {
+    /// SetLightingStandInLevel(STAND_IN_OFF): light paths end at the piece.
+    STAND_IN_OFF = -1,
+    /// SetLightingStandInLevel(STAND_IN_EXACT): the whole volume as stored.
+    STAND_IN_EXACT = 0
+  };
+
+  ///@{
+  /**
+   * Lighting across the pieces of a volume split over processes (ParaView's
+   * pvserver or pvbatch under mpiexec: each process renders its piece, and
+   * the pieces' images are composited in visibility order). Camera rays
+   * stay in the piece; the part of a shadow ray beyond it, and with
+   * MaxScatteringDepth > 1 a scattered ray that leaves it, go on through a
+   * stand-in for the whole volume that every process gathers from all of
+   * them, so that a piece casts its shadow onto another:
+   *
+   * - STAND_IN_EXACT (0, the default): every channel's voxels at full
+   *   resolution, as the data hold them (the whole data set's bytes on
+   *   every process, plus its macrocells and majorants). The composited
+   *   image equals the single-process one within the Monte Carlo error.
+   *   Gathered again when the data change, not when a transfer function
+   *   does.
+   * - k > 0: the whole volume's extinction pyramid level k (each channel
+   *   pre-classified and its extinction and extinction-weighted colour
+   *   averaged over blocks of 2^k voxels a side, which keeps optical depth):
+   *   16 bytes per channel and coarse voxel, 1/8^k of the voxels. Shadows
+   *   across pieces are blurred over 2^k voxels. Gathered again when the
+   *   data or a transfer function change.
+   * - STAND_IN_OFF (-1): no stand-in; shadows end at the piece's border
+   *   (what every process sees of the others is empty space).
+   *
+   * Only lit renders (ShadeOn) at level of detail 0 use it; a single
+   * process, or processes that each hold the whole volume, build nothing
+   * and render exactly as without it. With more than one process (the
+   * Controller's), every lit render is collective: each process must render
+   * with this mapper in step, as sort-last rendering does. The exact
+   * default is the correct one; the coarse levels trade accuracy of the
+   * shadows across pieces for memory (Documentation/user-guide/cluster.md
+   * gives the figures).
+   */
+  vtkSetClampMacro(LightingStandInLevel, int, STAND_IN_OFF, 16);
+  vtkGetMacro(LightingStandInLevel, int);
+  void SetLightingStandInLevelToOff() { this->SetLightingStandInLevel(STAND_IN_OFF); }
+  void SetLightingStandInLevelToExact() { this->SetLightingStandInLevel(STAND_IN_EXACT); }
+  ///@}
+
+  ///@{
+  /**
+   * The processes the stand-in is gathered from (default null: VTK's
+   * global controller, vtkMultiProcessController::GetGlobalController(),
+   * as parallel VTK filters use it). A controller of one process (or
+   * none) means no stand-in.
+   */
+  void SetController(vtkMultiProcessController* controller);
+  vtkMultiProcessController* GetController();
+  ///@}
+
+  ///@{
+  /**
+   * The stand-in's cost on this process: bytes held (its voxels, macrocells
+   * and majorants; 0 without one), the seconds of its last gather (the
+   * classification of a coarse level included), how many times it was
+   * gathered, and one sentence on what it holds.
+   */
+  double GetLightingStandInMemory();
+  double GetLastLightingStandInGatherTime();
+  int GetNumberOfLightingStandInGathers();
+  const char* GetLightingStandInReport();
+  ///@}
+
   /**
    * Samples per pixel accumulated in the current image.
    */
@@ -1127,6 +1200,7 @@ protected:
   double MemoryBudget = 0.0;
   int LastLevelOfDetail = 0;
   int LastLevelOfDetailChannels = 0;
+  int LightingStandInLevel = STAND_IN_EXACT;
 
 private:
   vtkMultiChannelVolumeMapper(const vtkMultiChannelVolumeMapper&) = delete;
@@ -1150,6 +1224,8 @@ private:
   bool UpdateLevelScene(RenderPass& pass);
   /// Whether the level sums the channels into one (density blend).
   bool SumsChannelsAtLevels(RenderPass& pass);
+  /// Lit, split over processes: the stand-in of the other pieces (collective).
+  bool UpdateStandIn(RenderPass& pass);
   bool SetUpView(RenderPass& pass);
   void UpdateAccumulation(RenderPass& pass);
   /// AUTOMATIC_ESTIMATOR: the pilots, when the data, tables or settings the

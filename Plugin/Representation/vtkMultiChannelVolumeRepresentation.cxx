@@ -466,6 +466,26 @@ void vtkMultiChannelVolumeRepresentation::SetMaxScatteringDepth(int depth)
   this->GetMultiChannelMapper()->SetMaxScatteringDepth(depth);
 }
 
+void vtkMultiChannelVolumeRepresentation::SetLightingStandInLevel(int level)
+{
+  this->GetMultiChannelMapper()->SetLightingStandInLevel(level);
+}
+
+double vtkMultiChannelVolumeRepresentation::GetLightingStandInMemory()
+{
+  return this->GetMultiChannelMapper()->GetLightingStandInMemory();
+}
+
+double vtkMultiChannelVolumeRepresentation::GetLastLightingStandInGatherTime()
+{
+  return this->GetMultiChannelMapper()->GetLastLightingStandInGatherTime();
+}
+
+const char* vtkMultiChannelVolumeRepresentation::GetLightingStandInReport()
+{
+  return this->GetMultiChannelMapper()->GetLightingStandInReport();
+}
+
 void vtkMultiChannelVolumeRepresentation::SetGradientShading(bool on)
 {
   this->GetMultiChannelMapper()->SetGradientShading(on);

@@ -124,6 +124,11 @@ public:
   void SetShadowMode(int mode);
   void SetAmbientRadiance(double r, double g, double b);
   void SetMaxScatteringDepth(int depth);
+  /// vtkMultiChannelVolumeMapper::SetLightingStandInLevel (lighting across ranks).
+  void SetLightingStandInLevel(int level);
+  double GetLightingStandInMemory();
+  double GetLastLightingStandInGatherTime();
+  const char* GetLightingStandInReport();
   void SetGradientShading(bool on);
   void SetShininess(double shininess);
   /// vtkMultiChannelVolumeMapper::SetLightIntensityScale (ParaView's default

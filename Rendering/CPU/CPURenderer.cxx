@@ -178,9 +178,15 @@ void CPURenderer::render(const Scene& scene, const Camera& camera, const RenderS
   s.marchControlVariates = marchControlVariates(settings, camera);
   const FrameParams fp = frameParams(settings, accum.samples());
   const bool lit = s.lighting.enabled;
+  // Lit, one piece of a split volume: the stand-in of the other pieces.
+  SceneView outside;
   if (lit)
   {
     setLightingFrame(s, camera);
+    if (prepareOutside(scene, camera, s, outside))
+    {
+      s.outside = &outside;
+    }
   }
   ImportanceFrame imp;
   if (s.importance.enabled)

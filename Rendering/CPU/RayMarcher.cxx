@@ -76,6 +76,12 @@ void RayMarcher::render(const Scene& scene, const Camera& camera, const MarchSet
   }
   // The checks, refusals and per-render set-up every backend shares.
   const MarchParams mp = prepareMarch(camera, settings, s);
+  // Lit, one piece of a split volume: the stand-in of the other pieces.
+  SceneView outside;
+  if (prepareOutside(scene, camera, s, outside))
+  {
+    s.outside = &outside;
+  }
   const CameraView cam = toView(camera);
   out.resize(camera.width, camera.height);
   out.reset();

@@ -217,6 +217,30 @@ struct ImportanceLaunch
  * - CUDAMarch.cu: march(), the ray-marching reference, on the same copies;
  * - CUDAPyramid.cu: classifyLevel(), pyramid levels built on the device.
  */
+/// Device copy of a Scene's stand-in for lighting across pieces
+/// (Scene::setOutside): its channels as packed arrays (read in software, as
+/// the CPU reads them), tables and host-built majorants, and the per-render
+/// view the kernels' SceneView::outside points to.
+struct OutsideCopy
+{
+  uint64_t SceneId = 0;
+  uint64_t ContentVersion = ~0ull;
+  uint64_t DataVersion = ~0ull;
+  DeviceBuffer<uint8_t> Channels[kMaxChannels];
+  DeviceBuffer<float> Tables;
+  DeviceBuffer<float> Majorants;
+  DeviceBuffer<SceneView> View;
+  size_t bytes() const
+  {
+    size_t b = this->Tables.bytes() + this->Majorants.bytes() + this->View.bytes();
+    for (const DeviceBuffer<uint8_t>& c : this->Channels)
+    {
+      b += c.bytes();
+    }
+    return b;
+  }
+};
+
 struct CUDARenderer::Internal
 {
   int Device = 0;
@@ -296,6 +320,7 @@ struct CUDARenderer::Internal
   bool ConcurrentPilots = true;
   /// classifyLevel()'s kept inputs (CUDAPyramid.cu).
   std::vector<std::unique_ptr<LevelInput>> LevelInputs;
+  OutsideCopy Outside;
 
   CudaUpdateCounters Updates;
 
@@ -355,6 +380,11 @@ struct CUDARenderer::Internal
   SceneView renderView(const Scene& scene, bool textures);
   /// The depth image on the device (uploaded when it changed), or nullptr.
   const float* deviceDepth(const float* depth, size_t pixels);
+  /// CUDAOutside.cu: a lit Scene's stand-in (Scene::setOutside) on the
+  /// device, uploaded when it changed, and s.outside pointing to its
+  /// per-render view (prepareOutside(), as on the CPU); s.outside null
+  /// without one. Call after the lighting frame of `s` is set.
+  void linkOutside(const Scene& scene, const Camera& camera, SceneView& s);
   /// The Scene's importance tables on the device (uploaded when they changed).
   const float* deviceImportanceTables(const Scene& scene);
   /// render(): makes Accum and AccumSums (and Even and EvenSums, when

@@ -435,6 +435,8 @@ void CUDARenderer::render(const Scene& scene, const Camera& camera, const Render
                                   "the CPU backend, or density, max or mix blending");
     }
     setLightingFrame(s, camera);
+    // Lit, one piece of a split volume: the stand-in of the other pieces.
+    in.linkOutside(scene, camera, s);
   }
 
   const size_t P = size_t(camera.width) * size_t(camera.height);

@@ -102,6 +102,8 @@ void CUDARenderer::march(const Scene& scene, const Camera& camera, const MarchSe
   {
     s.importance.table = in.deviceImportanceTables(scene);
   }
+  // Lit, one piece of a split volume: the stand-in of the other pieces.
+  in.linkOutside(scene, camera, s);
   const CameraView cam = toView(camera);
 
   // The image goes to the device accumulation buffer, which then holds this

@@ -93,3 +93,31 @@ void Scene::setLighting(const LightingDesc& d)
   L.enabled = anyLight || d.ambient[0] > 0 || d.ambient[1] > 0 || d.ambient[2] > 0;
 }
 } // namespace mcvol
+
+namespace mcvol
+{
+void Scene::setOutside(const Scene* outside, const double scale[3], const double offset[3])
+{
+  if (outside == this)
+  {
+    throw std::invalid_argument("mcvol: a Scene cannot be its own stand-in (setOutside)");
+  }
+  double sc[3] = { 1, 1, 1 }, off[3] = { 0, 0, 0 };
+  for (int a = 0; a < 3; ++a)
+  {
+    sc[a] = scale ? scale[a] : 1.0;
+    off[a] = offset ? offset[a] : 0.0;
+    if (!(sc[a] > 0.0) || !std::isfinite(sc[a]) || !std::isfinite(off[a]))
+    {
+      throw std::invalid_argument(
+        "mcvol: the stand-in's index map needs a positive, finite scale and a finite offset (setOutside)");
+    }
+  }
+  this->Outside = outside;
+  for (int a = 0; a < 3; ++a)
+  {
+    this->OutsideScale[a] = outside ? sc[a] : 1.0;
+    this->OutsideOffset[a] = outside ? off[a] : 0.0;
+  }
+}
+} // namespace mcvol

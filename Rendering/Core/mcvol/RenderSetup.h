@@ -3,6 +3,7 @@
 
 #include "mcvol/ray/Integrator.h"
 #include "mcvol/Renderer.h"
+#include "mcvol/Scene.h"
 
 #include <cmath>
 #include <stdexcept>
@@ -60,6 +61,58 @@ inline void setLightingFrame(SceneView& s, const Camera& camera)
   }
   const double* w = camera.worldToIndex;
   L.indexOffset = Vec3f(float(w[3]), float(w[7]), float(w[11]));
+}
+
+/**
+ * The per-render view of a lit Scene's stand-in (Scene::setOutside), after
+ * `s` (the Scene's own per-render view) has its lighting frame: `o` gets the
+ * stand-in's volume, tables and grids with `s`'s blend and lighting, the
+ * lighting frame and extinction limit of the stand-in's index space, no
+ * visibility optimization and no stand-in of its own; `s` gets the index
+ * map. Sets neither pointer (s.outside is the backend's: a host or a
+ * device address). Returns false, touching nothing, when the Scene has no
+ * stand-in or is unlit. Throws std::invalid_argument for a stand-in that
+ * is not ready or does not match.
+ */
+inline bool prepareOutside(const Scene& scene, const Camera& camera, SceneView& s, SceneView& o)
+{
+  const Scene* outside = scene.outside();
+  if (!outside || !s.lighting.enabled)
+  {
+    return false;
+  }
+  o = outside->view();
+  if (outside->numChannels() != scene.numChannels() || o.volume.numChannels != s.volume.numChannels ||
+    o.tables.size < 2)
+  {
+    throw std::invalid_argument("mcvol: the stand-in of the other pieces (Scene::setOutside) must be updated and have "
+                                "the piece's number of channels");
+  }
+  if (!o.grid.majorants)
+  {
+    throw std::invalid_argument("mcvol: the stand-in of the other pieces needs its host macrocells and majorants "
+                                "(Scene::setHostAcceleration on)");
+  }
+  const double* scale = scene.outsideScale();
+  const double* offset = scene.outsideOffset();
+  Camera standIn = camera;
+  for (int r = 0; r < 3; ++r)
+  {
+    for (int col = 0; col < 4; ++col)
+    {
+      standIn.worldToIndex[4 * r + col] = camera.worldToIndex[4 * r + col] * scale[r];
+    }
+    standIn.worldToIndex[4 * r + 3] += offset[r];
+  }
+  o.blend = s.blend;
+  o.lighting = s.lighting;
+  setLightingFrame(o, standIn);
+  o.sigmaLimit = extinctionLimit(toView(standIn));
+  o.importance.enabled = false;
+  o.outside = nullptr;
+  s.outsideScale = Vec3f(float(scale[0]), float(scale[1]), float(scale[2]));
+  s.outsideOffset = Vec3f(float(offset[0]), float(offset[1]), float(offset[2]));
+  return true;
 }
 
 /// The per-render frame of the visibility optimization: the world length of

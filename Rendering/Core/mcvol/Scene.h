@@ -225,6 +225,27 @@ public:
   bool optimized() const { return this->View.importance.enabled; }
 
   /**
+   * Lit rendering of one piece of a volume split over processes: `outside`
+   * stands in for the whole volume (every piece, this one included) along
+   * the parts of light paths beyond this Scene's box (SceneView::outside:
+   * the rest of each shadow ray and, with multiple scattering, scattered
+   * rays that leave the piece). This Scene's index point p is the
+   * stand-in's p * scale + offset, per axis. A render reads only the
+   * stand-in's volume, tables, macrocells and majorants (it must be
+   * updated, with host acceleration on, and have this Scene's number of
+   * channels, or the render throws std::invalid_argument); lighting, blend
+   * and every setting are this Scene's. Unlit renders ignore it. The
+   * stand-in is not copied: it must outlive its use. Null (default) clears
+   * it. Throws std::invalid_argument for this Scene itself, or a scale that
+   * is not positive and finite or an offset that is not finite.
+   */
+  void setOutside(const Scene* outside, const double scale[3] = nullptr, const double offset[3] = nullptr);
+  const Scene* outside() const { return this->Outside; }
+  /// The map given to setOutside (scale 1, offset 0 without one).
+  const double* outsideScale() const { return this->OutsideScale; }
+  const double* outsideOffset() const { return this->OutsideOffset; }
+
+  /**
    * Whether update() builds the macrocell ranges and majorants on the host
    * (default true; the CPU backend reads them). A backend that builds its own
    * copies on the device (CUDA) turns it off so that no host time or memory
@@ -280,6 +301,9 @@ private:
 
   int Dims[3] = { 0, 0, 0 };
   int NumChannels = 0;
+  const Scene* Outside = nullptr;
+  double OutsideScale[3] = { 1, 1, 1 };
+  double OutsideOffset[3] = { 0, 0, 0 };
   std::array<ChannelSource, kMaxChannels> Channels{};
   std::array<bool, kMaxChannels> HasTF{};
   std::array<bool, kMaxChannels> MajorantDirty{};

@@ -206,6 +206,34 @@ MCVOL_FUNC float boxExit(const VolumeView& vol, Vec3f x, Vec3f d)
 }
 
 /**
+ * The transmittance of the part of a light ray beyond this piece
+ * (SceneView::outside): the ray from index point x along d leaves the
+ * piece's box at tPiece (boxExit) and reaches the light at tLight (world
+ * units; 3.4e38 for a directional light or the environment); the stand-in
+ * covers [tPiece, tLight] up to its own box. The piece's box is convex, so
+ * the ray never comes back into the piece. 1 without a stand-in (one
+ * process: nothing is read, no random number is drawn).
+ */
+template <BlendMode Mode>
+MCVOL_HOT float outsideShadow(const SceneView& s, Vec3f x, Vec3f d, float tPiece, float tLight,
+  ShadowEstimator estimator, Rng& rng, ShadowCounters& c)
+{
+  if (!s.outside || !(tLight > tPiece))
+  {
+    return 1.f;
+  }
+  const SceneView& o = *s.outside;
+  const Vec3f xo = toOutside(s, x);
+  const Vec3f dO = toOutsideDirection(s, d);
+  const float tEnd = minf(boxExit(o.volume, xo, dO), tLight);
+  if (!(tEnd > tPiece))
+  {
+    return 1.f;
+  }
+  return shadowTransmittance<Mode>(o, o.active, o.numActive, xo + dO * tPiece, dO, tEnd - tPiece, estimator, rng, c);
+}
+
+/**
  * Gradient of the blend's extinction at index point p, in world units
  * (central differences one voxel apart, mapped by the transpose of the
  * world-to-index matrix).
@@ -284,10 +312,19 @@ MCVOL_HOT Vec4f traceLitComposite(const SceneView& s, Tracker tracker, Vec3f o, 
   rng.endSequence();
   SceneView alone = s;
   alone.numActive = 1;
+  // The stand-in of the other pieces carries the same one channel.
+  SceneView aloneOutside;
+  if (s.outside)
+  {
+    aloneOutside = *s.outside;
+    aloneOutside.numActive = 1;
+    alone.outside = &aloneOutside;
+  }
   Vec4f out;
   for (int i = 0; i < s.numActive; ++i)
   {
     alone.active[0] = s.active[i];
+    aloneOutside.active[0] = s.active[i];
     const Vec4f v = traceLitSample<BlendMode::Density>(alone, tracker, o, d, w, tmax, rng, c, sc, imp);
     out.r += v.r;
     out.g += v.g;
@@ -305,22 +342,47 @@ MCVOL_HOT Vec4f traceLitSample(const SceneView& s, Tracker tracker, Vec3f o, Vec
   {
     return traceLitComposite(s, tracker, o, d, w, tmax, rng, c, sc, imp);
   }
-  const LightingView& L = s.lighting;
-  const ShadowEstimator est = L.shadowEstimator == 1 ? ShadowEstimator::Delta : ShadowEstimator::Ratio;
+  const ShadowEstimator est =
+    s.lighting.shadowEstimator == 1 ? ShadowEstimator::Delta : ShadowEstimator::Ratio;
   Vec4f out;
   Vec3f radiance;
   Vec3f throughput(1.f, 1.f, 1.f);
+  // The view the path is in: this piece, or, once a scattered ray has left
+  // the piece and collided beyond it, the stand-in of the whole volume
+  // (SceneView::outside), whose own outside is null.
+  const SceneView* v = &s;
   for (int depth = 0;; ++depth)
   {
     // The visibility optimization acts on the camera ray only (its segment
     // list belongs to the pixel).
     const RayImportance* camImp = depth == 0 ? imp : nullptr;
-    const Hit hit = tracker == Tracker::OneDDA ? track1DDA<Mode>(s, o, d, 0.f, tmax, rng, c, camImp)
-                                               : trackNDDA<Mode>(s, o, d, 0.f, tmax, rng, c, camImp);
+    Hit hit = tracker == Tracker::OneDDA ? track1DDA<Mode>(*v, o, d, 0.f, tmax, rng, c, camImp)
+                                         : trackNDDA<Mode>(*v, o, d, 0.f, tmax, rng, c, camImp);
+    if (!hit.found() && depth > 0 && v->outside)
+    {
+      // A scattered ray that leaves the piece goes on through the stand-in
+      // (camera rays stay in the piece: the pieces' images are composited).
+      const SceneView& os = *v->outside;
+      const Vec3f oo = toOutside(*v, o);
+      const Vec3f od = toOutsideDirection(*v, d);
+      const float tEnd = boxExit(os.volume, oo, od);
+      if (tEnd > tmax)
+      {
+        hit = tracker == Tracker::OneDDA ? track1DDA<Mode>(os, oo, od, tmax, tEnd, rng, c, nullptr)
+                                         : trackNDDA<Mode>(os, oo, od, tmax, tEnd, rng, c, nullptr);
+        if (hit.found())
+        {
+          v = &os;
+          o = oo;
+          d = od;
+        }
+      }
+    }
     if (!hit.found())
     {
       break; // escaped: the environment was counted at the vertices
     }
+    const LightingView& L = v->lighting;
     if (depth == 0)
     {
       out.a = 1.f;
@@ -340,7 +402,7 @@ MCVOL_HOT Vec4f traceLitSample(const SceneView& s, Tracker tracker, Vec3f o, Vec
     float gradLen = 0.f;
     if (L.gradientShading)
     {
-      grad = extinctionGradient<Mode>(s, s.active, s.numActive, x, c);
+      grad = extinctionGradient<Mode>(*v, v->active, v->numActive, x, c);
       gradLen = length(grad);
     }
     // Every light, or one chosen by its share of the radiance and weighted
@@ -392,7 +454,12 @@ MCVOL_HOT Vec4f traceLitSample(const SceneView& s, Tracker tracker, Vec3f o, Vec
       if (L.shadows)
       {
         ++c.shadowRays;
-        T = optimizedShadow<Mode>(s, x, dl, minf(boxExit(s.volume, x, dl), dist), est, rng, sc);
+        const float tPiece = boxExit(v->volume, x, dl);
+        T = optimizedShadow<Mode>(*v, x, dl, minf(tPiece, dist), est, rng, sc);
+        if (T > 0.f)
+        {
+          T *= outsideShadow<Mode>(*v, x, dl, tPiece, dist, est, rng, sc);
+        }
       }
       radiance += throughput * L.lightRadiance[l] * (f * T * falloff * lightWeight);
     }
@@ -407,7 +474,12 @@ MCVOL_HOT Vec4f traceLitSample(const SceneView& s, Tracker tracker, Vec3f o, Vec
       {
         ++c.shadowRays;
         const Vec3f da = mul3(L.toIndex, wa);
-        T = optimizedShadow<Mode>(s, x, da, boxExit(s.volume, x, da), est, rng, sc);
+        const float tPiece = boxExit(v->volume, x, da);
+        T = optimizedShadow<Mode>(*v, x, da, tPiece, est, rng, sc);
+        if (T > 0.f)
+        {
+          T *= outsideShadow<Mode>(*v, x, da, tPiece, 3.4e38f, est, rng, sc);
+        }
       }
       radiance += throughput * L.ambient * T;
     }
@@ -429,7 +501,7 @@ MCVOL_HOT Vec4f traceLitSample(const SceneView& s, Tracker tracker, Vec3f o, Vec
     w = directionAround(w, sampleHGCosine(g, rng.next()), rng.next());
     d = mul3(L.toIndex, w);
     o = x;
-    tmax = boxExit(s.volume, o, d);
+    tmax = boxExit(v->volume, o, d);
   }
   c.importance += sc.importance;
   c.importanceOverflows += sc.importanceOverflows;

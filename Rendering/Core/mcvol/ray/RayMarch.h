@@ -433,6 +433,28 @@ MCVOL_HOT float marchLightRay(const SceneView& s, bool optimized, Vec3f x, Vec3f
     : marchTransmittance<Mode>(s, s.active, s.numActive, x, dl, tmax, step);
 }
 
+/// The marched transmittance of the part of a light ray beyond this piece
+/// (outsideShadow()'s geometry: the ray leaves the piece at tPiece and
+/// reaches the light at tLight), through the stand-in (SceneView::outside)
+/// at the same step. 1 without a stand-in.
+template <BlendMode Mode>
+MCVOL_HOT float marchOutside(const SceneView& s, Vec3f x, Vec3f dl, float tPiece, float tLight, float step)
+{
+  if (!s.outside || !(tLight > tPiece))
+  {
+    return 1.f;
+  }
+  const SceneView& o = *s.outside;
+  const Vec3f xo = toOutside(s, x);
+  const Vec3f dO = toOutsideDirection(s, dl);
+  const float tEnd = minf(boxExit(o.volume, xo, dO), tLight);
+  if (!(tEnd > tPiece))
+  {
+    return 1.f;
+  }
+  return marchTransmittance<Mode>(o, o.active, o.numActive, xo + dO * tPiece, dO, tEnd - tPiece, step);
+}
+
 /// Direction towards each light and the light arriving at ls.x from it
 /// (radiance times marched transmittance, times 1/dist^2 for a point light).
 template <BlendMode Mode>
@@ -457,11 +479,16 @@ MCVOL_HOT void gatherLights(const SceneView& s, const LitRay& r, const LitSample
       dl = toLight * (1.f / dist);
       falloff = 1.f / (dist * dist);
     }
-    const float tl = minf(boxExit(s.volume, ls.x, dl), dist);
+    const float tPiece = boxExit(s.volume, ls.x, dl);
+    const float tl = minf(tPiece, dist);
     float Tl = 1.f;
     if (L.shadows)
     {
       Tl = marchLightRay<Mode>(s, r.optimized, ls.x, dl, tl, r.step);
+      if (s.outside)
+      {
+        Tl *= marchOutside<Mode>(s, ls.x, dl, tPiece, dist, r.step);
+      }
     }
     ls.arriving[l] = L.lightRadiance[l] * (Tl * falloff);
   }
@@ -484,6 +511,10 @@ MCVOL_HOT float ambientTransmittance(const SceneView& s, const LitRay& r, int n,
         const Vec3f dk = mul3(L.toIndex, r.ambientDirs[k]);
         const float tk = boxExit(s.volume, ls.x, dk);
         Tk = marchLightRay<Mode>(s, r.optimized, ls.x, dk, tk, r.step);
+        if (s.outside)
+        {
+          Tk *= marchOutside<Mode>(s, ls.x, dk, tk, 3.4e38f, r.step);
+        }
       }
       ls.ambientT[k] = Tk;
     }
@@ -688,14 +719,23 @@ MCVOL_FUNC Vec4f marchPixel(const SceneView& s, const CameraView& cam, const Mar
   }
   if (MayBeLit && Mode == BlendMode::Composite && s.lighting.enabled)
   {
-    // Each channel lit alone, as the Monte Carlo composite does.
+    // Each channel lit alone, as the Monte Carlo composite does (in the
+    // stand-in of the other pieces too).
     SceneView alone = s;
     alone.numActive = 1;
+    SceneView aloneOutside;
+    if (s.outside)
+    {
+      aloneOutside = *s.outside;
+      aloneOutside.numActive = 1;
+      alone.outside = &aloneOutside;
+    }
     Vec4f sum;
     float clear = 1.f;
     for (int i = 0; i < s.numActive; ++i)
     {
       alone.active[0] = s.active[i];
+      aloneOutside.active[0] = s.active[i];
       const Vec4f v = marchLit<BlendMode::Density>(alone, mp, ray.o, ray.d, ray.world, ray.tmax, phase, mc);
       sum.r += v.r;
       sum.g += v.g;

@@ -205,5 +205,36 @@ struct SceneView
   bool marchControlVariates = false;
   LightingView lighting;
   ImportanceView importance;
+  /**
+   * Lit rendering of one piece of a volume split over processes (ParaView,
+   * MPI): a stand-in for the whole volume (Scene::setOutside), which the
+   * parts of light paths beyond this piece's box are traced through: the
+   * rest of every shadow ray and, with multiple scattering, a scattered ray
+   * that leaves the piece (the path then continues in the stand-in).
+   * Camera rays never enter it. Null (the default, and always unlit): the
+   * piece is the whole volume, and no lighting code reads what follows.
+   * Set per render by the backend (a host pointer on the CPU, a device
+   * pointer on CUDA) to a view of its own whose lighting and blend are this
+   * view's, mapped to the stand-in's index space, and whose `outside` is
+   * null.
+   */
+  const SceneView* outside = nullptr;
+  /// This view's index point p is the stand-in's p * outsideScale +
+  /// outsideOffset (per axis); index directions scale by outsideScale.
+  Vec3f outsideScale = Vec3f(1.f, 1.f, 1.f);
+  Vec3f outsideOffset;
 };
+
+/// An index point of view s in its stand-in's index space (SceneView::outside).
+MCVOL_FUNC Vec3f toOutside(const SceneView& s, Vec3f p)
+{
+  return Vec3f(p.x * s.outsideScale.x + s.outsideOffset.x, p.y * s.outsideScale.y + s.outsideOffset.y,
+    p.z * s.outsideScale.z + s.outsideOffset.z);
+}
+
+/// An index direction of view s in its stand-in's index space.
+MCVOL_FUNC Vec3f toOutsideDirection(const SceneView& s, Vec3f d)
+{
+  return Vec3f(d.x * s.outsideScale.x, d.y * s.outsideScale.y, d.z * s.outsideScale.z);
+}
 } // namespace mcvol
