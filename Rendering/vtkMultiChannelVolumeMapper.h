@@ -946,7 +946,7 @@ public:
    * stand-in for the whole volume that every process gathers from all of
    * them, so that a piece casts its shadow onto another:
    *
-   * - STAND_IN_EXACT (0, the default): every channel's voxels at full
+   * - STAND_IN_EXACT (0): every channel's voxels at full
    *   resolution, as the data hold them (the whole data set's bytes on
    *   every process, plus its macrocells and majorants). The composited
    *   image equals the single-process one within the Monte Carlo error.
@@ -958,17 +958,19 @@ public:
    *   16 bytes per channel and coarse voxel, 1/8^k of the voxels. Shadows
    *   across pieces are blurred over 2^k voxels. Gathered again when the
    *   data or a transfer function change.
-   * - STAND_IN_OFF (-1): no stand-in; shadows end at the piece's border
-   *   (what every process sees of the others is empty space).
+   * - STAND_IN_OFF (-1, the default): no stand-in; shadows end at the
+   *   piece's border (what every process sees of the others is empty space).
    *
    * Only lit renders (ShadeOn) at level of detail 0 use it; a single
    * process, or processes that each hold the whole volume, build nothing
    * and render exactly as without it. With more than one process (the
    * Controller's), every lit render is collective: each process must render
-   * with this mapper in step, as sort-last rendering does. The exact
-   * default is the correct one; the coarse levels trade accuracy of the
-   * shadows across pieces for memory (Documentation/user-guide/cluster.md
-   * gives the figures).
+   * with this mapper in step. Off by default for that reason: a compositor
+   * may skip a process whose piece is outside the view (IceT does), and the
+   * others would then wait for it. Turn it on where every piece is rendered
+   * every frame (the whole volume in view). The exact level is the correct
+   * one; the coarse levels trade accuracy of the shadows across pieces for
+   * memory (Documentation/user-guide/cluster.md gives the figures).
    */
   vtkSetClampMacro(LightingStandInLevel, int, STAND_IN_OFF, 16);
   vtkGetMacro(LightingStandInLevel, int);
@@ -1200,7 +1202,7 @@ protected:
   double MemoryBudget = 0.0;
   int LastLevelOfDetail = 0;
   int LastLevelOfDetailChannels = 0;
-  int LightingStandInLevel = STAND_IN_EXACT;
+  int LightingStandInLevel = STAND_IN_OFF;
 
 private:
   vtkMultiChannelVolumeMapper(const vtkMultiChannelVolumeMapper&) = delete;

@@ -468,7 +468,30 @@ void vtkMultiChannelVolumeRepresentation::SetMaxScatteringDepth(int depth)
 
 void vtkMultiChannelVolumeRepresentation::SetLightingStandInLevel(int level)
 {
-  this->GetMultiChannelMapper()->SetLightingStandInLevel(level);
+  this->LightingStandInLevel = level;
+  this->GetMultiChannelMapper()->SetLightingStandInLevel(this->EmptyPieceSomewhere ? -1 : level);
+}
+
+//------------------------------------------------------------------------------
+int vtkMultiChannelVolumeRepresentation::RequestData(
+  vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+{
+  const int result = this->Superclass::RequestData(request, inputVector, outputVector);
+  // The stand-in for lighting across ranks is gathered as the mapper
+  // renders, by every process together; ParaView renders a representation
+  // only where its piece holds data, so with an empty piece anywhere the
+  // others would wait for ever. Decide here, in the pipeline update that
+  // every process runs: all hold data, or the stand-in stays off.
+  vtkMultiProcessController* controller = vtkMultiProcessController::GetGlobalController();
+  int mine = this->HoldsData() ? 1 : 0;
+  int all = mine;
+  if (controller && controller->GetNumberOfProcesses() > 1)
+  {
+    controller->AllReduce(&mine, &all, 1, vtkCommunicator::MIN_OP);
+  }
+  this->EmptyPieceSomewhere = all == 0;
+  this->SetLightingStandInLevel(this->LightingStandInLevel);
+  return result;
 }
 
 double vtkMultiChannelVolumeRepresentation::GetLightingStandInMemory()
@@ -483,6 +506,10 @@ double vtkMultiChannelVolumeRepresentation::GetLastLightingStandInGatherTime()
 
 const char* vtkMultiChannelVolumeRepresentation::GetLightingStandInReport()
 {
+  if (this->EmptyPieceSomewhere && this->LightingStandInLevel >= 0)
+  {
+    return "off: a process holds no piece of the data, and lighting across ranks needs every process to render";
+  }
   return this->GetMultiChannelMapper()->GetLightingStandInReport();
 }
 

@@ -124,7 +124,9 @@ public:
   void SetShadowMode(int mode);
   void SetAmbientRadiance(double r, double g, double b);
   void SetMaxScatteringDepth(int depth);
-  /// vtkMultiChannelVolumeMapper::SetLightingStandInLevel (lighting across ranks).
+  /// vtkMultiChannelVolumeMapper::SetLightingStandInLevel (lighting across
+  /// ranks). Off while any process holds an empty piece (the report says so):
+  /// the gather needs every process to render.
   void SetLightingStandInLevel(int level);
   double GetLightingStandInMemory();
   double GetLastLightingStandInGatherTime();
@@ -292,6 +294,7 @@ protected:
   ~vtkMultiChannelVolumeRepresentation() override;
 
   void UpdateMapperParameters() override;
+  int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
   bool AddToView(vtkView* view) override;
   bool RemoveFromView(vtkView* view) override;
   void UpdateChannelImportance(int numChannels);
@@ -333,6 +336,8 @@ protected:
   int StillInterpolation = -1; // SetMultiChannelInterpolation's (-1: the volume property's)
   bool RenderingWithLOD = false; // this render is one with ParaView's LOD
   bool ProgressAnnotation = true;
+  int LightingStandInLevel = -1;    // as set; the mapper's is -1 while a piece is empty
+  bool EmptyPieceSomewhere = false; // some process holds no data (RequestData)
   vtkSmartPointer<vtkTextActor> ProgressActor;
   std::string ProgressSummaryValue;
   std::string RemoteProgressSummary;
