@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 //
-// The unlit render kernels for plain scenes: scalar channels only, linear or
+// The render kernels (unlit and lit) for plain scenes: scalar channels only, linear or
 // nearest interpolation (CUDARenderKernels.h says why they are compiled
 // twice). MCVOL_DEVICE_PLAIN_CHANNELS changes device code only (Blend.h's
 // channelOptics under __CUDA_ARCH__), so the host code of the core's inline
@@ -10,9 +10,9 @@
 
 namespace mcvol
 {
-void launchPlainUnlit(BlendMode mode, int unlit, bool count, const SceneView& s, const CameraView& cam,
+void launchPlain(BlendMode mode, bool lit, int unlit, bool count, const SceneView& s, const CameraView& cam,
   const FrameParams& fp, const RenderLaunch& k)
 {
-  withBlendMode(mode, [&](auto m) { launchUnlit<decltype(m)::value>(unlit, count, s, cam, fp, k); });
+  withBlendMode(mode, [&](auto m) { launchKernel<decltype(m)::value>(lit, unlit, count, s, cam, fp, k); });
 }
 } // namespace mcvol
