@@ -40,8 +40,9 @@
 // is recorded under the estimator it runs, once: the CSV never holds two
 // copies of one series under different names.
 // --lighting shadows|ambient|multiple (lightingPreset() in BenchUtil.h) lights
-// the scene: every Monte Carlo series then runs the collision estimator (a lit
-// camera ray's), the marches are the lit march (extinction model only), and
+// the scene: the Monte Carlo series run the expected-value estimator of lit
+// camera rays or the collision estimator (an unbiased-march series runs the
+// collision one), the marches are the lit march (extinction model only), and
 // with multiple scattering, which the march does not render, the reference is
 // a Monte Carlo image at --ref-spp with its own seed and no marches are run.
 

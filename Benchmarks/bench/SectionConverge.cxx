@@ -97,16 +97,14 @@ void runConverge(Bench& bench)
   }
   if (s.scene.lit())
   {
-    // A lit camera ray always runs the collision estimator (unlitEstimator()
-    // in Integrator.h): the expected-value, unbiased-march and automatic rows
-    // would repeat the collision ones under other names.
+    // A lit camera ray runs the expected-value or the collision estimator
+    // (unlitEstimator() in Integrator.h; the automatic choice takes the
+    // expected-value one without pilots): the unbiased-march and automatic
+    // rows would repeat the collision and expected-value ones under other
+    // names.
     configs.erase(std::remove_if(configs.begin(), configs.end(),
-                    [](const Config& c) { return c.automatic || c.estimator != mcvol::Estimator::Collision; }),
+                    [](const Config& c) { return c.automatic || c.estimator == mcvol::Estimator::UnbiasedMarch; }),
       configs.end());
-    if (!configs.empty())
-    {
-      configs.front().name += " (the default when lit)";
-    }
   }
   if (o.onlyAutomatic)
   {

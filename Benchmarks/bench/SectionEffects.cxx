@@ -90,20 +90,24 @@ void runEffects(Bench& bench)
   std::printf("## Lighting effects: cost and effect (%s, macrocell %d, %dx%d)\n\n"
               "Times: 1 spp per frame, median. Image change: RMSE of the %d-spp image against the unlit %d-spp "
               "image; noise: RMSE of one 1-spp frame against its own %d-spp image (premultiplied RGB).\n\n"
-              "| effect | 1-DDA ms | x unlit | scattering events/ray | shadow rays/ray | gradients/ray | image change "
-              "| 1-spp noise |\n|---|---|---|---|---|---|---|---|\n",
+              "Collision: the collision estimator, 1-DDA; expected value: the expected-value estimator (lit: "
+              "traceLitExpected()), each against the unlit frame of the same estimator.\n\n"
+              "| effect | collision ms | x unlit | expected value ms | x unlit | scattering events/ray | shadow rays/ray "
+              "| gradients/ray | image change | 1-spp noise |\n|---|---|---|---|---|---|---|---|---|---|\n",
     ds.c_str(), o.macrocell, o.width, o.height, o.referenceSpp, o.referenceSpp, o.referenceSpp);
   std::vector<float> unlit;
-  double unlitMs = 0;
+  double unlitMs = 0, unlitExpectedMs = 0;
   for (const Effect& e : effects)
   {
     s.scene.setLighting(e.desc);
     const FrameStats f = timeFrames(o, r, s.scene, mcvol::Tracker::OneDDA);
+    const FrameStats fe = timeFrames(o, r, s.scene, mcvol::Tracker::OneDDA, mcvol::Estimator::ExpectedValue);
     const std::vector<float> conv = converged(4242);
     if (unlit.empty())
     {
       unlit = conv;
       unlitMs = f.medianMs;
+      unlitExpectedMs = fe.medianMs;
     }
     mcvol::Accumulator one;
     mcvol::RenderSettings rs;
@@ -111,9 +115,11 @@ void runEffects(Bench& bench)
     r.render(s.scene, cam, rs, nullptr, one);
     const double change = rmse(conv, unlit.data());
     const double noise = rmse(conv, one.rgba());
-    std::printf("| %s | %.3f | %.2fx | %.3f | %.3f | %.3f | %.4f | %.4f |\n", e.name.c_str(), f.medianMs,
-      f.medianMs / unlitMs, f.scatterPerRay, f.shadowPerRay, f.gradientPerRay, change, noise);
+    std::printf("| %s | %.3f | %.2fx | %.3f | %.2fx | %.3f | %.3f | %.3f | %.4f | %.4f |\n", e.name.c_str(),
+      f.medianMs, f.medianMs / unlitMs, fe.medianMs, fe.medianMs / unlitExpectedMs, f.scatterPerRay, f.shadowPerRay,
+      f.gradientPerRay, change, noise);
     bench.row("effects", ds, nch, o.macrocell, e.name, f.medianMs, "ms", "");
+    bench.row("effects", ds, nch, o.macrocell, e.name, fe.medianMs, "ms_expected_value", "");
     bench.row("effects", ds, nch, o.macrocell, e.name, change, "rmse_vs_unlit", "");
     bench.row("effects", ds, nch, o.macrocell, e.name, noise, "rmse_1spp_vs_converged", "");
     std::fflush(stdout);

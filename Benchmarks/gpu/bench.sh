@@ -10,8 +10,9 @@
 #   accuracy  the accuracy study's series with the CUDA backend (Monte Carlo,
 #             new and old defaults, and the ray marches): accuracy.tgz
 #   lit       lit convergence: time to 35 dB at 1024^2 with one light,
-#             shadows and ambient 0.2 (converge section, --lighting ambient)
-#             on the four paper-sized datasets; then the lit accuracy series
+#             shadows and ambient 0.2 (converge section, --lighting ambient:
+#             the expected-value and the collision estimator) on the four
+#             paper-sized datasets; then the lit accuracy series
 #             (mcvol-accuracy --lighting shadows|ambient|multiple: Monte Carlo
 #             against the lit CUDA ray march at several steps, scored against
 #             a fine-step lit march, or a Monte Carlo reference for multiple
@@ -240,7 +241,8 @@ for stage in "$@"; do
           work="$(mktemp -d)"
           t0=$SECONDS
           if "$b/bin/mcvol-accuracy" --backend cuda --score-only --dataset "$ds" --size 256 256 --lighting "$lighting" \
-            --ref-spp 2048 --spp-max 1024 --steps 4,2,1,0.5,0.25 --mc-configs collision:sobol:1dda,collision:independent:1dda \
+            --ref-spp 2048 --spp-max 1024 --steps 4,2,1,0.5,0.25 \
+            --mc-configs expected-value:sobol:1dda,collision:sobol:1dda,collision:independent:1dda \
             --out "$work" 2> "$out/accuracy-lit/$ds-$lighting.log"; then
             cp "$work/timings.csv" "$out/accuracy-lit/$ds-$lighting.csv"
             cp "$work/meta.txt" "$out/accuracy-lit/$ds-$lighting.meta.txt"
@@ -261,6 +263,14 @@ for stage in "$@"; do
       run effects-cpu --backend cpu --dataset cosmology --dims 256 256 256 --channels 4 --label "cosmology 256^3" \
         --size 512 512 --warmup 1 --frames 5 --reference-spp 64 --sections effects
       grep "^| " "$out/effects-cuda.md" | head -10
+      # The paper-sized sets at 1024^2: a light without shadows against the
+      # unlit frame, each estimator.
+      for s in "${sets[@]}"; do
+        read -r key ds x y z ch label <<< "$s"
+        run "effects-$key" --backend cuda --dataset "$ds" --dims "$x" "$y" "$z" --channels "$ch" --label "$label" \
+          --size 1024 1024 --warmup 10 --frames 100 --reference-spp 64 --sections effects
+        grep -E "^\| (emission|1 light, (no shadows|ratio-tracking))" "$out/effects-$key.md" | sed "s/^/$label /"
+      done
       ;;
     ea-compare)
       # Emission-absorption frame time with the lighting code compiled in

@@ -100,9 +100,9 @@ void launchOptimized(BlendMode mode, bool lit, const SceneView& s, const CameraV
     });
 }
 
-/// Launches the render kernel of a render or a pilot: the lit kernel, or the
-/// unlit one of the estimator's code (unlitEstimator()). The unlit kernels
-/// contain none of the lighting code and the collision kernels none of the
+/// Launches the render kernel of a render or a pilot: the lit or unlit one
+/// of the estimator's code (unlitEstimator()). The unlit kernels contain
+/// none of the lighting code and the collision kernels none of the
 /// expected-value estimator's, which saves registers; for plain scenes
 /// (`plain`) the kernels come from CUDALaunchPlain.cu, compiled without the
 /// pre-classified and cubic sampling.
@@ -110,30 +110,12 @@ void launchRender(BlendMode mode, bool count, bool lit, bool plain, const SceneV
   const FrameParams& fp, const RenderLaunch& k)
 {
   const int unlit = unlitEstimator(fp.estimator, mode, lit, false, s.marchControlVariates);
-  if (plain && !(lit && mode == BlendMode::Composite))
+  if (plain)
   {
-    if (lit)
-    {
-      launchPlainLit(mode, count, s, cam, fp, k);
-    }
-    else
-    {
-      launchPlainUnlit(mode, unlit, count, s, cam, fp, k);
-    }
+    launchPlain(mode, lit, unlit, count, s, cam, fp, k);
     return;
   }
-  withBlendMode(mode,
-    [&](auto m)
-    {
-      if (lit)
-      {
-        launchRenderKernel<decltype(m)::value, true, 0>(count, s, cam, fp, k);
-      }
-      else
-      {
-        launchUnlit<decltype(m)::value>(unlit, count, s, cam, fp, k);
-      }
-    });
+  withBlendMode(mode, [&](auto m) { launchKernel<decltype(m)::value>(lit, unlit, count, s, cam, fp, k); });
 }
 
 /// Whether the plain kernels can render `s`: scalar channels only, linear or

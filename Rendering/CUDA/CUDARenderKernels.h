@@ -4,13 +4,13 @@
 // launcher, shared by the two translation units that compile them:
 // - CUDALaunch.cu: every kernel, for every scene (pre-classified channels,
 //   cubic interpolation, lighting, the visibility optimization);
-// - CUDALaunchPlain.cu: the unlit and the lit kernels again, compiled with
+// - CUDALaunchPlain.cu: the unlit and lit kernels again, compiled with
 //   MCVOL_DEVICE_PLAIN_CHANNELS, for scenes of scalar channels with linear or
 //   nearest interpolation (the common case; CUDARenderer::setPlainKernels,
 //   on by default). There channelOptics() has no out-of-line call for
 //   pre-classified or cubic sampling. On the GPU an out-of-line function
 //   shares the registers of every kernel that can call it, so without it the
-//   unlit kernels need far fewer registers per thread (ptxas
+//   kernels need far fewer registers per thread (ptxas
 //   --resource-usage), keep more rays in flight and finish a frame sooner
 //   (Documentation/performance.md).
 // Included once per translation unit: the kernels and launchUnlit() sit in
@@ -198,14 +198,44 @@ void launchUnlit(
     }
   }
 }
+
+/// Launches the lit kernel of estimator code `unlit` (unlitEstimator(): 1
+/// the expected-value estimator of lit camera rays, 0 the collision
+/// estimator), with or without counters. Post-render composite only ever
+/// takes code 0.
+template <BlendMode Mode>
+void launchLit(
+  int unlit, bool count, const SceneView& s, const CameraView& cam, const FrameParams& fp, const RenderLaunch& k)
+{
+  if constexpr (Mode == BlendMode::Composite)
+  {
+    launchRenderKernel<Mode, true, 0>(count, s, cam, fp, k);
+  }
+  else
+  {
+    unlit == 1 ? launchRenderKernel<Mode, true, 1>(count, s, cam, fp, k)
+               : launchRenderKernel<Mode, true, 0>(count, s, cam, fp, k);
+  }
+}
+
+/// launchLit() or launchUnlit() as the scene is lit or not.
+template <BlendMode Mode>
+void launchKernel(bool lit, int unlit, bool count, const SceneView& s, const CameraView& cam, const FrameParams& fp,
+  const RenderLaunch& k)
+{
+  if (lit)
+  {
+    launchLit<Mode>(unlit, count, s, cam, fp, k);
+  }
+  else
+  {
+    launchUnlit<Mode>(unlit, count, s, cam, fp, k);
+  }
+}
 } // namespace
 
-/// CUDALaunchPlain.cu: launchUnlit() for the blend mode known at run time,
-/// with the plain compilation of the kernels.
-void launchPlainUnlit(BlendMode mode, int unlit, bool count, const SceneView& s, const CameraView& cam,
+/// CUDALaunchPlain.cu: launchKernel() for the blend mode known at run time,
+/// with the plain compilation of the kernels (lit and unlit).
+void launchPlain(BlendMode mode, bool lit, int unlit, bool count, const SceneView& s, const CameraView& cam,
   const FrameParams& fp, const RenderLaunch& k);
-/// CUDALaunchPlain.cu: the lit kernel for the blend mode known at run time
-/// (not composite), with the plain compilation.
-void launchPlainLit(
-  BlendMode mode, bool count, const SceneView& s, const CameraView& cam, const FrameParams& fp, const RenderLaunch& k);
 } // namespace mcvol

@@ -618,6 +618,81 @@ inline void expectSameImage(const Moments& A, const Moments& B, double alpha, co
   expectZeroDifference(D, V, alpha, what);
 }
 
+/**
+ * Two renders of the same expectation by estimators whose per-sample
+ * distributions differ (e.g. the collision estimator's rare bright samples
+ * against the expected-value estimator's small steady ones), at
+ * significance `alpha`, per component: the image-mean z (the pixels'
+ * differences summed, over the summed variances of the difference), then
+ * the z of each `tile` x `tile` block of pixels, Bonferroni-corrected over
+ * the blocks. A per-pixel test would not do: where one estimator has only a
+ * few non-zero samples in a pixel, its mean is far from normal. A block
+ * takes part only where each render holds at least 30 effective non-zero
+ * samples in it (sum^2 / sum of squares, at most the count of non-zero
+ * samples); the other blocks are pooled into one more z-test.
+ */
+inline void expectSameMean(const Moments& A, const Moments& B, double alpha, const std::string& what, int tile = 4)
+{
+  ASSERT_EQ(A.size(), B.size());
+  const char* names[4] = { "R", "G", "B", "A" };
+  const int tx = (A.width + tile - 1) / tile, ty = (A.height + tile - 1) / tile;
+  for (int c = 0; c < 4; ++c)
+  {
+    double allD = 0, allV = 0, rareD = 0, rareV = 0, maxZ = 0;
+    int blocks = 0;
+    for (int by = 0; by < ty; ++by)
+    {
+      for (int bx = 0; bx < tx; ++bx)
+      {
+        double D = 0, V = 0, sA = 0, qA = 0, sB = 0, qB = 0;
+        for (int y = by * tile; y < std::min(A.height, (by + 1) * tile); ++y)
+        {
+          for (int x = bx * tile; x < std::min(A.width, (bx + 1) * tile); ++x)
+          {
+            const size_t i = (size_t(y) * size_t(A.width) + size_t(x)) * 4 + size_t(c);
+            D += A.mean(i) - B.mean(i);
+            V += A.var(i) / A.n + B.var(i) / B.n;
+            sA += A.sum[i];
+            qA += A.sumSq[i];
+            sB += B.sum[i];
+            qB += B.sumSq[i];
+          }
+        }
+        allD += D;
+        allV += V;
+        const bool enough = qA > 0 && qB > 0 && sA * sA / qA >= 30.0 && sB * sB / qB >= 30.0;
+        if (!enough)
+        {
+          rareD += D;
+          rareV += V;
+          continue;
+        }
+        maxZ = std::max(maxZ, std::fabs(D) / std::sqrt(V));
+        ++blocks;
+      }
+    }
+    if (allV > 0)
+    {
+      const double z = allD / std::sqrt(allV);
+      EXPECT_GT(normalTwoSided(z), alpha) << what << " " << names[c] << ": image-mean difference z = " << z;
+    }
+    else
+    {
+      EXPECT_LE(std::fabs(allD), 1e-6) << what << " " << names[c] << ": differs although no sample varied";
+    }
+    if (blocks > 0)
+    {
+      EXPECT_GT(std::min(1.0, normalTwoSided(maxZ) * blocks), alpha)
+        << what << " " << names[c] << ": largest block |z| = " << maxZ << " over " << blocks << " blocks";
+    }
+    if (rareV > 0)
+    {
+      const double z = rareD / std::sqrt(rareV);
+      EXPECT_GT(normalTwoSided(z), alpha) << what << " " << names[c] << ": pooled sparse blocks z = " << z;
+    }
+  }
+}
+
 /// Binomial test: `hits` successes in `n` trials of probability p, two-sided,
 /// normal approximation (n p (1 - p) is large in every use here).
 inline void expectBinomial(double hits, double n, double p, double alpha, const std::string& what)

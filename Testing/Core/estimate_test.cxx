@@ -396,9 +396,10 @@ void quarterRateWins(SyntheticNoiseRenderer& r)
 }
 } // namespace
 
-// The choice is made where the estimator matters, and only there: lit
-// scenes, the visibility optimization and composite blending take the
-// collision estimator whatever is set, so no pilot renders.
+// The choice is made where the estimator matters, and only there: the
+// visibility optimization and composite blending take the collision
+// estimator whatever is set, and lit scenes the expected-value estimator of
+// lit camera rays, so no pilot renders.
 TEST(EstimatorChoice, NoPilotsWhereTheEstimatorDoesNotApply)
 {
   std::unique_ptr<Renderer> inner = testRenderer();
@@ -420,8 +421,12 @@ TEST(EstimatorChoice, NoPilotsWhereTheEstimatorDoesNotApply)
     scene.setLighting(ld);
     scene.update();
     ASSERT_TRUE(scene.lit());
-    const EstimatorChoice c = chooseEstimator(r, scene, cam, RenderSettings());
+    RenderSettings collision;
+    collision.estimator = Estimator::Collision;
+    const EstimatorChoice c = chooseEstimator(r, scene, cam, collision);
     EXPECT_FALSE(c.applies);
+    EXPECT_EQ(c.settings.estimator, Estimator::ExpectedValue);
+    EXPECT_EQ(effectiveEstimator(scene, c.settings), Estimator::ExpectedValue);
   }
   EXPECT_EQ(r.Renders, 0);
   Scene scene;

@@ -800,3 +800,96 @@ TEST(HardCases, Float64FarFromZeroKeepsResolution)
   bad.type = ScalarType::Float32;
   EXPECT_THROW(scene.setVolume(dims, 1, &bad), std::invalid_argument);
 }
+
+// The lit estimators on the hard cases: one light with ratio shadows and
+// ambient 0.3, albedo 0.7. Opacity 1 (every first tentative collision real),
+// a volume with NaN and Inf voxels, and a single voxel: the expected-value
+// estimator of lit camera rays (traceLitExpected()) and the collision
+// estimator give the same image (expectSameMean, 3 scenes x 12 checks;
+// 128 one-sample renders each, independent seeds); every value finite.
+// All-zero opacity: both give a transparent image with no work at all.
+TEST(HardCases, LitEstimatorsAgree)
+{
+  const double alpha = kAlpha / 36;
+  const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+  LightingDesc ld;
+  LightDesc sun;
+  sun.vector[0] = 0.3;
+  sun.vector[1] = 0.5;
+  sun.vector[2] = 1;
+  sun.intensity = 2;
+  ld.lights = { sun };
+  ld.ambient[0] = ld.ambient[1] = ld.ambient[2] = 0.3;
+  ld.albedo = { 0.7f };
+  ld.anisotropy = { 0.3f };
+  const double spacing[3] = { 1, 1, 1 };
+  std::unique_ptr<Renderer> r = testRenderer();
+  RenderSettings ev;
+  ev.estimator = Estimator::ExpectedValue;
+  RenderSettings col = ev;
+  col.estimator = Estimator::Collision;
+  auto compare = [&](const Scene& scene, const Camera& cam, const std::string& what)
+  {
+    ASSERT_TRUE(scene.lit()) << what;
+    const Moments A = renderMoments(*r, scene, cam, ev, 128, 300);
+    const Moments B = renderMoments(*r, scene, cam, col, 128, 900);
+    double lit = 0;
+    for (size_t i = 0; i < A.size(); ++i)
+    {
+      EXPECT_TRUE(std::isfinite(A.mean(i)) && std::isfinite(B.mean(i))) << what;
+      lit += i % 4 == 3 ? 0.0 : A.mean(i);
+    }
+    EXPECT_GT(lit, 0.0) << what << ": the scene is lit and visible";
+    expectSameMean(A, B, alpha, what + ": lit expected value against collision");
+  };
+  {
+    TestVolume v(8, 8, 17, 1, 0.5f);
+    Scene scene;
+    configure(scene, v, { flatTF(1.f, 0.2f, 0.4f, 0.6f, 2.f) }, 4);
+    scene.setLighting(ld);
+    compare(scene, axisCamera(2, v.dims, spacing, -1.5, 8.5, 10, 10), "opacity 1");
+  }
+  {
+    TestVolume v(16, 16, 16, 1, 1.f);
+    for (int k = 0; k < 16; ++k)
+      for (int j = 0; j < 16; ++j)
+        for (int i = 0; i < 16; ++i)
+        {
+          if (i <= 6)
+            v.channels[0][v.index(i, j, k)] = nan;
+          else if (i >= 9 && j == 12)
+            v.channels[0][v.index(i, j, k)] = inf;
+        }
+    Scene scene;
+    configure(scene, v, { flatTF(opacityFor(0.1, 1.0), 0.3f, 0.6f, 0.9f, 1.f, 2, 0.f, 2.f) }, 4);
+    scene.setLighting(ld);
+    compare(scene, axisCamera(2, v.dims, spacing, 0, 15, 12, 12), "NaN and Inf voxels");
+  }
+  {
+    TestVolume v(1, 1, 1, 1, 0.5f);
+    Scene scene;
+    configure(scene, v, { flatTF(0.5f, 1, 1, 1) }, 8);
+    scene.setLighting(ld);
+    compare(scene, orbitCamera(v.dims, spacing, 12, 12, 35, 25), "single voxel");
+  }
+  {
+    TestVolume v(8, 8, 17, 2, 0.5f);
+    Scene scene;
+    configure(scene, v, { flatTF(0.f, 1, 0, 0), flatTF(0.f, 0, 1, 0) }, 4);
+    LightingDesc two = ld;
+    two.albedo = { 0.7f, 0.7f };
+    two.anisotropy = { 0.3f, 0.3f };
+    scene.setLighting(two);
+    const Camera cam = axisCamera(2, v.dims, spacing, -1, 8, 10, 10);
+    for (Estimator e : { Estimator::ExpectedValue, Estimator::Collision })
+    {
+      RenderCounters c;
+      const Image img = render(scene, cam, Tracker::OneDDA, 4, 1, &c, true, e);
+      for (float x : img.px)
+      {
+        EXPECT_EQ(x, 0.f) << "zero opacity, " << toString(e);
+      }
+      EXPECT_EQ(c.tentativeCollisions + c.channelSamples + c.scatteringEvents + c.shadowRays, 0u) << toString(e);
+    }
+  }
+}

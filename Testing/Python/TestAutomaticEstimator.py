@@ -15,7 +15,7 @@ Documentation/user-guide/accumulation-and-estimators.md):
 - interactive renders (the window's DesiredUpdateRate at or above
   InteractiveUpdateRate, or SetInteractiveRendering(1)) keep expected value
   there, and the first still render restarts the image with the choice;
-- lit volumes use the collision estimator, and no pilot renders for them;
+- lit volumes use the expected-value estimator, and no pilot renders for them;
 - the scene file's "estimator": "automatic" reaches the mapper.
 Dense microscopy phantom, CPU backend (or the test backend), fixed seeds."""
 
@@ -238,7 +238,7 @@ opacity.AddPoint(0.5 * sum(src.GetOutput().GetPointData().GetArray(0).GetRange()
 render(window, 1)
 expect_equal(mapper.GetNumberOfEstimatorChoices(), 2, "a transfer-function change chooses again")
 
-# Lit: the collision estimator, and no pilots.
+# Lit: the expected-value estimator of lit camera rays, and no pilots.
 lit, lwindow, lrenderer, lvolume = make_view()
 lit.SetEstimatorToAutomatic()
 lvolume.GetProperty().ShadeOn()
@@ -247,7 +247,7 @@ light.SetLightTypeToSceneLight()
 light.SetPosition(1, 1, 1)
 lrenderer.AddLight(light)
 render(lwindow, 2)
-expect_equal(lit.GetChosenEstimatorAsString(), "Collision", "lit volumes use the collision estimator")
+expect_equal(lit.GetChosenEstimatorAsString(), "ExpectedValue", "lit volumes use the expected-value estimator")
 expect_equal(lit.GetNumberOfEstimatorChoices(), 0, "no pilots for a lit volume")
 
 # The scene file.

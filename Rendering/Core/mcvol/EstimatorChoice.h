@@ -160,10 +160,11 @@ struct EstimatorChoiceSettings
 };
 
 /**
- * The estimator a render of `scene` with `settings` runs for its unlit
- * camera rays: settings.estimator, except where the scene keeps the
- * collision estimator (lit, the visibility optimization, composite blending;
- * unlitEstimator() in Integrator.h, the kernels' own rule).
+ * The estimator a render of `scene` with `settings` runs for its camera
+ * rays: settings.estimator, except where the scene keeps the collision
+ * estimator (the visibility optimization, composite blending, and the
+ * unbiased march asked for a lit scene; unlitEstimator() in Integrator.h,
+ * the kernels' own rule).
  */
 Estimator effectiveEstimator(const Scene& scene, const RenderSettings& settings);
 /// "Collision", "ExpectedValue", "UnbiasedMarch(R)" with R strata per
@@ -201,9 +202,10 @@ struct EstimatorTrial
 
 struct EstimatorChoice
 {
-  /// False where the estimator does not matter (lit scenes, the visibility
-  /// optimization and composite blending always take the collision
-  /// estimator): then no pilot ran and `settings` is the input.
+  /// False where no pilot ran: where the estimator does not matter (the
+  /// visibility optimization and composite blending always take the
+  /// collision estimator), `settings` is the input; lit scenes take the
+  /// expected-value estimator of lit camera rays (traceLitExpected()).
   bool applies = false;
   /// The input settings with the chosen estimator (and march rate; at pixel
   /// centres also the march's variant: marchControlVariates, and

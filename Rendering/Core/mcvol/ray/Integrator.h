@@ -10,16 +10,22 @@
 namespace mcvol
 {
 /// The estimator a render's camera rays use, as the kernels' compile-time
-/// code: 0 collision, 1 expected value, 2 unbiased march with plain strata,
-/// 3 unbiased march with control variates (`controlVariates`: SceneView::
-/// marchControlVariates, marchControlVariates()). The last three only
-/// when asked for, unlit, not optimized and not post-render compositing
-/// (these keep the collision estimator, Estimator's documentation says why).
+/// code: 0 collision, 1 expected value (lit: traceLitExpected()), 2
+/// unbiased march with plain strata, 3 unbiased march with control variates
+/// (`controlVariates`: SceneView::marchControlVariates,
+/// marchControlVariates()). The last three only when asked for, not
+/// optimized and not post-render compositing, and the marches only unlit
+/// (the others keep the collision estimator, Estimator's documentation says
+/// why).
 MCVOL_FUNC int unlitEstimator(Estimator e, BlendMode mode, bool lit, bool optimized, bool controlVariates = false)
 {
-  if (lit || optimized || mode == BlendMode::Composite)
+  if (optimized || mode == BlendMode::Composite)
   {
     return 0;
+  }
+  if (lit)
+  {
+    return e == Estimator::ExpectedValue ? 1 : 0;
   }
   if (e == Estimator::UnbiasedMarch)
   {
@@ -65,9 +71,9 @@ struct FrameParams
  * the error estimate keeps (Accumulator::estimatedMSE).
  * Unlit (a compile-time choice too, so that each kernel carries only its
  * estimator's code and registers; unlitEstimator() decides it): 1 scores
- * unlit camera rays with trackExpected(), 2 with trackUnbiasedMarch(), 3
- * with trackUnbiasedMarch()'s control variates, 0 with the collision
- * estimator.
+ * unlit camera rays with trackExpected() and lit ones with
+ * traceLitExpected(), 2 with trackUnbiasedMarch(), 3 with
+ * trackUnbiasedMarch()'s control variates, 0 with the collision estimator.
  */
 template <BlendMode Mode, bool Lit = false, bool Optimized = false, int Unlit = 0>
 MCVOL_FUNC void renderPixel(const SceneView& s, const CameraView& cam, const FrameParams& fp, int x, int y,
@@ -100,9 +106,13 @@ MCVOL_FUNC void renderPixel(const SceneView& s, const CameraView& cam, const Fra
       continue;
     }
     Vec4f v;
-    if (Lit)
+    if (Lit && Unlit == 1 && !Optimized && Mode != BlendMode::Composite)
     {
-      v = traceLitSample<Mode>(s, fp.tracker, ray.o, ray.d, ray.world, ray.tmax, rng, c, sc, ri);
+      v = traceLitExpected<Mode>(s, fp.tracker, ray.o, ray.d, ray.world, ray.tmax, rng, c, sc);
+    }
+    else if (Lit)
+    {
+      v = traceLitSample<Mode, Optimized>(s, fp.tracker, ray.o, ray.d, ray.world, ray.tmax, rng, c, sc, ri);
     }
     else if (Unlit == 1 && !Optimized && Mode != BlendMode::Composite)
     {

@@ -166,11 +166,13 @@ MCVOL_HOT float shadowTransmittance(const SceneView& s, const int* channels, int
  * ray unoptimized, counted (the mapper reports it with the camera rays'
  * overflows).
  */
-template <BlendMode Mode>
+template <BlendMode Mode, bool Optimized = true>
 MCVOL_HOT float optimizedShadow(
   const SceneView& s, Vec3f x, Vec3f d, float tmax, ShadowEstimator est, Rng& rng, ShadowCounters& sc)
 {
-  if (s.importance.enabled && s.importance.lightRays && tmax > 0.f)
+  // Optimized false: a kernel that renders without the optimization (its
+  // light rays never have one) and so carries none of its code.
+  if (Optimized && s.importance.enabled && s.importance.lightRays && tmax > 0.f)
   {
     ImportanceSegment seg[kImportanceCapacity];
     RayImportance ri;
@@ -282,69 +284,25 @@ MCVOL_HOT float scatterFunction(
 }
 
 /**
- * One lit Monte Carlo sample (Lerzer and Dachsbacher Eq. 1-2 with the
- * paper's multi-density tracking): the camera path is tracked as in the
- * unlit case; a real collision with channel n scatters with probability
- * albedo_n and otherwise absorbs and emits the blend's colour. At a
- * scattering vertex the path's throughput takes the blend's colour, each
- * light is sampled (next-event estimation with a shadow ray) and the ambient
- * environment through one phase-sampled direction (its phase value over its
- * pdf is 1); the path then continues in a phase-sampled direction, up to
- * maxDepth scattering events, with Russian roulette from the third.
- * `w` is the ray's unit world direction, `d` its index-space image.
+ * The lit path from a real collision `hit` of the ray o + t d (index space;
+ * `w` its unit world direction): the collision scatters with probability
+ * albedo_n of its channel n and otherwise absorbs, emitting the blend's
+ * colour when `emitFirst` (the expected-value estimator has scored that
+ * emission already). At a scattering vertex the path's throughput takes
+ * the blend's colour, each light is sampled (next-event estimation with a
+ * shadow ray) and the ambient environment through one phase-sampled
+ * direction (its phase value over its pdf is 1); the path then continues in
+ * a phase-sampled direction, tracked with the collision estimator, up to
+ * maxDepth scattering events, with Russian roulette from the third. Returns
+ * the radiance. Optimized: the render runs the visibility optimization
+ * (only then can a light ray have one, optimizedShadow()).
  */
-template <BlendMode Mode>
-MCVOL_HOT Vec4f traceLitSample(const SceneView& s, Tracker tracker, Vec3f o, Vec3f d, Vec3f w, float tmax, Rng& rng,
-  RayCounters& c, ShadowCounters& sc, const RayImportance* imp = nullptr);
-
-/**
- * Lighting under post-render compositing: each active channel lit as if it
- * were alone (its own emission, scattering and shadows), the premultiplied
- * results added. Alpha estimates 1 - prod(1 - alpha_n) as "some channel's
- * camera ray collided", which holds only when the channels' samples are
- * independent: they draw from the PCG stream, not from one shared Sobol'
- * point (whose sets are keyed by the place in the active list, the same
- * place 0 for every channel alone).
- */
-MCVOL_HOT Vec4f traceLitComposite(const SceneView& s, Tracker tracker, Vec3f o, Vec3f d, Vec3f w, float tmax, Rng& rng,
-  RayCounters& c, ShadowCounters& sc, const RayImportance* imp)
+template <BlendMode Mode, bool Optimized>
+MCVOL_HOT Vec3f litPathFrom(const SceneView& s, Tracker tracker, Vec3f o, Vec3f d, Vec3f w, Hit hit, bool emitFirst,
+  Rng& rng, RayCounters& c, ShadowCounters& sc)
 {
-  rng.endSequence();
-  SceneView alone = s;
-  alone.numActive = 1;
-  // The stand-in of the other pieces carries the same one channel.
-  SceneView aloneOutside;
-  if (s.outside)
-  {
-    aloneOutside = *s.outside;
-    aloneOutside.numActive = 1;
-    alone.outside = &aloneOutside;
-  }
-  Vec4f out;
-  for (int i = 0; i < s.numActive; ++i)
-  {
-    alone.active[0] = s.active[i];
-    aloneOutside.active[0] = s.active[i];
-    const Vec4f v = traceLitSample<BlendMode::Density>(alone, tracker, o, d, w, tmax, rng, c, sc, imp);
-    out.r += v.r;
-    out.g += v.g;
-    out.b += v.b;
-    out.a = fmaxf(out.a, v.a);
-  }
-  return out;
-}
-
-template <BlendMode Mode>
-MCVOL_HOT Vec4f traceLitSample(const SceneView& s, Tracker tracker, Vec3f o, Vec3f d, Vec3f w, float tmax, Rng& rng,
-  RayCounters& c, ShadowCounters& sc, const RayImportance* imp)
-{
-  if (Mode == BlendMode::Composite)
-  {
-    return traceLitComposite(s, tracker, o, d, w, tmax, rng, c, sc, imp);
-  }
   const ShadowEstimator est =
     s.lighting.shadowEstimator == 1 ? ShadowEstimator::Delta : ShadowEstimator::Ratio;
-  Vec4f out;
   Vec3f radiance;
   Vec3f throughput(1.f, 1.f, 1.f);
   // The view the path is in: this piece, or, once a scattered ray has left
@@ -353,46 +311,48 @@ MCVOL_HOT Vec4f traceLitSample(const SceneView& s, Tracker tracker, Vec3f o, Vec
   const SceneView* v = &s;
   for (int depth = 0;; ++depth)
   {
-    // The visibility optimization acts on the camera ray only (its segment
-    // list belongs to the pixel).
-    const RayImportance* camImp = depth == 0 ? imp : nullptr;
-    Hit hit = tracker == Tracker::OneDDA ? track1DDA<Mode>(*v, o, d, 0.f, tmax, rng, c, camImp)
-                                         : trackNDDA<Mode>(*v, o, d, 0.f, tmax, rng, c, camImp);
-    if (!hit.found() && depth > 0 && v->outside)
+    if (depth > 0)
     {
-      // A scattered ray that leaves the piece goes on through the stand-in
-      // (camera rays stay in the piece: the pieces' images are composited).
-      const SceneView& os = *v->outside;
-      const Vec3f oo = toOutside(*v, o);
-      const Vec3f od = toOutsideDirection(*v, d);
-      const float tEnd = boxExit(os.volume, oo, od);
-      if (tEnd > tmax)
+      // The visibility optimization acts on the camera ray only (its segment
+      // list belongs to the pixel).
+      const float tmax = boxExit(v->volume, o, d);
+      hit = tracker == Tracker::OneDDA ? track1DDA<Mode>(*v, o, d, 0.f, tmax, rng, c)
+                                       : trackNDDA<Mode>(*v, o, d, 0.f, tmax, rng, c);
+      if (!hit.found() && v->outside)
       {
-        hit = tracker == Tracker::OneDDA ? track1DDA<Mode>(os, oo, od, tmax, tEnd, rng, c, nullptr)
-                                         : trackNDDA<Mode>(os, oo, od, tmax, tEnd, rng, c, nullptr);
-        if (hit.found())
+        // A scattered ray that leaves the piece goes on through the stand-in
+        // (camera rays stay in the piece: the pieces' images are composited).
+        const SceneView& os = *v->outside;
+        const Vec3f oo = toOutside(*v, o);
+        const Vec3f od = toOutsideDirection(*v, d);
+        const float tEnd = boxExit(os.volume, oo, od);
+        if (tEnd > tmax)
         {
-          v = &os;
-          o = oo;
-          d = od;
+          hit = tracker == Tracker::OneDDA ? track1DDA<Mode>(os, oo, od, tmax, tEnd, rng, c)
+                                           : trackNDDA<Mode>(os, oo, od, tmax, tEnd, rng, c);
+          if (hit.found())
+          {
+            v = &os;
+            o = oo;
+            d = od;
+          }
         }
       }
-    }
-    if (!hit.found())
-    {
-      break; // escaped: the environment was counted at the vertices
+      if (!hit.found())
+      {
+        break; // escaped: the environment was counted at the vertices
+      }
     }
     const LightingView& L = v->lighting;
-    if (depth == 0)
-    {
-      out.a = 1.f;
-    }
     const Vec3f x = o + d * hit.t;
     // Scatter or absorb: a set of its own at the camera ray's collision
     // under Sampler::Sobol (next() otherwise, as before).
     if (!(rng.sequence(kGroupScatter) < L.albedo[hit.channel]))
     {
-      radiance += throughput * hit.rgb; // absorbed: emits
+      if (depth > 0 || emitFirst)
+      {
+        radiance += throughput * hit.rgb; // absorbed: emits
+      }
       break;
     }
     ++c.scattering;
@@ -455,7 +415,7 @@ MCVOL_HOT Vec4f traceLitSample(const SceneView& s, Tracker tracker, Vec3f o, Vec
       {
         ++c.shadowRays;
         const float tPiece = boxExit(v->volume, x, dl);
-        T = optimizedShadow<Mode>(*v, x, dl, minf(tPiece, dist), est, rng, sc);
+        T = optimizedShadow<Mode, Optimized>(*v, x, dl, minf(tPiece, dist), est, rng, sc);
         if (T > 0.f)
         {
           T *= outsideShadow<Mode>(*v, x, dl, tPiece, dist, est, rng, sc);
@@ -475,7 +435,7 @@ MCVOL_HOT Vec4f traceLitSample(const SceneView& s, Tracker tracker, Vec3f o, Vec
         ++c.shadowRays;
         const Vec3f da = mul3(L.toIndex, wa);
         const float tPiece = boxExit(v->volume, x, da);
-        T = optimizedShadow<Mode>(*v, x, da, tPiece, est, rng, sc);
+        T = optimizedShadow<Mode, Optimized>(*v, x, da, tPiece, est, rng, sc);
         if (T > 0.f)
         {
           T *= outsideShadow<Mode>(*v, x, da, tPiece, 3.4e38f, est, rng, sc);
@@ -501,15 +461,256 @@ MCVOL_HOT Vec4f traceLitSample(const SceneView& s, Tracker tracker, Vec3f o, Vec
     w = directionAround(w, sampleHGCosine(g, rng.next()), rng.next());
     d = mul3(L.toIndex, w);
     o = x;
-    tmax = boxExit(v->volume, o, d);
   }
+  return radiance;
+}
+
+/// Moves the shadow rays' importance counts into the ray counters.
+MCVOL_FUNC void foldShadowCounters(RayCounters& c, ShadowCounters& sc)
+{
   c.importance += sc.importance;
   c.importanceOverflows += sc.importanceOverflows;
   sc.importance = 0;
   sc.importanceOverflows = 0;
-  out.r = radiance.x;
-  out.g = radiance.y;
-  out.b = radiance.z;
+}
+
+/**
+ * One lit Monte Carlo sample with the collision estimator (Lerzer and
+ * Dachsbacher Eq. 1-2 with the paper's multi-density tracking): the camera
+ * path is tracked as in the unlit case to its first real collision, from
+ * which litPathFrom() scatters or absorbs. `w` is the ray's unit world
+ * direction, `d` its index-space image.
+ */
+template <BlendMode Mode, bool Optimized = false>
+MCVOL_HOT Vec4f traceLitSample(const SceneView& s, Tracker tracker, Vec3f o, Vec3f d, Vec3f w, float tmax, Rng& rng,
+  RayCounters& c, ShadowCounters& sc, const RayImportance* imp = nullptr);
+
+/**
+ * Lighting under post-render compositing: each active channel lit as if it
+ * were alone (its own emission, scattering and shadows), the premultiplied
+ * results added. Alpha estimates 1 - prod(1 - alpha_n) as "some channel's
+ * camera ray collided", which holds only when the channels' samples are
+ * independent: they draw from the PCG stream, not from one shared Sobol'
+ * point (whose sets are keyed by the place in the active list, the same
+ * place 0 for every channel alone).
+ */
+template <bool Optimized>
+MCVOL_HOT Vec4f traceLitComposite(const SceneView& s, Tracker tracker, Vec3f o, Vec3f d, Vec3f w, float tmax, Rng& rng,
+  RayCounters& c, ShadowCounters& sc, const RayImportance* imp)
+{
+  rng.endSequence();
+  SceneView alone = s;
+  alone.numActive = 1;
+  // The stand-in of the other pieces carries the same one channel.
+  SceneView aloneOutside;
+  if (s.outside)
+  {
+    aloneOutside = *s.outside;
+    aloneOutside.numActive = 1;
+    alone.outside = &aloneOutside;
+  }
+  Vec4f out;
+  for (int i = 0; i < s.numActive; ++i)
+  {
+    alone.active[0] = s.active[i];
+    aloneOutside.active[0] = s.active[i];
+    const Vec4f v = traceLitSample<BlendMode::Density, Optimized>(alone, tracker, o, d, w, tmax, rng, c, sc, imp);
+    out.r += v.r;
+    out.g += v.g;
+    out.b += v.b;
+    out.a = fmaxf(out.a, v.a);
+  }
   return out;
+}
+
+template <BlendMode Mode, bool Optimized>
+MCVOL_HOT Vec4f traceLitSample(const SceneView& s, Tracker tracker, Vec3f o, Vec3f d, Vec3f w, float tmax, Rng& rng,
+  RayCounters& c, ShadowCounters& sc, const RayImportance* imp)
+{
+  if (Mode == BlendMode::Composite)
+  {
+    return traceLitComposite<Optimized>(s, tracker, o, d, w, tmax, rng, c, sc, imp);
+  }
+  Vec4f out;
+  const Hit hit = tracker == Tracker::OneDDA ? track1DDA<Mode>(s, o, d, 0.f, tmax, rng, c, imp)
+                                             : trackNDDA<Mode>(s, o, d, 0.f, tmax, rng, c, imp);
+  if (hit.found())
+  {
+    const Vec3f radiance = litPathFrom<Mode, Optimized>(s, tracker, o, d, w, hit, true, rng, c, sc);
+    out = Vec4f{ radiance.x, radiance.y, radiance.z, 1.f };
+  }
+  foldShadowCounters(c, sc);
+  return out;
+}
+
+/// A lit point's optics for the expected-value estimator: the blend's
+/// extinction, the colour its absorbed share emits, and the channel and
+/// colour of the real collision a uniform number selects (channel -1: none).
+struct LitPointOptics
+{
+  float sigma = 0.f;
+  Vec3f absorbed; ///< sum_n sigma_n (1 - albedo_n) c_n / sigma (density); (1 - albedo) c of the blend (max, mix)
+  int channel = -1;
+  Vec3f rgb;
+};
+
+/**
+ * litPointOptics: the blend at p as blendedOptics() (Blend.h) sees it, with
+ * each channel's albedo. `select` (a uniform number times the majorant, or
+ * negative for no selection) picks the real collision as delta tracking
+ * would: none where select >= sigma, else, for density, the channel whose
+ * share of the running sum of sigma_n holds `select` (probability sigma_n /
+ * majorant, as the collision estimator's channel), for max and mix the
+ * channel of largest extinction with the blend's colour (realCollision()).
+ */
+template <BlendMode Mode>
+MCVOL_HOT LitPointOptics litPointOptics(const SceneView& s, Vec3f p, uint32_t present, float select)
+{
+  const LightingView& L = s.lighting;
+  LitPointOptics out;
+  Vec3f weighted;
+  Vec3f absorbed;
+  float weightedSigma = 0.f;
+  float best = -1.f;
+  int bestChannel = -1;
+  Vec3f bestColour;
+  for (int i = 0; i < s.numActive; ++i)
+  {
+    const int n = s.active[i];
+    if (((present >> n) & 1u) == 0u)
+    {
+      continue;
+    }
+    const TFSample t = channelOptics(s, n, p);
+    if (Mode == BlendMode::Density || Mode == BlendMode::Composite)
+    {
+      out.sigma += t.sigma;
+      absorbed += t.rgb * (t.sigma * (1.f - L.albedo[n]));
+      if (out.channel < 0 && select >= 0.f && select < out.sigma)
+      {
+        out.channel = n;
+        out.rgb = t.rgb;
+      }
+      continue;
+    }
+    if (bestChannel < 0 || outranks(t.sigma, n, best, bestChannel))
+    {
+      best = t.sigma;
+      bestChannel = n;
+      bestColour = t.rgb;
+    }
+    if (Mode == BlendMode::Mix)
+    {
+      weighted += t.rgb * (t.sigma * s.blend.mixWeights[n]);
+      weightedSigma += t.sigma * s.blend.mixWeights[n];
+    }
+  }
+  if (Mode == BlendMode::Density || Mode == BlendMode::Composite)
+  {
+    out.absorbed = out.sigma > 0.f ? absorbed * (1.f / out.sigma) : Vec3f();
+    return out;
+  }
+  out.sigma = best > 0.f ? best : 0.f;
+  if (out.sigma > 0.f)
+  {
+    const Vec3f colour = Mode == BlendMode::Max ? bestColour : mixColour(s.blend, weighted, weightedSigma, out.sigma);
+    out.absorbed = colour * (1.f - L.albedo[bestChannel]);
+    if (select >= 0.f && select < out.sigma)
+    {
+      out.channel = bestChannel;
+      out.rgb = colour;
+    }
+  }
+  return out;
+}
+
+/**
+ * One lit sample with the expected-value estimator (Estimator::
+ * ExpectedValue with lighting): next-event estimation on the camera ray of
+ * trackExpected(). The camera ray's tentative collisions follow the blend's
+ * majorant M, as trackExpected()'s; at each, with running transmittance T
+ * (ratio tracking, Russian roulette below kRouletteThreshold), the
+ * absorbed share of the emission is scored with the expected-value weight
+ * w = sigma / M: L += T w c_abs, c_abs = sum_n sigma_n (1 - albedo_n) c_n /
+ * sigma, so the emission needs no random absorb-or-scatter decision. The
+ * scattered share needs shadow rays; it is scored at one real collision
+ * per path, the first one delta tracking finds over the same tentative
+ * collisions (real where the collision's own uniform number u has u M <
+ * sigma; channel n with probability sigma_n / M): there the path scatters
+ * with probability albedo_n (litPathFrom(), its emission not scored again),
+ * exactly as the collision estimator's path does from its real collision.
+ * That collision has the density sigma(t) T(t), so the scattered part is
+ * unbiased and costs the shadow rays of the collision estimator; the
+ * emission is the expected-value estimator's, so is alpha (1 - T). The
+ * scattering vertex is handled after the traversal, so the camera ray's
+ * loop carries no lighting code.
+ */
+template <BlendMode Mode>
+MCVOL_HOT Vec4f traceLitExpected(const SceneView& s, Tracker tracker, Vec3f o, Vec3f d, Vec3f w, float tmax, Rng& rng,
+  RayCounters& c, ShadowCounters& sc)
+{
+  if (s.numActive == 0)
+  {
+    return Vec4f();
+  }
+  Vec3f L;
+  float T = 1.f;
+  Hit hit;
+  float tau = opticalDepthOf(rng.sequence(kGroupFlight));
+  DDA dda;
+  dda.init(s.grid, o, d, 0.f, tmax);
+  while (!dda.done && T > 0.f)
+  {
+    ++c.ddaSteps;
+    CellChannels present;
+    float M = blendMajorant<Mode>(s, dda.cellIndex(), present);
+    if (M > 0.f)
+    {
+      M = maxf(M, s.minRate); // a denser tentative process stays unbiased
+    }
+    float t = dda.t0;
+    while (M > 0.f)
+    {
+      const float room = (dda.t1 - t) * M; // optical depth left in the cell
+      if (!(tau < room))
+      {
+        tau -= room > 0.f ? room : 0.f;
+        break;
+      }
+      t = advance(t, tau / M);
+      float uFlight, uAccept;
+      rng.collision(uFlight, uAccept);
+      tau = opticalDepthOf(uFlight);
+      ++c.tentative;
+      const LitPointOptics po = litPointOptics<Mode>(s, o + d * t, present.mask, hit.found() ? -1.f : uAccept * M);
+      c.samples += uint32_t(present.count);
+      if (po.channel >= 0)
+      {
+        hit.t = t;
+        hit.channel = po.channel;
+        hit.rgb = po.rgb;
+      }
+      const float wt = minf(po.sigma / M, 1.f);
+      L += po.absorbed * (T * wt);
+      T *= 1.f - wt;
+      if (T < kRouletteThreshold)
+      {
+        if (rng.next() * kRouletteThreshold >= T)
+        {
+          T = 0.f;
+          break;
+        }
+        T = kRouletteThreshold;
+      }
+    }
+    dda.next();
+  }
+  if (hit.found())
+  {
+    ++c.real;
+    L += litPathFrom<Mode, false>(s, tracker, o, d, w, hit, false, rng, c, sc);
+  }
+  foldShadowCounters(c, sc);
+  return premultipliedRGBA(L, T);
 }
 } // namespace mcvol

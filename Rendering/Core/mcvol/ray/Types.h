@@ -81,7 +81,7 @@ enum class Sampler : int
 };
 
 /**
- * What an unlit camera ray scores. All three are unbiased
+ * What a camera ray scores. All three are unbiased
  * estimates of the same emission-absorption integral.
  * - Collision: Woodcock tracking to the first real collision, which scores
  *   its colour with alpha 1 (the papers' estimator; the trackers choose
@@ -101,8 +101,12 @@ enum class Sampler : int
  *   trackUnbiasedMarch() in Tracking.h). Unbiased; about 2x a ray march's
  *   samples per frame, far less noise per frame where structures are thin
  *   and dense (microscopy), more work where the majorants are sparse.
- * Lit paths, post-render compositing and the visibility optimization keep
- * the collision estimator whatever is asked (their own estimators apply).
+ * Lit camera rays take ExpectedValue too (traceLitExpected() in
+ * Lighting.h: the emission with the expected-value weights, the scattered
+ * light at one delta-tracked real collision) or Collision; UnbiasedMarch
+ * lights nothing and runs Collision there. Post-render compositing and the
+ * visibility optimization keep the collision estimator whatever is asked
+ * (their own estimators apply).
  */
 enum class Estimator : int
 {
