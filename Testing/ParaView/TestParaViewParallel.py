@@ -21,33 +21,22 @@ FXAA is off in these views (mcvolParaViewTesting.make_view): ParaView 5.11
 turns it on by default, and it filters the composited image differently
 from the serial one, which showed as differences along silhouettes.
 """
-import argparse
 import os
 import subprocess
 import sys
-import tempfile
 
 import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, HERE)
 sys.path.insert(0, os.path.join(os.path.dirname(HERE), "Python"))
 from mcvolTesting import read_png_rgb  # noqa: E402
+import mcvolParallelDriver as D  # noqa: E402
 
 
 def main():
-    p = argparse.ArgumentParser()
-    p.add_argument("--pvbatch", default="pvbatch")
-    p.add_argument("--mpiexec", default="mpiexec")
-    p.add_argument("--ranks", type=int, default=2)
-    args = p.parse_args()
-
-    env = dict(os.environ)
-    env["PYTHONPATH"] = HERE + os.pathsep + env.get("PYTHONPATH", "")
-    # OpenMPI refuses to run as root without these (CI runs as root).
-    env.setdefault("OMPI_ALLOW_RUN_AS_ROOT", "1")
-    env.setdefault("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+    args, env, tmp = D.setup("mcvol-parallel-")
     script = os.path.join(HERE, "ParallelRender.py")
-    tmp = tempfile.mkdtemp(prefix="mcvol-parallel-")
 
     def run(name, seed, ranks=1, scale=1.0):
         out = os.path.join(tmp, name + ".png")

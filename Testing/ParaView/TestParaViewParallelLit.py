@@ -24,35 +24,23 @@ above 1.5; this also proves that the scene's shadows cross the pieces. (The
 coarse stand-ins' error is reported by TestParallelLitRayMarch, noise-free,
 and measured for this mapper in Benchmarks/results/lighting-across-ranks.)
 """
-import argparse
 import os
 import subprocess
 import sys
-import tempfile
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
 sys.path.insert(0, os.path.join(os.path.dirname(HERE), "Python"))
 from mcvolTesting import read_png_rgb  # noqa: E402
 import mcvolLitSplitScene as S  # noqa: E402
+import mcvolParallelDriver as D  # noqa: E402
 
 SAMPLES = 128
 
 
 def main():
-    p = argparse.ArgumentParser()
-    p.add_argument("--pvbatch", default="pvbatch")
-    p.add_argument("--mpiexec", default="mpiexec")
-    p.add_argument("--ranks", type=int, default=2)
-    args = p.parse_args()
-
-    env = dict(os.environ)
-    env["PYTHONPATH"] = HERE + os.pathsep + env.get("PYTHONPATH", "")
-    # OpenMPI refuses to run as root without these (CI runs as root).
-    env.setdefault("OMPI_ALLOW_RUN_AS_ROOT", "1")
-    env.setdefault("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+    args, env, tmp = D.setup("mcvol-parallel-lit-")
     script = os.path.join(HERE, "ParallelLitRender.py")
-    tmp = tempfile.mkdtemp(prefix="mcvol-parallel-lit-")
     from vtkmodules.vtkIOXML import vtkXMLImageDataWriter
     scene = os.path.join(tmp, "scene.vti")
     writer = vtkXMLImageDataWriter()

@@ -21,32 +21,21 @@ parallel march with the stand-in off must give a ratio above 1.5. The
 coarse stand-ins' error is reported against the exact one (root mean square
 of the colour difference, noise-free since the march is deterministic).
 """
-import argparse
 import os
 import subprocess
 import sys
-import tempfile
 
 import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
 import mcvolLitSplitScene as S  # noqa: E402
+import mcvolParallelDriver as D  # noqa: E402
 
 
 def main():
-    p = argparse.ArgumentParser()
-    p.add_argument("--pvbatch", default="pvbatch")
-    p.add_argument("--mpiexec", default="mpiexec")
-    p.add_argument("--ranks", type=int, default=2)
-    args = p.parse_args()
-
-    env = dict(os.environ)
-    env["PYTHONPATH"] = HERE + os.pathsep + env.get("PYTHONPATH", "")
-    env.setdefault("OMPI_ALLOW_RUN_AS_ROOT", "1")
-    env.setdefault("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+    args, env, tmp = D.setup("mcvol-parallel-march-")
     script = os.path.join(HERE, "ParallelLitMapper.py")
-    tmp = tempfile.mkdtemp(prefix="mcvol-parallel-march-")
 
     def run(name, mapper, level=0, ranks=1, seed=0, spp=1):
         out = os.path.join(tmp, name + ".npy")
