@@ -54,17 +54,36 @@ private:
   uint64_t S;
 };
 
-/// One directional light (intensity `intensity`, from (1, 2, 0.5)) with
-/// shadows, and a grey sky of radiance `ambient`: the lit test scenes' light.
-inline LightingDesc sunAndSky(double intensity, double ambient)
+/// The lit test scenes' directional light, from (1, 2, 0.5).
+inline LightDesc testSun(double intensity)
 {
-  LightingDesc ld;
   LightDesc sun;
   sun.vector[0] = 1;
   sun.vector[1] = 2;
   sun.vector[2] = 0.5;
   sun.intensity = intensity;
-  ld.lights = { sun };
+  return sun;
+}
+
+/// The lit test scenes' bluish point light at (25, -5, 10) (index space).
+inline LightDesc testLamp(double intensity)
+{
+  LightDesc lamp;
+  lamp.point = true;
+  lamp.vector[0] = 25;
+  lamp.vector[1] = -5;
+  lamp.vector[2] = 10;
+  lamp.intensity = intensity;
+  lamp.color[2] = 0.5;
+  return lamp;
+}
+
+/// One directional light (testSun) with shadows, and a grey sky of
+/// radiance `ambient`: the lit test scenes' light.
+inline LightingDesc sunAndSky(double intensity, double ambient)
+{
+  LightingDesc ld;
+  ld.lights = { testSun(intensity) };
   ld.ambient[0] = ld.ambient[1] = ld.ambient[2] = ambient;
   return ld;
 }

@@ -91,18 +91,8 @@ void expectSameMarch(CUDARenderer& gpu, const Scene& scene, const Camera& cam, c
 LightingDesc twoLights(int channels, double ambient)
 {
   LightingDesc ld;
-  LightDesc sun;
-  sun.vector[0] = 1;
-  sun.vector[1] = 2;
-  sun.vector[2] = 0.5;
-  sun.intensity = 1.5;
-  LightDesc lamp;
-  lamp.point = true;
-  lamp.vector[0] = 25;
-  lamp.vector[1] = -5;
-  lamp.vector[2] = 10;
-  lamp.intensity = 400;
-  lamp.color[2] = 0.5;
+  const LightDesc sun = testSun(1.5);
+  const LightDesc lamp = testLamp(400);
   ld.lights = { sun, lamp };
   ld.ambient[0] = ambient;
   ld.ambient[1] = 0.8 * ambient;

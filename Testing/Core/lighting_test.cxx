@@ -519,18 +519,8 @@ TEST(Lighting, MonteCarloShadowsMatchTheRayMarchedReference)
     Scene scene;
     configureDemo(scene, v, 4, 128, 0.5, mode);
     LightingDesc ld;
-    LightDesc sun;
-    sun.vector[0] = 1;
-    sun.vector[1] = 2;
-    sun.vector[2] = 0.5;
-    sun.intensity = 1.5;
-    LightDesc lamp;
-    lamp.point = true;
-    lamp.vector[0] = 25;
-    lamp.vector[1] = -5;
-    lamp.vector[2] = 10;
-    lamp.intensity = 400;
-    lamp.color[2] = 0.5;
+    const LightDesc sun = testSun(1.5);
+    const LightDesc lamp = testLamp(400);
     ld.lights = { sun, lamp };
     ld.albedo = { 0.9f, 0.6f, 0.8f, 0.3f };
     ld.anisotropy = { 0.4f, -0.2f, 0.f, 0.7f };
@@ -868,18 +858,8 @@ TEST(Lighting, ExpectedValueEqualsTheCollisionEstimator)
   const double alpha = kAlpha / (9 * 12 + 6);
   const DemoVolume v = makeDemo("cosmology", { 16, 16, 16 });
   const Camera cam = orbitCamera(v.dims, v.spacing, 12, 12, 30, 20);
-  LightDesc sun;
-  sun.vector[0] = 1;
-  sun.vector[1] = 2;
-  sun.vector[2] = 0.5;
-  sun.intensity = 1.5;
-  LightDesc lamp;
-  lamp.point = true;
-  lamp.vector[0] = 25;
-  lamp.vector[1] = -5;
-  lamp.vector[2] = 10;
-  lamp.intensity = 300;
-  lamp.color[2] = 0.5;
+  const LightDesc sun = testSun(1.5);
+  const LightDesc lamp = testLamp(300);
   const std::unique_ptr<Renderer> rp = testRenderer();
   for (BlendMode mode : { BlendMode::Density, BlendMode::Max, BlendMode::Mix })
   {
