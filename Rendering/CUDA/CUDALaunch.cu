@@ -83,7 +83,8 @@ __global__ void renderOptimizedKernel(const __grid_constant__ SceneView s, const
 }
 
 /// Launches the visibility optimization's kernel for the blend mode and
-/// lighting known at run time.
+/// lighting known at run time. Post-render composite is never lit here
+/// (refused before the launch), so its lit kernel is not compiled.
 void launchOptimized(BlendMode mode, bool lit, const SceneView& s, const CameraView& cam, const FrameParams& fp,
   const RenderLaunch& k, const ImportanceLaunch& o)
 {
@@ -93,9 +94,17 @@ void launchOptimized(BlendMode mode, bool lit, const SceneView& s, const CameraV
       withFlag(lit,
         [&](auto l)
         {
-          renderOptimizedKernel<decltype(m)::value, decltype(l)::value><<<k.grid, k.block, 0, k.stream>>>(
-            s, cam, fp, k.depth, k.accum, k.sums, k.even, k.evenSums, k.previous, k.counters, o.segments, o.counts,
-            o.totals, o.refinePass);
+          constexpr BlendMode Mode = decltype(m)::value;
+          if constexpr (decltype(l)::value && Mode == BlendMode::Composite)
+          {
+            throw std::logic_error("mcvol: lit post-render composite reached the CUDA launcher");
+          }
+          else
+          {
+            renderOptimizedKernel<Mode, decltype(l)::value><<<k.grid, k.block, 0, k.stream>>>(s, cam, fp, k.depth,
+              k.accum, k.sums, k.even, k.evenSums, k.previous, k.counters, o.segments, o.counts, o.totals,
+              o.refinePass);
+          }
         });
     });
 }
@@ -119,10 +128,11 @@ void launchRender(BlendMode mode, bool count, bool lit, bool plain, const SceneV
 }
 
 /// Whether the plain kernels can render `s`: scalar channels only, linear or
-/// nearest interpolation.
+/// nearest interpolation, and no lighting across pieces (kStandInCode,
+/// Lighting.h).
 bool plainScene(const SceneView& s)
 {
-  bool plain = !s.volume.cubic;
+  bool plain = !s.volume.cubic && !s.outside;
   for (int n = 0; n < s.volume.numChannels; ++n)
   {
     plain = plain && s.volume.channels[n].format == ChannelFormat::Scalar;

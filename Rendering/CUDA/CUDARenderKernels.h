@@ -201,15 +201,16 @@ void launchUnlit(
 
 /// Launches the lit kernel of estimator code `unlit` (unlitEstimator(): 1
 /// the expected-value estimator of lit camera rays, 0 the collision
-/// estimator), with or without counters. Post-render composite only ever
-/// takes code 0.
+/// estimator), with or without counters. This backend refuses to light
+/// post-render composite before it launches (CUDARenderer::render), so no
+/// lit composite kernel is compiled: it would only spill registers.
 template <BlendMode Mode>
 void launchLit(
   int unlit, bool count, const SceneView& s, const CameraView& cam, const FrameParams& fp, const RenderLaunch& k)
 {
   if constexpr (Mode == BlendMode::Composite)
   {
-    launchRenderKernel<Mode, true, 0>(count, s, cam, fp, k);
+    throw std::logic_error("mcvol: lit post-render composite reached the CUDA launcher");
   }
   else
   {

@@ -208,6 +208,21 @@ MCVOL_FUNC float boxExit(const VolumeView& vol, Vec3f x, Vec3f d)
 }
 
 /**
+ * Whether this compilation carries the lighting across pieces
+ * (SceneView::outside). The plain kernels' device code does not
+ * (CUDARenderKernels.h): a lit path that may switch to the stand-in keeps a
+ * pointer to its view and a second shadow march, which takes the lit
+ * kernels from about 150 to 225 registers per thread (ptxas
+ * --resource-usage, sm_90) and spills the max and mix ones. The launcher
+ * sends a scene with a stand-in to the general kernels.
+ */
+#if defined(__CUDA_ARCH__) && defined(MCVOL_DEVICE_PLAIN_CHANNELS)
+constexpr bool kStandInCode = false;
+#else
+constexpr bool kStandInCode = true;
+#endif
+
+/**
  * The transmittance of the part of a light ray beyond this piece
  * (SceneView::outside): the ray from index point x along d leaves the
  * piece's box at tPiece (boxExit) and reaches the light at tLight (world
@@ -220,7 +235,7 @@ template <BlendMode Mode>
 MCVOL_HOT float outsideShadow(const SceneView& s, Vec3f x, Vec3f d, float tPiece, float tLight,
   ShadowEstimator estimator, Rng& rng, ShadowCounters& c)
 {
-  if (!s.outside || !(tLight > tPiece))
+  if (!kStandInCode || !s.outside || !(tLight > tPiece))
   {
     return 1.f;
   }
@@ -318,7 +333,7 @@ MCVOL_HOT Vec3f litPathFrom(const SceneView& s, Tracker tracker, Vec3f o, Vec3f 
       const float tmax = boxExit(v->volume, o, d);
       hit = tracker == Tracker::OneDDA ? track1DDA<Mode>(*v, o, d, 0.f, tmax, rng, c)
                                        : trackNDDA<Mode>(*v, o, d, 0.f, tmax, rng, c);
-      if (!hit.found() && v->outside)
+      if (kStandInCode && !hit.found() && v->outside)
       {
         // A scattered ray that leaves the piece goes on through the stand-in
         // (camera rays stay in the piece: the pieces' images are composited).
