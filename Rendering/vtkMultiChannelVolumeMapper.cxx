@@ -9,6 +9,7 @@
 #include "vtkMath.h"
 #include "vtkMatrix3x3.h"
 #include "vtkMatrix4x4.h"
+#include "vtkCommunicator.h"
 #include "vtkMultiProcessController.h"
 #include "vtkObjectFactory.h"
 #include "vtkOpenGLRenderWindow.h"
@@ -1035,7 +1036,8 @@ void vtkMultiChannelVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
     !this->EnsureBackend() ||                   // CPU or CUDA renderer
     !this->ChooseLevelOfDetail(pass) ||         // level asked for, automatic, or the one that fits
     !this->UpdateScene(pass) ||                 // volume, tables, grids, settings, lights
-    !this->UpdateStandIn(pass) ||               // lit, split over processes: the other pieces
+    !this->UpdateStandIn(pass,                  // lit, split over processes: the other pieces
+      this->LightingStandInSynchronizedByCaller ? STAND_IN_USE : STAND_IN_GATHER_AND_USE) ||
     !this->SetUpView(pass))                     // camera rays, depth of opaque geometry
   {
     return;
@@ -1291,15 +1293,18 @@ bool vtkMultiChannelVolumeMapper::UpdateScene(RenderPass& pass)
 }
 
 //------------------------------------------------------------------------------
-bool vtkMultiChannelVolumeMapper::UpdateStandIn(RenderPass& pass)
+bool vtkMultiChannelVolumeMapper::UpdateStandIn(RenderPass& pass, StandInStep step)
 {
   vtkInternals& in = *this->Internals;
-  in.Scene.setOutside(nullptr);
+  if (step != STAND_IN_GATHER)
+  {
+    in.Scene.setOutside(nullptr);
+  }
   vtkMultiProcessController* controller =
     in.Controller ? in.Controller.Get() : vtkMultiProcessController::GetGlobalController();
   // The same on every process (the settings and lights are), so that all
   // take part in the gather or none does.
-  const bool wanted = this->LightingStandInLevel >= 0 && pass.Scene && pass.Scene->lit() && controller &&
+  const bool wanted = this->LightingStandInLevel != STAND_IN_OFF && pass.Scene && pass.Scene->lit() && controller &&
     controller->GetNumberOfProcesses() > 1;
   if (!wanted)
   {
@@ -1324,13 +1329,26 @@ bool vtkMultiChannelVolumeMapper::UpdateStandIn(RenderPass& pass)
     }
   }
   input.Level = this->LightingStandInLevel;
+  input.MemoryLimit = this->LightingStandInMemoryLimit;
   input.MacrocellSize = this->MacrocellSize;
   input.Interp = in.Scene.interpolation();
   try
   {
     bool changed = false;
     double scale[3], offset[3];
-    const mcvol::Scene* standIn = in.StandIn.Update(controller, input, changed, scale, offset);
+    const mcvol::Scene* standIn = nullptr;
+    switch (step)
+    {
+      case STAND_IN_GATHER:
+        in.StandIn.Synchronize(controller, input, changed);
+        break;
+      case STAND_IN_USE:
+        standIn = in.StandIn.Use(input, changed, scale, offset);
+        break;
+      default:
+        standIn = in.StandIn.Update(controller, input, changed, scale, offset);
+        break;
+    }
     if (changed)
     {
       in.Accumulation.RequestReset();
@@ -1348,6 +1366,36 @@ bool vtkMultiChannelVolumeMapper::UpdateStandIn(RenderPass& pass)
     return false;
   }
   return true;
+}
+
+//------------------------------------------------------------------------------
+void vtkMultiChannelVolumeMapper::SynchronizeLightingStandIn(vtkRenderer* ren, vtkVolume* vol)
+{
+  vtkMultiProcessController* controller = this->Internals->Controller
+    ? this->Internals->Controller.Get()
+    : vtkMultiProcessController::GetGlobalController();
+  // The same on every process, so that all return here or none does.
+  if (this->LightingStandInLevel == STAND_IN_OFF || !controller || controller->GetNumberOfProcesses() < 2)
+  {
+    return;
+  }
+  RenderPass pass;
+  pass.Renderer = ren;
+  pass.Volume = vol;
+  // Render()'s stages up to the stand-in, so that its input is the next
+  // render's. A process whose stages fail (its error reported) keeps all
+  // the others out of the gather: they agree first.
+  int ready = ren && vol && this->BindChannels(pass) && this->ClassifyDependentComponents(pass) &&
+      this->ResolveTransferFunctions(pass) && this->EnsureBackend() && this->ChooseLevelOfDetail(pass) &&
+      this->UpdateScene(pass)
+    ? 1
+    : 0;
+  int all = 0;
+  controller->AllReduce(&ready, &all, 1, vtkCommunicator::MIN_OP);
+  if (all)
+  {
+    this->UpdateStandIn(pass, STAND_IN_GATHER);
+  }
 }
 
 //------------------------------------------------------------------------------
@@ -1889,7 +1937,13 @@ void vtkMultiChannelVolumeMapper::PrintSelf(ostream& os, vtkIndent indent)
      << (this->LevelOfDetail == LEVEL_OF_DETAIL_AUTOMATIC ? " (automatic)" : "") << "\n";
   os << indent << "LevelOfDetailFilter: " << this->GetLevelOfDetailFilterAsString() << "\n";
   os << indent << "LightingStandInLevel: " << this->LightingStandInLevel
-     << (this->LightingStandInLevel < 0 ? " (off)" : this->LightingStandInLevel == 0 ? " (exact)" : " (coarse)") << "\n";
+     << (this->LightingStandInLevel == STAND_IN_AUTOMATIC ? " (automatic)"
+           : this->LightingStandInLevel < 0               ? " (off)"
+           : this->LightingStandInLevel == 0              ? " (exact)"
+                                                          : " (coarse)")
+     << "\n";
+  os << indent << "LightingStandInMemoryLimit: " << this->LightingStandInMemoryLimit << "\n";
+  os << indent << "LightingStandInSynchronizedByCaller: " << this->LightingStandInSynchronizedByCaller << "\n";
   os << indent << "LevelOfDetailHalfPrecision: " << (this->LevelOfDetailHalfPrecision ? "On" : "Off") << "\n";
   os << indent << "MemoryBudget: " << this->MemoryBudget << " bytes" << (this->MemoryBudget > 0.0 ? "" : " (no cap)")
      << "\n";
@@ -2018,6 +2072,13 @@ void vtkMultiChannelVolumeMapper::SetImportanceMergeDistance(double value)
 void vtkMultiChannelVolumeMapper::SetMemoryBudget(double value)
 {
   mcvol::adapter::SetClamped(this, "SetMemoryBudget", value, 0.0, VTK_DOUBLE_MAX, this->MemoryBudget);
+}
+
+//------------------------------------------------------------------------------
+void vtkMultiChannelVolumeMapper::SetLightingStandInMemoryLimit(double bytes)
+{
+  mcvol::adapter::SetClamped(
+    this, "SetLightingStandInMemoryLimit", bytes, 0.0, VTK_DOUBLE_MAX, this->LightingStandInMemoryLimit);
 }
 
 //------------------------------------------------------------------------------

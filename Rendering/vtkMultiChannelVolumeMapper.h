@@ -940,7 +940,10 @@ public:
     /// SetLightingStandInLevel(STAND_IN_OFF): light paths end at the piece.
     STAND_IN_OFF = -1,
     /// SetLightingStandInLevel(STAND_IN_EXACT): the whole volume as stored.
-    STAND_IN_EXACT = 0
+    STAND_IN_EXACT = 0,
+    /// SetLightingStandInLevel(STAND_IN_AUTOMATIC): the finest level whose
+    /// stand-in fits LightingStandInMemoryLimit.
+    STAND_IN_AUTOMATIC = -2
   };
 
   ///@{
@@ -965,6 +968,10 @@ public:
    *   16 bytes per channel and coarse voxel, 1/8^k of the voxels. Shadows
    *   across pieces are blurred over 2^k voxels. Gathered again when the
    *   data or a transfer function change.
+   * - STAND_IN_AUTOMATIC (-2): the exact stand-in when the whole volume's
+   *   voxels take at most LightingStandInMemoryLimit bytes (default 2 GiB),
+   *   else the finest coarse level that does (GetLightingStandInReport()
+   *   names it). ParaView's representation uses it by default.
    * - STAND_IN_OFF (-1, the default): no stand-in; shadows end at the
    *   piece's border (what every process sees of the others is empty space).
    *
@@ -975,14 +982,28 @@ public:
    * with this mapper in step. Off by default for that reason: a compositor
    * may skip a process whose piece is outside the view (IceT does), and the
    * others would then wait for it. Turn it on where every piece is rendered
-   * every frame (the whole volume in view). The exact level is the correct
-   * one; the coarse levels trade accuracy of the shadows across pieces for
-   * memory (Documentation/user-guide/cluster.md gives the figures).
+   * every frame (the whole volume in view), or gather outside the render
+   * (SetLightingStandInSynchronizedByCaller, as ParaView's representation
+   * does). The exact level is the correct one; the coarse levels trade
+   * accuracy of the shadows across pieces for memory
+   * (Documentation/user-guide/cluster.md gives the figures).
    */
-  vtkSetClampMacro(LightingStandInLevel, int, STAND_IN_OFF, 16);
+  vtkSetClampMacro(LightingStandInLevel, int, STAND_IN_AUTOMATIC, 16);
   vtkGetMacro(LightingStandInLevel, int);
   void SetLightingStandInLevelToOff() { this->SetLightingStandInLevel(STAND_IN_OFF); }
   void SetLightingStandInLevelToExact() { this->SetLightingStandInLevel(STAND_IN_EXACT); }
+  void SetLightingStandInLevelToAutomatic() { this->SetLightingStandInLevel(STAND_IN_AUTOMATIC); }
+  ///@}
+
+  ///@{
+  /**
+   * Bytes the automatic stand-in may hold on each process (default 2^31, 2
+   * GiB; its macrocells and majorants and, on the CUDA backend, its device
+   * copy come on top). Clamped to [0, VTK_DOUBLE_MAX]; NaN is an error (the
+   * value stays).
+   */
+  virtual void SetLightingStandInMemoryLimit(double bytes);
+  vtkGetMacro(LightingStandInMemoryLimit, double);
   ///@}
 
   ///@{
@@ -994,6 +1015,30 @@ public:
    */
   void SetController(vtkMultiProcessController* controller);
   vtkMultiProcessController* GetController();
+  ///@}
+
+  ///@{
+  /**
+   * Who runs the stand-in's collective step (LightingStandInLevel not STAND_IN_OFF,
+   * more than one process). Off (the default): Render() does, so every
+   * process must render with this mapper in step. On: Render() never
+   * communicates. It uses the stand-in gathered by the last
+   * SynchronizeLightingStandIn(), which the caller makes on every process
+   * before each render, in a pass that every process runs whether or not
+   * the compositor then renders its piece. ParaView's representation does
+   * this in its REQUEST_RENDER pass, so that a piece out of view (which
+   * IceT does not render) holds up no other process.
+   *
+   * SynchronizeLightingStandIn() runs the stages of Render() that the
+   * stand-in reads (channels, transfer functions, level of detail, scene)
+   * for this renderer and volume, then the collective step: one AllReduce
+   * that agrees whether every process can take part, one that decides
+   * whether anything changed, and the gather when it did.
+   */
+  vtkSetMacro(LightingStandInSynchronizedByCaller, bool);
+  vtkGetMacro(LightingStandInSynchronizedByCaller, bool);
+  vtkBooleanMacro(LightingStandInSynchronizedByCaller, bool);
+  void SynchronizeLightingStandIn(vtkRenderer* ren, vtkVolume* vol);
   ///@}
 
   ///@{
@@ -1210,6 +1255,8 @@ protected:
   int LastLevelOfDetail = 0;
   int LastLevelOfDetailChannels = 0;
   int LightingStandInLevel = STAND_IN_OFF;
+  bool LightingStandInSynchronizedByCaller = false;
+  double LightingStandInMemoryLimit = 2147483648.0;
 
 private:
   vtkMultiChannelVolumeMapper(const vtkMultiChannelVolumeMapper&) = delete;
@@ -1233,8 +1280,17 @@ private:
   bool UpdateLevelScene(RenderPass& pass);
   /// Whether the level sums the channels into one (density blend).
   bool SumsChannelsAtLevels(RenderPass& pass);
-  /// Lit, split over processes: the stand-in of the other pieces (collective).
-  bool UpdateStandIn(RenderPass& pass);
+  /// Lit, split over processes: the stand-in of the other pieces. Its
+  /// steps: STAND_IN_GATHER_AND_USE (collective, then used by this render),
+  /// STAND_IN_GATHER (collective only: SynchronizeLightingStandIn) or
+  /// STAND_IN_USE (no communication: LightingStandInSynchronizedByCaller).
+  enum StandInStep
+  {
+    STAND_IN_GATHER_AND_USE,
+    STAND_IN_GATHER,
+    STAND_IN_USE
+  };
+  bool UpdateStandIn(RenderPass& pass, StandInStep step);
   bool SetUpView(RenderPass& pass);
   void UpdateAccumulation(RenderPass& pass);
   /// AUTOMATIC_ESTIMATOR: the pilots, when the data, tables or settings the

@@ -142,6 +142,9 @@ vtkMultiChannelVolumeRepresentation::vtkMultiChannelVolumeRepresentation()
   // ParaView's transfer functions span the whole dataset's range, the same
   // on every rank; a piece's own data range is not (tables would differ).
   mapper->SetTransferFunctionRangeMode(vtkMultiChannelVolumeMapper::FUNCTION_RANGE);
+  // Lighting across ranks gathers in ProcessViewRequest(REQUEST_RENDER),
+  // never inside the mapper's render (see there).
+  mapper->LightingStandInSynchronizedByCallerOn();
   this->VolumeMapper = mapper;
 }
 
@@ -477,11 +480,10 @@ int vtkMultiChannelVolumeRepresentation::RequestData(
   vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
   const int result = this->Superclass::RequestData(request, inputVector, outputVector);
-  // The stand-in for lighting across ranks is gathered as the mapper
-  // renders, by every process together; ParaView renders a representation
-  // only where its piece holds data, so with an empty piece anywhere the
-  // others would wait for ever. Decide here, in the pipeline update that
-  // every process runs: all hold data, or the stand-in stays off.
+  // The stand-in for lighting across ranks puts the whole volume together
+  // from every process's piece (ProcessViewRequest gathers it), so with an
+  // empty piece anywhere it stays off. Decided here, in the pipeline update
+  // that every process runs, so that all agree.
   vtkMultiProcessController* controller = vtkMultiProcessController::GetGlobalController();
   int mine = this->HoldsData() ? 1 : 0;
   int all = mine;
@@ -506,7 +508,7 @@ double vtkMultiChannelVolumeRepresentation::GetLastLightingStandInGatherTime()
 
 const char* vtkMultiChannelVolumeRepresentation::GetLightingStandInReport()
 {
-  if (this->EmptyPieceSomewhere && this->LightingStandInLevel >= 0)
+  if (this->EmptyPieceSomewhere && this->LightingStandInLevel != vtkMultiChannelVolumeMapper::STAND_IN_OFF)
   {
     return "off: a process holds no piece of the data, and lighting across ranks needs every process to render";
   }
@@ -673,7 +675,22 @@ int vtkMultiChannelVolumeRepresentation::ProcessViewRequest(
     this->RenderingWithLOD =
       inInfo && inInfo->Has(vtkPVRenderView::USE_LOD()) && inInfo->Get(vtkPVRenderView::USE_LOD()) != 0;
   }
-  return this->Superclass::ProcessViewRequest(request_type, inInfo, outInfo);
+  if (!this->Superclass::ProcessViewRequest(request_type, inInfo, outInfo))
+  {
+    return 0;
+  }
+  if (request_type == vtkPVView::REQUEST_RENDER())
+  {
+    // Every rendering process runs this pass before IceT composites, also
+    // one whose piece IceT then leaves out because it is outside the view.
+    // The stand-in's collective step runs here, so no process waits inside
+    // a render that another never starts.
+    if (vtkPVRenderView* view = vtkPVRenderView::SafeDownCast(inInfo->Get(vtkPVView::VIEW())))
+    {
+      this->GetMultiChannelMapper()->SynchronizeLightingStandIn(view->GetRenderer(), this->Actor);
+    }
+  }
+  return 1;
 }
 
 void vtkMultiChannelVolumeRepresentation::SetNumberOfChannelImportanceLevels(int n)

@@ -125,8 +125,10 @@ public:
   void SetAmbientRadiance(double r, double g, double b);
   void SetMaxScatteringDepth(int depth);
   /// vtkMultiChannelVolumeMapper::SetLightingStandInLevel (lighting across
-  /// ranks). Off while any process holds an empty piece (the report says so):
-  /// the gather needs every process to render.
+  /// ranks; default -2, automatic). Gathered in ProcessViewRequest's
+  /// REQUEST_RENDER, which every rank runs. Off while any process holds an
+  /// empty piece (the report says so): the stand-in is put together from
+  /// every piece.
   void SetLightingStandInLevel(int level);
   double GetLightingStandInMemory();
   double GetLastLightingStandInGatherTime();
@@ -336,7 +338,7 @@ protected:
   int StillInterpolation = -1; // SetMultiChannelInterpolation's (-1: the volume property's)
   bool RenderingWithLOD = false; // this render is one with ParaView's LOD
   bool ProgressAnnotation = true;
-  int LightingStandInLevel = -1;    // as set; the mapper's is -1 while a piece is empty
+  int LightingStandInLevel = -2;    // as set (automatic); the mapper's is -1 while a piece is empty
   bool EmptyPieceSomewhere = false; // some process holds no data (RequestData)
   vtkSmartPointer<vtkTextActor> ProgressActor;
   std::string ProgressSummaryValue;

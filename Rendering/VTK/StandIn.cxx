@@ -94,12 +94,44 @@ void ReadClassified(const ChannelSource& src, int64_t v, float out[4])
     out[i] = float(std::min(std::max(q[i], 0.0), sigma));
   }
 }
+/// The finest level whose stand-in of a whole volume of `wd` voxels takes
+/// at most `limit` bytes: level 0 holds every channel's voxels as stored,
+/// level k 16 bytes per channel and coarse voxel. The coarsest level (a
+/// single voxel per channel) is taken when none fits.
+int AutomaticLevel(const Scene& piece, const int wd[3], double limit)
+{
+  double exact = 0.0;
+  for (int n = 0; n < piece.numChannels(); ++n)
+  {
+    exact += double(ElementBytes(piece.channel(n)));
+  }
+  if (exact * double(wd[0]) * double(wd[1]) * double(wd[2]) <= limit)
+  {
+    return 0;
+  }
+  for (int k = 1;; ++k)
+  {
+    double voxels = 1.0;
+    bool single = true;
+    for (int a = 0; a < 3; ++a)
+    {
+      const double f = wd[a] > 1 ? std::ldexp(1.0, k) : 1.0;
+      const double c = std::ceil(double(wd[a]) / f);
+      voxels *= c;
+      single = single && c <= 1.0;
+    }
+    if (16.0 * double(piece.numChannels()) * voxels <= limit || single || k >= 30)
+    {
+      return k;
+    }
+  }
+}
 } // namespace
 
 bool StandIn::Key::operator==(const Key& o) const
 {
   if (this->Sources.size() != o.Sources.size() || this->DataMTime != o.DataMTime ||
-    this->TablesVersion != o.TablesVersion || this->Level != o.Level)
+    this->TablesVersion != o.TablesVersion || this->Level != o.Level || this->MemoryLimit != o.MemoryLimit)
   {
     return false;
   }
@@ -123,8 +155,17 @@ bool StandIn::Key::operator==(const Key& o) const
   return true;
 }
 
+const std::string& StandIn::Report() const
+{
+  static const std::string outOfDate = "stand-in out of date: the piece, its tables or the level changed after the "
+                                       "last gather; light paths end at the piece until the next one";
+  return this->OutOfDate ? outOfDate : this->ReportText;
+}
+
 void StandIn::Release()
 {
+  this->OutOfDate = false;
+  this->Resolved = -1;
   this->Have = false;
   this->Split = false;
   this->Whole = Scene();
@@ -155,8 +196,33 @@ size_t StandIn::Bytes() const
   return bytes + m.macrocellBytes + m.majorantBytes + m.tableBytes;
 }
 
+StandIn::Key StandIn::KeyOf(const Input& in) const
+{
+  Key key;
+  for (int n = 0; n < in.Piece->numChannels(); ++n)
+  {
+    key.Sources.push_back(in.Piece->channel(n));
+  }
+  std::copy(in.Extent, in.Extent + 6, key.Extent);
+  key.DataMTime = in.DataMTime;
+  // A coarse level's voxels are classified: a table edit gathers again.
+  key.TablesVersion = (in.Level == kAutomatic ? this->Resolved : in.Level) > 0 ? in.TablesVersion : 0;
+  key.Level = in.Level;
+  key.MemoryLimit = in.Level == kAutomatic ? in.MemoryLimit : 0.0;
+  return key;
+}
+
 const Scene* StandIn::Update(
   vtkMultiProcessController* controller, const Input& in, bool& changed, double scale[3], double offset[3])
+{
+  this->Synchronize(controller, in, changed);
+  bool tables = false;
+  const Scene* standIn = this->Use(in, tables, scale, offset);
+  changed = changed || tables;
+  return standIn;
+}
+
+void StandIn::Synchronize(vtkMultiProcessController* controller, const Input& in, bool& changed)
 {
   changed = false;
   if (!controller || controller->GetNumberOfProcesses() < 2 || !in.Piece)
@@ -165,60 +231,68 @@ const Scene* StandIn::Update(
     {
       this->Release();
     }
-    return nullptr;
+    return;
   }
   const int numChannels = in.Piece->numChannels();
-  Key key;
-  for (int n = 0; n < numChannels; ++n)
-  {
-    key.Sources.push_back(in.Piece->channel(n));
-  }
-  std::copy(in.Extent, in.Extent + 6, key.Extent);
-  key.DataMTime = in.DataMTime;
-  key.TablesVersion = in.Level > 0 ? in.TablesVersion : 0;
-  key.Level = in.Level;
+  const Key key = this->KeyOf(in);
   // Whether any process's piece, tables or level changed: then all gather.
   int stale = this->Have && key == this->Current ? 0 : 1;
   int anyStale = 0;
   controller->AllReduce(&stale, &anyStale, 1, vtkCommunicator::MAX_OP);
-  if (anyStale)
+  if (!anyStale)
   {
-    std::vector<double> mine(size_t(kDescribe), 0.0);
-    for (int i = 0; i < 6; ++i)
-    {
-      mine[size_t(i)] = in.Extent[i];
-    }
-    for (int a = 0; a < 3; ++a)
-    {
-      mine[size_t(6 + a)] = in.Origin[a];
-      mine[size_t(9 + a)] = in.Spacing[a];
-    }
-    mine[12] = numChannels;
-    mine[13] = in.Level;
-    for (int n = 0; n < numChannels; ++n)
-    {
-      mine[size_t(14 + 2 * n)] = double(int(in.Piece->channel(n).type));
-      mine[size_t(15 + 2 * n)] = double(int(in.Piece->channel(n).format));
-    }
-    std::vector<double> all(size_t(kDescribe) * size_t(controller->GetNumberOfProcesses()));
-    controller->AllGather(mine.data(), all.data(), kDescribe);
-    this->Have = false;
-    const auto start = std::chrono::steady_clock::now();
-    this->Build(controller, in, all);
-    this->GatherSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    ++this->BuildCount;
-    this->Current = key;
-    this->Have = true;
-    this->TablesApplied = 0;
-    changed = true;
+    return;
   }
-  if (!this->Split)
+  std::vector<double> mine(size_t(kDescribe), 0.0);
+  for (int i = 0; i < 6; ++i)
+  {
+    mine[size_t(i)] = in.Extent[i];
+  }
+  for (int a = 0; a < 3; ++a)
+  {
+    mine[size_t(6 + a)] = in.Origin[a];
+    mine[size_t(9 + a)] = in.Spacing[a];
+  }
+  mine[12] = numChannels;
+  mine[13] = in.Level;
+  for (int n = 0; n < numChannels; ++n)
+  {
+    mine[size_t(14 + 2 * n)] = double(int(in.Piece->channel(n).type));
+    mine[size_t(15 + 2 * n)] = double(int(in.Piece->channel(n).format));
+  }
+  std::vector<double> all(size_t(kDescribe) * size_t(controller->GetNumberOfProcesses()));
+  controller->AllGather(mine.data(), all.data(), kDescribe);
+  this->Have = false;
+  this->OutOfDate = false;
+  const auto start = std::chrono::steady_clock::now();
+  this->Build(controller, in, all);
+  this->GatherSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  ++this->BuildCount;
+  this->Current = this->KeyOf(in); // with the level the automatic choice resolved to
+  this->Have = true;
+  this->TablesApplied = 0;
+  changed = true;
+}
+
+const Scene* StandIn::Use(const Input& in, bool& changed, double scale[3], double offset[3])
+{
+  changed = false;
+  if (!this->Have || !this->Split || !in.Piece)
   {
     return nullptr;
   }
+  if (!(this->KeyOf(in) == this->Current))
+  {
+    // Only a caller that changes the data between Synchronize() and the
+    // render gets here; the render goes on without light from the others.
+    this->OutOfDate = true;
+    return nullptr;
+  }
+  this->OutOfDate = false;
+  const int numChannels = in.Piece->numChannels();
   // The exact stand-in classifies through the piece's own tables, set here
   // (a transfer-function edit gathers nothing).
-  if (in.Level == 0 && this->TablesApplied != in.TablesVersion)
+  if (this->Resolved == 0 && this->TablesApplied != in.TablesVersion)
   {
     for (int n = 0; n < numChannels; ++n)
     {
@@ -302,7 +376,13 @@ void StandIn::Build(vtkMultiProcessController* controller, const Input& in, cons
   const std::vector<std::array<int, 6>> lower = LowerOverlaps(all, me, mine);
   std::vector<ChannelSource> sources(static_cast<size_t>(numChannels));
   std::ostringstream report;
-  if (in.Level == 0)
+  const int level = in.Level == kAutomatic ? AutomaticLevel(*in.Piece, wd, in.MemoryLimit) : in.Level;
+  this->Resolved = level;
+  if (in.Level == kAutomatic)
+  {
+    report << "automatic, within " << in.MemoryLimit / double(1 << 20) << " MiB: ";
+  }
+  if (level == 0)
   {
     // Exact: every voxel comes from one process (the others send zeros), so
     // a bitwise OR puts together the serial volume bit for bit.
@@ -369,7 +449,7 @@ void StandIn::Build(vtkMultiProcessController* controller, const Input& in, cons
     int f[3], cd[3];
     for (int a = 0; a < 3; ++a)
     {
-      f[a] = wd[a] > 1 ? (1 << std::min(in.Level, 30)) : 1;
+      f[a] = wd[a] > 1 ? (1 << std::min(level, 30)) : 1;
       cd[a] = (wd[a] + f[a] - 1) / f[a];
     }
     const size_t coarseVoxels = size_t(cd[0]) * size_t(cd[1]) * size_t(cd[2]);
@@ -471,7 +551,7 @@ void StandIn::Build(vtkMultiProcessController* controller, const Input& in, cons
       hi[a] = wd[a] > 1 ? (double(wd[a] - 1) - c) / double(f[a]) : 0.5;
     }
     this->Whole.setIndexBounds(lo, hi);
-    report << "stand-in of the whole volume at level " << in.Level << " (" << cd[0] << " x " << cd[1] << " x "
+    report << "stand-in of the whole volume at level " << level << " (" << cd[0] << " x " << cd[1] << " x "
            << cd[2] << " voxels of " << wd[0] << " x " << wd[1] << " x " << wd[2] << ")";
   }
   this->ReportText = report.str();

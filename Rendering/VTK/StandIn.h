@@ -40,11 +40,11 @@ namespace adapter
  * combined by a bitwise OR (exact, bit for bit) or a sum (coarse), through
  * AllReduce in slabs of at most kSlabBytes.
  *
- * Collective: with more than one process, Update() is called by every
- * process for every lit render (sort-last rendering does), and it
- * communicates every time (one small AllReduce that decides whether any
- * process's data or tables changed; the gather when so). With one process
- * it does nothing and holds nothing.
+ * Collective: with more than one process, Update() (or its collective
+ * part, Synchronize()) is called by every process for every lit render,
+ * and it communicates every time (one small AllReduce that decides whether
+ * any process's data or tables changed; the gather when so). With one
+ * process it does nothing and holds nothing.
  */
 class StandIn
 {
@@ -59,7 +59,8 @@ public:
     vtkMTimeType DataMTime = 0;                         ///< the channels' values
     unsigned long long TablesVersion = 0;               ///< the transfer-function tables
     std::vector<const TransferFunctionDesc*> Functions; ///< per channel (empty: pre-classified)
-    int Level = 0;                                      ///< 0 exact, k > 0 coarse
+    int Level = 0;                                      ///< 0 exact, k > 0 coarse, kAutomatic
+    double MemoryLimit = 0.0;                           ///< kAutomatic: bytes the stand-in may take
     int MacrocellSize = 8;
     Interpolation Interp = Interpolation::Linear;
   };
@@ -77,13 +78,28 @@ public:
   const Scene* Update(vtkMultiProcessController* controller, const Input& in, bool& changed, double scale[3],
     double offset[3]);
 
+  /**
+   * Update() in its two parts. Synchronize() is the collective one: every
+   * process calls it with its input, and it gathers again when any
+   * process's piece, tables or level changed (`changed` set then). Use()
+   * communicates nothing: it returns the stand-in gathered for this input,
+   * or null when there is none or the input changed since the last
+   * Synchronize() (the report says so), with its tables brought up to date.
+   */
+  void Synchronize(vtkMultiProcessController* controller, const Input& in, bool& changed);
+  const Scene* Use(const Input& in, bool& changed, double scale[3], double offset[3]);
+
   /// Frees the stand-in (Update() builds it again when asked).
   void Release();
 
   size_t Bytes() const;
   double LastGatherSeconds() const { return this->GatherSeconds; }
   int Builds() const { return this->BuildCount; }
-  const std::string& Report() const { return this->ReportText; }
+  const std::string& Report() const;
+
+  /// Input::Level: the finest level (exact first) whose stand-in takes at
+  /// most Input::MemoryLimit bytes, chosen from the whole volume's size.
+  static constexpr int kAutomatic = -2;
 
   /// Largest AllReduce message, in bytes.
   static constexpr size_t kSlabBytes = size_t(16) << 20;
@@ -96,9 +112,11 @@ private:
     vtkMTimeType DataMTime = 0;
     unsigned long long TablesVersion = 0; ///< coarse levels only
     int Level = -1;
+    double MemoryLimit = 0.0; ///< automatic level only
     bool operator==(const Key& o) const;
   };
   void Build(vtkMultiProcessController* controller, const Input& in, const std::vector<double>& all);
+  Key KeyOf(const Input& in) const;
 
   bool Have = false;
   bool Split = false;
@@ -112,6 +130,8 @@ private:
   double GatherSeconds = 0.0;
   int BuildCount = 0;
   std::string ReportText = "no stand-in";
+  bool OutOfDate = false; ///< the last Use() found the input changed since the gather
+  int Resolved = -1;      ///< the level built (the automatic one resolved)
 };
 } // namespace adapter
 } // namespace mcvol

@@ -5,7 +5,8 @@ premultiplied float images front to back and saves the result (.npy).
 
 Usage: pvbatch --symmetric ParallelLitMapper.py OUT.npy MAPPER SEED LEVEL SPP DEPTH AMBIENT [FRAMES [SCALE]]
   MAPPER  mc (vtkMultiChannelVolumeMapper) or march (vtkMultiChannelRayMarchMapper)
-  LEVEL   the mapper's LightingStandInLevel: -1 off, 0 exact, k > 0 coarse
+  LEVEL   the mapper's LightingStandInLevel: -1 off, 0 exact, k > 0 coarse;
+          auto:BYTES the automatic level within BYTES (LightingStandInMemoryLimit)
   SPP     samples per pixel (mc; march: ignored)
   DEPTH   MaxScatteringDepth; AMBIENT the ambient radiance (grey)
   FRAMES  renders to time after the first (default 0), each a new image of
@@ -34,7 +35,7 @@ import mcvolLitSplitScene as S
 from mcvol import vtkMultiChannelRayMarchMapper, vtkMultiChannelVolumeMapper
 
 out_path, mapper_kind = sys.argv[1], sys.argv[2]
-seed, level, spp, depth = int(sys.argv[3]), int(sys.argv[4]), int(sys.argv[5]), int(sys.argv[6])
+seed, level, spp, depth = int(sys.argv[3]), sys.argv[4], int(sys.argv[5]), int(sys.argv[6])
 ambient = float(sys.argv[7])
 frames = int(sys.argv[8]) if len(sys.argv) > 8 else 0
 scale = int(sys.argv[9]) if len(sys.argv) > 9 else 1
@@ -66,7 +67,11 @@ m.SetSeed(seed)
 m.SetSamplesPerPixel(spp)
 m.SetMaxScatteringDepth(depth)
 m.SetAmbientRadiance(ambient, ambient, ambient)
-m.SetLightingStandInLevel(level)
+if level.startswith("auto:"):
+    m.SetLightingStandInLevelToAutomatic()
+    m.SetLightingStandInMemoryLimit(float(level[5:]))
+else:
+    m.SetLightingStandInLevel(int(level))
 m.SetTransferFunctionRangeMode(vtkMultiChannelVolumeMapper.FUNCTION_RANGE)
 ctf = vtkColorTransferFunction()
 ctf.AddRGBPoint(0, *S.COLOR)

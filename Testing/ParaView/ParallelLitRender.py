@@ -3,9 +3,13 @@
 representation, Shade on, one directional scene light from +z, ambient
 light and two scattering events, and saves the composited image (rank 0).
 
-Usage: [mpiexec -n N] pvbatch ParallelLitRender.py SCENE.vti OUTPUT.png SEED LEVEL SAMPLES
-  LEVEL    the representation's LightingStandInLevel (-1 off, 0 exact, k coarse)
+Usage: [mpiexec -n N] pvbatch ParallelLitRender.py SCENE.vti OUTPUT.png SEED LEVEL SAMPLES [VIEW]
+  LEVEL    the representation's LightingStandInLevel (-1 off, 0 exact, k coarse;
+           "default": left as the representation sets it)
   SAMPLES  samples per pixel of the saved image
+  VIEW     "scene" (default): the scene's camera; "inside-lower": the camera
+           inside the lower piece, looking down, away from the upper piece
+           (IceT then renders only the lower piece's rank)
 It prints the number of pieces the data is split into (from a ProcessIds
 array) and rank 0's stand-in report and memory.
 """
@@ -16,7 +20,8 @@ from paraview import simple
 import mcvolLitSplitScene as S
 import mcvolParaViewTesting as T
 
-scene, out, seed, level, samples = sys.argv[1], sys.argv[2], int(sys.argv[3]), int(sys.argv[4]), int(sys.argv[5])
+scene, out, seed, level, samples = sys.argv[1], sys.argv[2], int(sys.argv[3]), sys.argv[4], int(sys.argv[5])
+camera = sys.argv[6] if len(sys.argv) > 6 else "scene"
 T.load_plugin()
 
 reader = simple.XMLImageDataReader(FileName=[scene])
@@ -28,9 +33,14 @@ pieces = int(arr.GetComponentRange(0)[1]) + 1 if arr else 1
 print("pieces: %d" % pieces)
 
 view = T.make_view((S.SIZE, S.SIZE))
-view.CameraPosition = list(S.CAMERA)
-view.CameraFocalPoint = list(S.FOCAL)
-view.CameraViewUp = list(S.VIEW_UP)
+if camera == "inside-lower":
+    view.CameraPosition = [20.0, 20.0, 10.0]
+    view.CameraFocalPoint = [20.0, 20.0, 0.0]
+    view.CameraViewUp = [0.0, 1.0, 0.0]
+else:
+    view.CameraPosition = list(S.CAMERA)
+    view.CameraFocalPoint = list(S.FOCAL)
+    view.CameraViewUp = list(S.VIEW_UP)
 view.CameraViewAngle = S.VIEW_ANGLE
 view.UseLight = 0  # the light kit off: the scene light alone
 light = simple.AddLight(view=view)
@@ -52,7 +62,8 @@ rep.Shade = 1
 rep.ChannelAlbedos = [0.9]
 rep.AmbientRadiance = [0.05, 0.05, 0.05]
 rep.MaxScatteringDepth = 2
-rep.LightingStandInLevel = level
+if level != "default":
+    rep.LightingStandInLevel = int(level)
 rep.Seed = seed
 rep.SamplesPerRender = min(64, samples)
 rep.MaximumTotalSamples = samples

@@ -2,8 +2,11 @@
 piece shadows the lower one (mcvolLitSplitScene: an occluder above the split
 at z = 32, a slab below it, the light straight down), composited by ParaView
 (IceT) in visibility order, equals the single-rank render within the Monte
-Carlo error with the default stand-in for lighting across ranks (the exact
-one, LightingStandInLevel 0). Shade on, one directional scene light, ambient
+Carlo error with the default stand-in for lighting across ranks (automatic,
+LightingStandInLevel -2: the exact one for this small volume). With the camera
+inside the lower piece looking away from the upper one, which IceT then does
+not render, the render still finishes (the stand-in is gathered in the pass
+every rank runs). Shade on, one directional scene light, ambient
 light, two scattering events: shadow rays and scattered rays cross the
 pieces.
 
@@ -48,21 +51,32 @@ def main():
     writer.SetFileName(scene)
     writer.Write()
 
-    def run(name, seed, level=0, ranks=1):
+    reports = {}
+
+    def run(name, seed, level="default", ranks=1, samples=SAMPLES, camera="scene", timeout=300):
         out = os.path.join(tmp, name + ".png")
-        cmd = [args.pvbatch, script, scene, out, str(seed), str(level), str(SAMPLES)]
+        cmd = [args.pvbatch, script, scene, out, str(seed), str(level), str(samples), camera]
         if ranks > 1:
             cmd = [args.mpiexec, "--oversubscribe", "-n", str(ranks)] + cmd
-        res = subprocess.run(cmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, timeout=300)
-        print("$ " + " ".join(cmd))
+        print("$ " + " ".join(cmd), flush=True)
+        try:
+            res = subprocess.run(cmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                                 timeout=timeout)
+        except subprocess.TimeoutExpired:
+            raise SystemExit("FAIL: %s did not finish within %d s (a rank waits for another)" % (name, timeout))
         lines = [l for l in res.stdout.splitlines() if l.startswith(("pieces:", "samples:", "stand-in:"))]
         print("\n".join(lines))
         if res.returncode != 0 or not os.path.exists(out):
             print(res.stdout[-20000:])
             raise SystemExit("FAIL: %s exited with %d" % (name, res.returncode))
+        reports[name] = lines
         pieces = int([l for l in lines if l.startswith("pieces:")][0].split()[1])
         return read_png_rgb(out).astype(float), pieces
 
+    # The camera inside the lower piece, looking away from the upper one:
+    # IceT renders only the lower piece's rank, and the stand-in's gather
+    # must not wait for the other (it runs in the pass every rank runs).
+    run("inside-lower", 9, ranks=args.ranks, samples=16, camera="inside-lower", timeout=120)
     parallel, pieces = run("parallel", 9, ranks=args.ranks)
     off, _ = run("parallel-off", 9, level=-1, ranks=args.ranks)
     serial, serial_pieces = run("serial", 7)
@@ -75,6 +89,10 @@ def main():
         print(("PASS: " if ok else "FAIL: ") + msg)
         failures += 0 if ok else 1
 
+    check(any(l == "samples: 16" for l in reports["inside-lower"]),
+          "with one rank's piece out of view the render finishes with all its samples")
+    check(any("automatic" in l and "exact stand-in" in l for l in reports["parallel"]),
+          "by default the stand-in is the automatic one, exact for this volume")
     check(pieces == args.ranks and serial_pieces == 1,
           "the data is split into %d pieces in parallel (%d) and 1 serially (%d)" % (args.ranks, pieces, serial_pieces))
     drawn = (serial.sum(axis=2) > 30).mean()

@@ -53,6 +53,11 @@ def main():
     parallel = run("march-parallel", "march", ranks=args.ranks)
     off = run("march-parallel-off", "march", level=-1, ranks=args.ranks)
     coarse = {k: run("march-parallel-level%d" % k, "march", level=k, ranks=args.ranks) for k in (1, 2)}
+    # The automatic level within 100,000 bytes: the exact stand-in of the
+    # 40 x 40 x 64 float volume takes 409,600, level 1 204,800 and level 2
+    # 25,600, so it must be level 2; within 1e12 bytes, the exact one.
+    auto_small = run("march-parallel-auto-100k", "march", level="auto:100000", ranks=args.ranks)
+    auto_large = run("march-parallel-auto-1e12", "march", level="auto:1e12", ranks=args.ranks)
     serial = run("march-serial", "march")
     mc = run("mc-serial", "mc", seed=7, spp=256)
 
@@ -79,6 +84,9 @@ def main():
           "level 2 %.5f, off %.5f (mean colour %.5f)"
           % (rms(parallel, serial), rms(coarse[1], serial), rms(coarse[2], serial), rms(off, serial),
              serial[..., :3].mean()))
+    check(np.array_equal(auto_small, coarse[2]) and not np.array_equal(auto_small, coarse[1]),
+          "the automatic level within 100,000 bytes is level 2 (the same image bit for bit)")
+    check(np.array_equal(auto_large, parallel), "the automatic level within 1e12 bytes is the exact stand-in")
     check(rms(parallel, serial) < 0.25 * rms(off, serial),
           "the exact stand-in is closer to the serial march than no stand-in by 4x (%.5f, %.5f)"
           % (rms(parallel, serial), rms(off, serial)))

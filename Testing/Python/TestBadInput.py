@@ -39,7 +39,8 @@ SETTERS = {
     vtkMultiChannelVolumeMapper: [
         "InteractiveUpdateRate", "MinimumSamplesPerVoxel", "MarchSamplesPerVoxel", "InteractiveFrameTime",
         "TargetError", "Shininess", "DeviationWeight", "OcclusionWeight", "ClutterWeight", "ImportanceEmphasis",
-        "ImportanceMergeDistance", "MemoryBudget", "LightIntensityScale"],
+        "ImportanceMergeDistance", "MemoryBudget", "LightIntensityScale",
+        "LightingStandInMemoryLimit"],
     vtkMultiChannelRayMarchMapper: ["StepSize", "TerminationTransmittance"],
 }
 
