@@ -12,6 +12,7 @@
 # Needs a build (scripts/build.sh), xwd (x11-apps) and Pillow (gui_walk.sh:
 # the Xvfb, ParaView's settings without the welcome dialog, the capture).
 set -euo pipefail
+# shellcheck source-path=SCRIPTDIR source=gui_walk.sh
 source "$(dirname "${BASH_SOURCE[0]}")/gui_walk.sh"
 out="$(realpath -m "$1")"
 gui_walk_start

@@ -30,6 +30,7 @@
 # not a ctest test. Needs a build (scripts/build.sh), tifffile, Xvfb, xwd
 # (x11-apps) and Pillow.
 set -euo pipefail
+# shellcheck source-path=SCRIPTDIR source=gui_walk.sh
 source "$(dirname "${BASH_SOURCE[0]}")/gui_walk.sh"
 out="$(realpath -m "${1:?usage: GUIOpenOMETIFF.sh OUTDIR}")"
 mkdir -p "$out"

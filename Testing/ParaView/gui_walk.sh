@@ -1,3 +1,4 @@
+# shellcheck shell=bash
 # Shared parts of the ParaView GUI walks (Testing/ParaView/GUI*.sh), sourced
 # by them: a scratch folder, a private Xvfb, ParaView settings without the
 # welcome dialog (it would block playback and pause the refinement), the
@@ -38,12 +39,12 @@ gui_walk_start() {
   mkdir -p "$work/home/.config/ParaView"
   printf '[General]\nGeneralSettings.ShowWelcomeDialog=false\n' > "$work/home/.config/ParaView/ParaView5.11.0.ini"
   # Xvfb picks a free display number and writes it to the descriptor.
-  local fd i
+  local fd
   exec {fd}> "$work/display"
   Xvfb -displayfd "$fd" -screen 0 1280x900x24 -noreset > "$work/xvfb.log" 2>&1 &
   gui_walk_pids+=($!)
   exec {fd}>&-
-  for i in $(seq 100); do
+  for _ in $(seq 100); do
     [ -s "$work/display" ] && break
     sleep 0.1
   done
