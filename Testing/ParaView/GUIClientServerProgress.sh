@@ -9,15 +9,13 @@
 #
 #   bash Testing/ParaView/GUIClientServerProgress.sh OUT.png
 #
-# Needs a build (scripts/build.sh), xwd (x11-apps) and Pillow.
+# Needs a build (scripts/build.sh), xwd (x11-apps) and Pillow (gui_walk.sh:
+# the Xvfb, ParaView's settings without the welcome dialog, the capture).
 set -euo pipefail
-top="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
+# shellcheck source-path=SCRIPTDIR source=gui_walk.sh
+source "$(dirname "${BASH_SOURCE[0]}")/gui_walk.sh"
 out="$(realpath -m "$1")"
-work="$(mktemp -d)"
-export PYTHONPATH="$top/build/lib/python3.11/site-packages${PYTHONPATH:+:$PYTHONPATH}"
-export PV_PLUGIN_PATH="$top/build/lib/paraview-5.11/plugins/mcvolPlugin"
-mkdir -p "$work/home/.config/ParaView"
-printf '[General]\nGeneralSettings.ShowWelcomeDialog=false\n' > "$work/home/.config/ParaView/ParaView5.11.0.ini"
+gui_walk_start
 cat > "$work/show.py" <<PYTHON
 import sys
 sys.path.insert(0, "$top/Testing/ParaView")
@@ -34,21 +32,9 @@ T.set_channel_functions(["channels:0", "channels:1", "channels:2"])
 view.ResetCamera()
 simple.Render(view)
 PYTHON
-display=":$(( 90 + RANDOM % 100 ))"
 port=$(( 20000 + RANDOM % 20000 ))
-Xvfb "$display" -screen 0 1280x900x24 -noreset > "$work/xvfb.log" 2>&1 &
-xvfb=$!
-server=$xvfb
-paraview=$xvfb
-trap 'kill $paraview $server $xvfb 2>/dev/null || true; rm -rf "$work"' EXIT
-sleep 2
-DISPLAY="$display" pvserver --server-port="$port" > "$work/pvserver.log" 2>&1 &
-server=$!
+gui_walk_background "$work/pvserver.log" pvserver --server-port="$port"
 sleep 4
-DISPLAY="$display" HOME="$work/home" paraview --server-url="cs://localhost:$port" --script="$work/show.py" \
-  > "$work/paraview.log" 2>&1 &
-paraview=$!
+gui_walk_paraview --server-url="cs://localhost:$port" --script="$work/show.py"
 sleep "${MCVOL_GUI_WAIT:-45}"
-xwd -root -display "$display" -out "$work/screen.xwd"
-/usr/bin/python3 "$top/Testing/ParaView/xwd_to_png.py" "$work/screen.xwd" "$out"
-echo "wrote $out"
+gui_walk_grab "$out"

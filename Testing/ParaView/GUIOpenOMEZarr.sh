@@ -10,20 +10,18 @@
 # Without a folder it writes Data/cells_omezarr.py's volume to a temporary
 # one. Needs a build (scripts/build.sh), xwd (x11-apps) and Pillow. The
 # playback (ParaView's QtTesting XML) clicks File > Open, selects the folder
-# and clicks Apply, as a user does; ParaView's welcome dialog is turned off
-# in a temporary HOME so that it does not block the playback.
+# and clicks Apply, as a user does (gui_walk.sh: the Xvfb, ParaView's
+# settings without the welcome dialog, the capture).
 set -euo pipefail
-top="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
+# shellcheck source-path=SCRIPTDIR source=gui_walk.sh
+source "$(dirname "${BASH_SOURCE[0]}")/gui_walk.sh"
 out="$(realpath -m "$1")"
-work="$(mktemp -d)"
-export PYTHONPATH="$top/build/lib/python3.11/site-packages${PYTHONPATH:+:$PYTHONPATH}"
+gui_walk_start
 folder="${2:-$work/cells.ome.zarr}"
 if [ $# -lt 2 ]; then
   /usr/bin/python3 "$top/Data/cells_omezarr.py" "$folder" > /dev/null
 fi
 folder="$(realpath "$folder")"
-mkdir -p "$work/home/.config/ParaView"
-printf '[General]\nGeneralSettings.ShowWelcomeDialog=false\n' > "$work/home/.config/ParaView/ParaView5.11.0.ini"
 cat > "$work/open.xml" <<XML
 <?xml version="1.0" ?>
 <pqevents>
@@ -32,16 +30,6 @@ cat > "$work/open.xml" <<XML
   <pqevent object="pqClientMainWindow/propertiesDock/propertiesPanel/Accept" command="activate" arguments="" />
 </pqevents>
 XML
-display=":$(( 90 + RANDOM % 100 ))"
-Xvfb "$display" -screen 0 1280x900x24 -noreset > "$work/xvfb.log" 2>&1 &
-xvfb=$!
-trap 'kill $paraview $xvfb 2>/dev/null || true; rm -rf "$work"' EXIT
-paraview=$xvfb
-sleep 2
-DISPLAY="$display" HOME="$work/home" PV_PLUGIN_PATH="$top/build/lib/paraview-5.11/plugins/mcvolPlugin" \
-  paraview --test-script="$work/open.xml" > "$work/paraview.log" 2>&1 &
-paraview=$!
+gui_walk_paraview --test-script="$work/open.xml"
 sleep "${MCVOL_GUI_WAIT:-60}"
-xwd -root -display "$display" -out "$work/screen.xwd"
-/usr/bin/python3 "$top/Testing/ParaView/xwd_to_png.py" "$work/screen.xwd" "$out"
-echo "wrote $out"
+gui_walk_grab "$out"
