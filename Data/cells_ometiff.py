@@ -8,8 +8,10 @@ OME-TIFF: the ParaView guide's OME-TIFF walk uses it.
 The same cells, noise and channels as cells_omezarr.py (DAPI: nuclei,
 membrane: cell borders, puncta: small bright dots; 16-bit photon counts over
 a background of about 100 with Poisson noise), written by tifffile as a
-CZYX uint16 stack whose OME-XML names the channels and gives the physical
-pixel sizes (0.2 x 0.2 x 0.8 um). Deterministic. Needs the build's mcvol
+CZYX uint16 stack whose OME-XML names the channels, gives their colours as
+microscope software exports them (Color: a signed 32-bit RGBA integer; DAPI
+blue, membrane magenta, puncta green) and the physical pixel sizes
+(0.2 x 0.2 x 0.8 um). Deterministic. Needs the build's mcvol
 package and tifffile.
 """
 
@@ -22,6 +24,16 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from cells_omezarr import CHANNELS, SPACING, cells  # noqa: E402
 
 
+# The channels' OME colours (r, g, b), in the order of CHANNELS.
+COLORS = [(0, 0, 255), (255, 0, 255), (0, 255, 0)]
+
+
+def ome_color(r, g, b, a=255):
+    """OME-XML's Color: RGBA packed into a signed 32-bit integer."""
+    value = (r << 24) | (g << 16) | (b << 8) | a
+    return value - (1 << 32) if value >= (1 << 31) else value
+
+
 def write(path, dims=(128, 128, 40)):
     import tifffile
 
@@ -31,7 +43,7 @@ def write(path, dims=(128, 128, 40)):
         "PhysicalSizeX": SPACING[0], "PhysicalSizeXUnit": "µm",
         "PhysicalSizeY": SPACING[1], "PhysicalSizeYUnit": "µm",
         "PhysicalSizeZ": SPACING[2], "PhysicalSizeZUnit": "µm",
-        "Channel": {"Name": [label for _, label, _, _ in CHANNELS]},
+        "Channel": {"Name": [label for _, label, _, _ in CHANNELS], "Color": [ome_color(*c) for c in COLORS]},
     }
     tifffile.imwrite(path, data, ome=True, photometric="minisblack", metadata=metadata)
     return path

@@ -234,27 +234,40 @@ void vtkSMMultiChannelVolumeRepresentationProxy::ApplyDefaultFunctions(
   vtkSMOutputPort* port = vtkSMPropertyHelper(this, "Input", true).GetAsOutputPort();
   vtkPVDataInformation* data = port ? port->GetDataInformation() : nullptr;
   // The file's display of this channel (an OME-Zarr's omero colour and
-  // window: mcvol_display/<array>, components r, g, b, start, end, active).
+  // window, an OME-TIFF's channel colours: mcvol_display/<array>, components
+  // r, g, b, start, end, active for each component of the array; NaN where
+  // the file gives none).
   double color[3], range[2] = { 0.0, 1.0 };
-  bool window = false, haveRange = false;
-  vtkPVArrayInformation* display = (data && component == 0)
+  bool window = false, haveRange = false, haveColor = false;
+  vtkPVArrayInformation* values = data ? data->GetArrayInformation(array, vtkDataObject::POINT) : nullptr;
+  vtkPVArrayInformation* display = (data && values && component >= 0)
     ? data->GetArrayInformation((std::string(kDisplayPrefix) + (array ? array : "")).c_str(), vtkDataObject::FIELD)
     : nullptr;
-  if (display && display->GetNumberOfComponents() == 6)
+  if (display && display->GetNumberOfComponents() == 6 * values->GetNumberOfComponents() &&
+    component < values->GetNumberOfComponents())
   {
+    const int first = 6 * component;
+    haveColor = true;
     for (int k = 0; k < 3; ++k)
     {
-      color[k] = display->GetComponentRange(k)[0];
+      const double* c = display->GetComponentRange(first + k);
+      color[k] = c[0];
+      haveColor = haveColor && std::isfinite(c[0]) && c[0] == c[1] && c[0] >= 0.0 && c[0] <= 1.0;
     }
-    range[0] = display->GetComponentRange(3)[0];
-    range[1] = display->GetComponentRange(4)[0];
+    range[0] = display->GetComponentRange(first + 3)[0];
+    range[1] = display->GetComponentRange(first + 4)[0];
     window = std::isfinite(range[0]) && std::isfinite(range[1]) && range[0] < range[1];
     haveRange = window;
   }
-  else
+  if (!haveColor)
   {
     const double* rgb = channels == 1 ? kChannelAlone : kChannelColors[channel % kNumChannelColors];
     std::copy(rgb, rgb + 3, color);
+  }
+  if (!window)
+  {
+    range[0] = 0.0;
+    range[1] = 1.0;
   }
   if (!haveRange)
   {

@@ -137,7 +137,9 @@ if tifffile is not None:
     for c in range(3):
         stack[3:9, c, 4:12, 2 + 6 * c:6 + 6 * c] += 4000
     tif = os.path.join(work, "stains.ome.tif")
-    tifffile.imwrite(tif, stack, ome=True, metadata={"axes": "ZCYX", "Channel": {"Name": ["a", "b", "c"]}})
+    # OME colours (signed 32-bit RGBA): a blue, b malformed (its default colour, a warning), c magenta.
+    tifffile.imwrite(tif, stack, ome=True, metadata={"axes": "ZCYX", "Channel": {
+        "Name": ["a", "b", "c"], "Color": [65535, "x", -16711681]}})
     files = simple.mcvolChannelFiles(FileNames=[tif])
     files.UpdatePipeline()
     view2 = T.make_view((120, 120))
@@ -149,6 +151,11 @@ if tifffile is not None:
     checks.check(rep2.ChannelSource == "Components of One Array" and rep2.ChannelComponentsArray == "stains",
                  "one 3-component array: Components of One Array (%s, %r)" % (rep2.ChannelSource,
                                                                             rep2.ChannelComponentsArray))
+    from mcvol.scenefile.assemble import DEFAULT_COLORS
+
+    tops = [list(lut.RGBPoints)[-3:] for lut in rep2.ChannelLookupTables]
+    checks.check(len(tops) == 3 and np.allclose(tops[0], [0, 0, 1]) and np.allclose(tops[1], DEFAULT_COLORS[1])
+                 and np.allclose(tops[2], [1, 0, 1]), "the components in the file's colours (%s)" % tops)
     rep2.Backend = "CPU"
     rep2.MaximumTotalSamples = 8
     rep2.InteractiveFrameTime = 0

@@ -362,6 +362,40 @@ def test_tiff(t, work, program):
     check_render(t, program, work, "render-ome", "cells.ome.tif",
                  [channel(component="gfp", color=[0, 1, 0]), channel(component="dapi", color=[0, 0, 1])], 2)
 
+    # OME-TIFF channel colours (OME-XML Color, signed 32-bit RGBA) are the
+    # default channels' colours; a channel with a malformed one ("None",
+    # "blue") keeps its default colour, with a warning.
+    from mcvol.scenefile.assemble import DEFAULT_COLORS, default_channels
+
+    tifffile.imwrite(os.path.join(work, "colors.ome.tif"), ome[:, [0, 1, 0, 1]], ome=True, metadata={
+        "axes": "ZCYX", "PhysicalSizeX": 0.2, "PhysicalSizeY": 0.3, "PhysicalSizeZ": 0.5,
+        "Channel": {"Name": ["dapi", "gfp", "none", "bad"],
+                                    "Color": [65535, -16711681, None, "blue"]}})
+    image, err = load("colors.ome.tif", work)
+    if t.check(err is None, "colors.ome.tif: %s" % (err and err.message)):
+        tops = [(c["component"], c["color"]["points"][-1][1:]) for c in default_channels(image)]
+        t.check(tops == [(0, [0.0, 0.0, 1.0]), (1, [1.0, 0.0, 1.0]), (2, list(DEFAULT_COLORS[2])),
+                         (3, list(DEFAULT_COLORS[3]))], "colors.ome.tif: default colours %s" % tops)
+    image, err = load(["colors.ome.tif", "cells.ome.tif"], work)
+    if t.check(err is None, "colors.ome.tif in a list: %s" % (err and err.message)):
+        tops = [(c["array"], c["component"], c["color"]["points"][-1][1:]) for c in default_channels(image)]
+        t.check(tops[:2] == [("colors", 0, [0.0, 0.0, 1.0]), ("colors", 1, [1.0, 0.0, 1.0])]
+                and tops[4] == ("cells", 0, list(DEFAULT_COLORS[4])), "in a list: default colours %s" % tops)
+    # mcvol-render's default channels: a blue-only file renders blue (the
+    # first default colour is green), and the malformed colour is a warning.
+    blue = np.zeros((nz, 2, ny, nx), np.uint8)
+    blue[:, 0] = 200 * (rng.random((nz, ny, nx)) < 0.5)
+    tifffile.imwrite(os.path.join(work, "blue.ome.tif"), blue, ome=True, metadata={
+        "axes": "ZCYX", "Channel": {"Name": ["dapi", "bad"], "Color": [65535, "0xFF"]}})
+    out = os.path.join(work, "blue.png")
+    r = run(program, [os.path.join(work, "blue.ome.tif"), "-o", out, "--spp", "4", "--size", "32x32",
+                      "--backend", "cpu"])
+    if t.check(r.returncode == 0, "blue.ome.tif: exit status %d: %s" % (r.returncode, r.stderr.strip())):
+        rgb = read_png_rgb(out).reshape(-1, 3).mean(axis=0)
+        t.check(rgb[2] > 2.0 * rgb[1] and rgb[2] > 1.0, "blue.ome.tif renders in its file colour: mean rgb %s" % rgb)
+        t.check("channel 1 (bad)" in r.stderr and "0xFF" in r.stderr and "Traceback" not in r.stderr,
+                "blue.ome.tif: the malformed colour is a warning: %r" % r.stderr)
+
 
 def test_raw(t, work):
     nz, ny, nx = 3, 4, 5

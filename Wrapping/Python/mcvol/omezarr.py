@@ -21,7 +21,9 @@ What the metadata gives:
   `window.start`/`end` and `active` are the channel's default display
   (`channel_defaults`), carried in the output's field data as
   `mcvol_display/<array>` (components r, g, b, window start, window end,
-  active), which mcvol-render and the ParaView representation read.
+  active; `display_array`), which mcvol-render and the ParaView
+  representation read. A multi-component array's field array has these 6
+  per component (an OME-TIFF's channel colours: mcvol.scenefile.readers).
 
 Reading:
 
@@ -630,7 +632,6 @@ class OMEZarrImage:
 
     def _image(self, index, box, out):
         from vtkmodules.util.numpy_support import numpy_to_vtk
-        from vtkmodules.vtkCommonCore import vtkDoubleArray
         from vtkmodules.vtkCommonDataModel import vtkImageData
 
         spacing, origin = self._frame(index, box)
@@ -650,15 +651,7 @@ class OMEZarrImage:
         for d in self.channel_defaults:
             if d["color"] is None and d["window"] is None and d["active"]:
                 continue
-            display = vtkDoubleArray()
-            display.SetName(DISPLAY_PREFIX + d["name"])
-            display.SetNumberOfComponents(len(DISPLAY_COMPONENTS))
-            for k, n in enumerate(DISPLAY_COMPONENTS):
-                display.SetComponentName(k, n)
-            color = d["color"] or (1.0, 1.0, 1.0)
-            window = d["window"] or (float("nan"), float("nan"))
-            display.InsertNextTuple(list(color) + list(window) + [1.0 if d["active"] else 0.0])
-            image.GetFieldData().AddArray(display)
+            image.GetFieldData().AddArray(display_array(d["name"], [dict(d, color=d["color"] or (1.0, 1.0, 1.0))]))
         return image
 
 
@@ -666,18 +659,55 @@ def _mib(nbytes):
     return "%.4g MiB" % (nbytes / 1048576.0)
 
 
-def display_defaults(image):
-    """The default displays an image carries (OMEZarrImage.read's field
-    data): {array name: {"color": (r, g, b), "window": [start, end] or None,
-    "active": bool}}."""
+def display_array(name, displays):
+    """The field array `mcvol_display/<name>` that carries the default
+    displays of point array `name`, one per component: dicts with "color"
+    ((r, g, b) in [0, 1], or None: the reader's own colour), "window"
+    ([start, end] or None) and "active". One tuple of 6 values per component
+    (r, g, b, window start, window end, active; NaN for what is not given),
+    component after component."""
+    from vtkmodules.vtkCommonCore import vtkDoubleArray
+
+    display = vtkDoubleArray()
+    display.SetName(DISPLAY_PREFIX + name)
+    display.SetNumberOfComponents(len(DISPLAY_COMPONENTS) * len(displays))
+    values = []
+    for c, d in enumerate(displays):
+        for k, n in enumerate(DISPLAY_COMPONENTS):
+            display.SetComponentName(c * len(DISPLAY_COMPONENTS) + k, n if len(displays) == 1 else "%d %s" % (c, n))
+        color = d.get("color") or (float("nan"),) * 3
+        window = d.get("window") or (float("nan"), float("nan"))
+        values += list(color) + list(window) + [1.0 if d.get("active", True) else 0.0]
+    display.InsertNextTuple(values)
+    return display
+
+
+def component_displays(image):
+    """The default displays an image carries in its field data, per point
+    array and component: {array name: [{"color": (r, g, b) or None,
+    "window": [start, end] or None, "active": bool}, one per component]}."""
     out = {}
     fd = image.GetFieldData()
+    size = len(DISPLAY_COMPONENTS)
     for k in range(fd.GetNumberOfArrays()):
         a = fd.GetArray(k)
         name = a.GetName() if a is not None else None
-        if not name or not name.startswith(DISPLAY_PREFIX) or a.GetNumberOfComponents() != len(DISPLAY_COMPONENTS):
+        if not name or not name.startswith(DISPLAY_PREFIX) or a.GetNumberOfTuples() < 1 \
+                or a.GetNumberOfComponents() == 0 or a.GetNumberOfComponents() % size:
             continue
-        v = a.GetTuple(0)
-        window = [v[3], v[4]] if math.isfinite(v[3]) and math.isfinite(v[4]) and v[3] < v[4] else None
-        out[name[len(DISPLAY_PREFIX):]] = {"color": tuple(v[:3]), "window": window, "active": v[5] > 0.5}
+        values = a.GetTuple(0)
+        entries = []
+        for c in range(a.GetNumberOfComponents() // size):
+            v = values[c * size:(c + 1) * size]
+            color = tuple(v[:3]) if all(math.isfinite(x) and 0.0 <= x <= 1.0 for x in v[:3]) else None
+            window = [v[3], v[4]] if math.isfinite(v[3]) and math.isfinite(v[4]) and v[3] < v[4] else None
+            entries.append({"color": color, "window": window, "active": v[5] > 0.5})
+        out[name[len(DISPLAY_PREFIX):]] = entries
     return out
+
+
+def display_defaults(image):
+    """The default displays of an image's single-component point arrays
+    (OMEZarrImage.read's field data): {array name: {"color": (r, g, b) or
+    None, "window": [start, end] or None, "active": bool}}."""
+    return {name: entries[0] for name, entries in component_displays(image).items() if len(entries) == 1}

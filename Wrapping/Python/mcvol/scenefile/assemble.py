@@ -50,15 +50,17 @@ def default_channels(image):
     "auto" range, 0.3 at its top per 4 voxels) over its robust range.
 
     An image that carries default displays (an OME-Zarr's omero metadata,
-    mcvol.omezarr.display_defaults) shows its active channels only, each in
-    its colour, the ramps over its window (opacity 0 at the window's start)."""
-    from ..omezarr import display_defaults
+    an OME-TIFF's channel colours: mcvol.omezarr.component_displays) shows
+    its active channels only, each in its colour (where the file gives one),
+    the ramps over its window (opacity 0 at the window's start)."""
+    from ..omezarr import component_displays
     from .parse import parse_channel
 
     pd = image.GetPointData()
-    displays = display_defaults(image)
+    displays = {n: d[0] for n, d in component_displays(image).items() if len(d) == 1}
     if displays and not any(d["active"] for d in displays.values()):
         displays = {n: dict(d, active=True) for n, d in displays.items()}  # all off: show them all
+    per_component = component_displays(image)
     picks = []
     for k in range(pd.GetNumberOfArrays()):
         a = pd.GetArray(k)
@@ -81,10 +83,13 @@ def default_channels(image):
         raw = {"array": name, "normalized": True, "unit_distance": unit,
                "color": [[0.0] + [0.35 * v for v in rgb], [1.0] + list(rgb)],
                "opacity": [[0.0, 0.0], [0.15, 0.0], [1.0, 0.3]]}
-        display = displays.get(name) if ncomp == 1 else None
+        entries = per_component.get(name)
+        display = (displays.get(name) if ncomp == 1 else None) or (
+            entries[comp] if entries is not None and len(entries) == ncomp else None)
         if display is not None:
-            rgb = display["color"]
-            raw["color"] = [[0.0] + [0.35 * v for v in rgb], [1.0] + list(rgb)]
+            if display["color"] is not None:
+                rgb = display["color"]
+                raw["color"] = [[0.0] + [0.35 * v for v in rgb], [1.0] + list(rgb)]
             if display["window"] is not None:
                 raw["range"] = display["window"]
                 raw["opacity"] = [[0.0, 0.0], [1.0, 0.3]]

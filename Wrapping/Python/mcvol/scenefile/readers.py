@@ -478,6 +478,40 @@ def ome_spacing(tf):
     return spacing, names
 
 
+def ome_color(text):
+    """An OME-XML Channel's Color (a signed 32-bit integer, RGBA: red in the
+    highest byte; writers that store it unsigned are read too) as (r, g, b)
+    in [0, 1], or None when it is no such integer. Alpha is ignored."""
+    try:
+        value = int(str(text).strip())
+    except ValueError:
+        return None
+    if not -(1 << 31) <= value < (1 << 32):
+        return None
+    value &= 0xFFFFFFFF
+    return tuple(((value >> shift) & 0xFF) / 255.0 for shift in (24, 16, 8))
+
+
+def ome_colors(tf, fn):
+    """The Color of every Channel of the OME-XML's first image, as (r, g, b)
+    or None (no Color, or one that is no OME colour: a warning names it)."""
+    import xml.etree.ElementTree as ET
+
+    from vtkmodules.vtkCommonCore import vtkOutputWindow
+
+    pixels = next((e for e in ET.fromstring(tf.ome_metadata).iter() if e.tag.split("}")[-1] == "Pixels"), None)
+    colors = []
+    for c, channel in enumerate(e for e in (pixels if pixels is not None else []) if e.tag.split("}")[-1] == "Channel"):
+        text = channel.get("Color")
+        color = ome_color(text) if text is not None else None
+        if text is not None and color is None:
+            vtkOutputWindow.GetInstance().DisplayWarningText(
+                "mcvol: '%s': channel %d (%s) has Color \"%s\", which is no OME colour (a signed 32-bit RGBA "
+                "integer): it keeps its default colour\n" % (fn, c, channel.get("Name") or "no name", text))
+        colors.append(color)
+    return colors
+
+
 def imagej_spacing(tf):
     """(spacing x, y, z): x and y from the resolution tags (pixels per
     unit), z from the ImageJ description's "spacing"."""
@@ -519,13 +553,21 @@ def read_hyperstack(entry, tf):
     spacing, names = ome_spacing(tf) if tf.is_ome else (imagej_spacing(tf), [])
     array = numpy_to_vtk(values if ncomp > 1 else values.reshape(-1), deep=True)
     array.SetName(entry["name"])
-    if [axes[i] for i in others] == ["C"] and len(names) == ncomp and all(names):
+    channels = [axes[i] for i in others] == ["C"]
+    if channels and len(names) == ncomp and all(names):
         for c, n in enumerate(names):
             array.SetComponentName(c, n)
     image = vtkImageData()
     image.SetDimensions(nx, ny, nz)
     image.SetSpacing(*spacing)
     image.GetPointData().SetScalars(array)
+    # The channels' colours as the array's default displays (as an
+    # OME-Zarr's omero colours): a channel without one keeps the default.
+    colors = ome_colors(tf, fn) if channels and tf.is_ome else []
+    if len(colors) == ncomp and any(colors):
+        from ..omezarr import display_array
+
+        image.GetFieldData().AddArray(display_array(entry["name"], [{"color": c} for c in colors]))
     return image
 
 
@@ -756,6 +798,7 @@ def resample(image, reference, mode):
             out.GetPointData().SetScalars(result)
         else:
             out.GetPointData().AddArray(result)
+    out.GetFieldData().PassData(image.GetFieldData())  # the file's default displays
     return out
 
 
@@ -781,14 +824,23 @@ def read_inputs(spec, errors):
         images.append(image)
     if not spec["list"]:
         return images[0]
+    from ..omezarr import DISPLAY_PREFIX
+
     out = vtkImageData()
     out.CopyStructure(images[0])
     for entry, image in zip(entries, images):
         scalars = image.GetPointData().GetScalars()
+        fd = image.GetFieldData()
         for k, array in enumerate(point_arrays(image)):
+            display = fd.GetArray(DISPLAY_PREFIX + array.GetName()) if array.GetName() else None
             if array is not scalars:
                 array.SetName("%s/%s" % (entry["name"], array.GetName() or "array %d" % k))
             else:
                 array.SetName(entry["name"])
             out.GetPointData().AddArray(array)
+            if display is not None:  # the file's default display goes with its array, renamed
+                copy = display.NewInstance()
+                copy.DeepCopy(display)
+                copy.SetName(DISPLAY_PREFIX + array.GetName())
+                out.GetFieldData().AddArray(copy)
     return out
