@@ -476,6 +476,12 @@ void vtkMultiChannelVolumeRepresentation::SetLightingStandInLevel(int level)
 }
 
 //------------------------------------------------------------------------------
+void vtkMultiChannelVolumeRepresentation::SetLightingStandInMemoryLimit(double mib)
+{
+  this->GetMultiChannelMapper()->SetLightingStandInMemoryLimit(mib * 1048576.0);
+}
+
+//------------------------------------------------------------------------------
 int vtkMultiChannelVolumeRepresentation::RequestData(
   vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {

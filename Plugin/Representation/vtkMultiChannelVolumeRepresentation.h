@@ -130,6 +130,9 @@ public:
   /// empty piece (the report says so): the stand-in is put together from
   /// every piece.
   void SetLightingStandInLevel(int level);
+  /// vtkMultiChannelVolumeMapper::SetLightingStandInMemoryLimit, in MiB
+  /// (the automatic level's limit per rank).
+  void SetLightingStandInMemoryLimit(double mib);
   double GetLightingStandInMemory();
   double GetLastLightingStandInGatherTime();
   const char* GetLightingStandInReport();

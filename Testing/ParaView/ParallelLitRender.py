@@ -5,7 +5,8 @@ light and two scattering events, and saves the composited image (rank 0).
 
 Usage: [mpiexec -n N] pvbatch ParallelLitRender.py SCENE.vti OUTPUT.png SEED LEVEL SAMPLES [VIEW]
   LEVEL    the representation's LightingStandInLevel (-1 off, 0 exact, k coarse;
-           "default": left as the representation sets it)
+           "default": left as the representation sets it; "auto:MIB": automatic
+           within LightingStandInMemoryLimit MIB)
   SAMPLES  samples per pixel of the saved image
   VIEW     "scene" (default): the scene's camera; "inside-lower": the camera
            inside the lower piece, looking down, away from the upper piece
@@ -62,7 +63,10 @@ rep.Shade = 1
 rep.ChannelAlbedos = [0.9]
 rep.AmbientRadiance = [0.05, 0.05, 0.05]
 rep.MaxScatteringDepth = 2
-if level != "default":
+if level.startswith("auto:"):
+    rep.LightingStandInLevel = -2
+    rep.LightingStandInMemoryLimit = float(level[5:])
+elif level != "default":
     rep.LightingStandInLevel = int(level)
 rep.Seed = seed
 rep.SamplesPerRender = min(64, samples)

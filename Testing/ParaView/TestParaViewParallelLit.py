@@ -77,6 +77,10 @@ def main():
     # IceT renders only the lower piece's rank, and the stand-in's gather
     # must not wait for the other (it runs in the pass every rank runs).
     run("inside-lower", 9, ranks=args.ranks, samples=16, camera="inside-lower", timeout=120)
+    # Lighting Across Ranks Memory 0.1 MiB: the exact stand-in of the
+    # 40 x 40 x 64 float volume takes 409,600 bytes, level 1 204,800 and
+    # level 2 25,600, so the automatic level must be 2.
+    run("parallel-auto-small", 9, level="auto:0.1", ranks=args.ranks, samples=16)
     parallel, pieces = run("parallel", 9, ranks=args.ranks)
     off, _ = run("parallel-off", 9, level=-1, ranks=args.ranks)
     serial, serial_pieces = run("serial", 7)
@@ -93,6 +97,8 @@ def main():
           "with one rank's piece out of view the render finishes with all its samples")
     check(any("automatic" in l and "exact stand-in" in l for l in reports["parallel"]),
           "by default the stand-in is the automatic one, exact for this volume")
+    check(any("automatic" in l and "level 2" in l for l in reports["parallel-auto-small"]),
+          "within Lighting Across Ranks Memory 0.1 MiB the automatic stand-in is level 2")
     check(pieces == args.ranks and serial_pieces == 1,
           "the data is split into %d pieces in parallel (%d) and 1 serially (%d)" % (args.ranks, pieces, serial_pieces))
     drawn = (serial.sum(axis=2) > 30).mean()
