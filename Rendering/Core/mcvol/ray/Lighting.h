@@ -514,22 +514,12 @@ MCVOL_HOT Vec4f traceLitComposite(const SceneView& s, Tracker tracker, Vec3f o, 
   RayCounters& c, ShadowCounters& sc, const RayImportance* imp)
 {
   rng.endSequence();
-  SceneView alone = s;
-  alone.numActive = 1;
-  // The stand-in of the other pieces carries the same one channel.
-  SceneView aloneOutside;
-  if (s.outside)
-  {
-    aloneOutside = *s.outside;
-    aloneOutside.numActive = 1;
-    alone.outside = &aloneOutside;
-  }
+  OneChannelView one(s);
   Vec4f out;
   for (int i = 0; i < s.numActive; ++i)
   {
-    alone.active[0] = s.active[i];
-    aloneOutside.active[0] = s.active[i];
-    const Vec4f v = traceLitSample<BlendMode::Density, Optimized>(alone, tracker, o, d, w, tmax, rng, c, sc, imp);
+    const Vec4f v =
+      traceLitSample<BlendMode::Density, Optimized>(one.alone(s.active[i]), tracker, o, d, w, tmax, rng, c, sc, imp);
     out.r += v.r;
     out.g += v.g;
     out.b += v.b;

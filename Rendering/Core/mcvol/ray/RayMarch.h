@@ -721,22 +721,13 @@ MCVOL_FUNC Vec4f marchPixel(const SceneView& s, const CameraView& cam, const Mar
   {
     // Each channel lit alone, as the Monte Carlo composite does (in the
     // stand-in of the other pieces too).
-    SceneView alone = s;
-    alone.numActive = 1;
-    SceneView aloneOutside;
-    if (s.outside)
-    {
-      aloneOutside = *s.outside;
-      aloneOutside.numActive = 1;
-      alone.outside = &aloneOutside;
-    }
+    OneChannelView one(s);
     Vec4f sum;
     float clear = 1.f;
     for (int i = 0; i < s.numActive; ++i)
     {
-      alone.active[0] = s.active[i];
-      aloneOutside.active[0] = s.active[i];
-      const Vec4f v = marchLit<BlendMode::Density>(alone, mp, ray.o, ray.d, ray.world, ray.tmax, phase, mc);
+      const Vec4f v =
+        marchLit<BlendMode::Density>(one.alone(s.active[i]), mp, ray.o, ray.d, ray.world, ray.tmax, phase, mc);
       sum.r += v.r;
       sum.g += v.g;
       sum.b += v.b;

@@ -237,4 +237,36 @@ MCVOL_FUNC Vec3f toOutsideDirection(const SceneView& s, Vec3f d)
 {
   return Vec3f(d.x * s.outsideScale.x, d.y * s.outsideScale.y, d.z * s.outsideScale.z);
 }
+
+/**
+ * A view of one of s's active channels alone, its stand-in of the other
+ * pieces (SceneView::outside) carrying the same one channel: lit
+ * post-render composite lights each channel alone, in both mappers.
+ * Not copyable: the view points at its own stand-in copy.
+ */
+struct OneChannelView
+{
+  SceneView view;
+  SceneView standIn;
+  MCVOL_FUNC explicit OneChannelView(const SceneView& s)
+    : view(s)
+  {
+    view.numActive = 1;
+    if (s.outside)
+    {
+      standIn = *s.outside;
+      standIn.numActive = 1;
+      view.outside = &standIn;
+    }
+  }
+  OneChannelView(const OneChannelView&) = delete;
+  OneChannelView& operator=(const OneChannelView&) = delete;
+  /// The view of channel n alone.
+  MCVOL_FUNC const SceneView& alone(int n)
+  {
+    view.active[0] = n;
+    standIn.active[0] = n;
+    return view;
+  }
+};
 } // namespace mcvol
