@@ -575,6 +575,51 @@ inline void expectZeroDifference(
   }
 }
 
+/// The long-accumulation check: images a and b of `preset` samples each
+/// (a of mean 0.5, b of mean 0; presetLongImages()) then the same `renders`
+/// one-sample renders. a must equal 0.5 x preset / N + b (N = preset +
+/// renders) to within the rounding of a (under one float spacing at 0.5,
+/// 6e-8), on enough pixels that a stalled float mean (0.5, 9.5e-7 off where
+/// the samples are 0 or 1) is caught.
+inline void expectLongMean(const Accumulator& a, const Accumulator& b, uint32_t preset, int renders)
+{
+  const size_t n = size_t(a.width()) * size_t(a.height()) * 4;
+  const double N = double(preset) + renders;
+  const double base = 0.5 * double(preset) / N;
+  double worst = 0;
+  size_t moved = 0;
+  for (size_t i = 0; i < n; ++i)
+  {
+    const double want = base + double(b.rgba()[i]);
+    worst = std::max(worst, std::fabs(double(a.rgba()[i]) - want));
+    moved += std::fabs(want - 0.5) > 2e-7 ? 1u : 0u; // more than 3 float spacings from 0.5
+  }
+  EXPECT_LE(worst, 0x1p-24) << "the mean of " << preset << " + " << renders
+                            << " samples is off by more than its rounding";
+  EXPECT_GT(moved, n / 4) << "too few pixels whose mean must move";
+}
+
+/// Sets a and b up as images of `preset` samples of the camera's size
+/// without rendering them (a mean written through rgbaForOverwrite(), the
+/// count through addSamples()): a of mean 0.5, b of mean 0; with or
+/// without the error estimate's even half.
+inline void presetLongImages(
+  Accumulator& a, Accumulator& b, const Camera& cam, uint32_t preset, bool errorEstimation = true)
+{
+  const size_t n = size_t(cam.width) * size_t(cam.height) * 4;
+  for (Accumulator* acc : { &a, &b })
+  {
+    acc->resize(cam.width, cam.height);
+    if (!errorEstimation)
+    {
+      acc->setErrorEstimation(false);
+    }
+    float* mean = acc->rgbaForOverwrite();
+    std::fill(mean, mean + n, acc == &a ? 0.5f : 0.f);
+    acc->addSamples(preset);
+  }
+}
+
 // Asserts that a Monte Carlo image of N samples per pixel, each of whose
 // colour components lies in [0, top] and alpha in [0, 1], has the reference
 // as its mean, at significance level alpha: components with

@@ -798,18 +798,11 @@ TEST(CudaAccumulation, KeepsConvergingPast2To24Samples)
   Scene scene;
   v.configure(scene, BlendMode::Density);
   const Camera cam = orbitCamera(v.dims, std::array<double, 3>{ 1, 1, 1 }.data(), 24, 24, 30, 20);
-  const size_t n = size_t(cam.width) * cam.height * 4;
   const uint32_t preset = 1u << 25;
   const int renders = 64;
   CUDARenderer g;
   Accumulator a, b;
-  for (Accumulator* acc : { &a, &b })
-  {
-    acc->resize(cam.width, cam.height);
-    float* mean = acc->rgbaForOverwrite();
-    std::fill(mean, mean + n, acc == &a ? 0.5f : 0.f);
-    acc->addSamples(preset);
-  }
+  presetLongImages(a, b, cam, preset);
   RenderSettings rs;
   rs.seed = 3;
   rs.samplesPerPixel = 1;
@@ -824,18 +817,7 @@ TEST(CudaAccumulation, KeepsConvergingPast2To24Samples)
   }
   g.readBack(b);
   ASSERT_EQ(a.samples(), preset + uint32_t(renders));
-  const double N = double(preset) + renders;
-  const double base = 0.5 * double(preset) / N;
-  double worst = 0;
-  size_t moved = 0;
-  for (size_t i = 0; i < n; ++i)
-  {
-    const double want = base + double(b.rgba()[i]);
-    worst = std::max(worst, std::fabs(double(a.rgba()[i]) - want));
-    moved += std::fabs(want - 0.5) > 2e-7 ? 1u : 0u;
-  }
-  EXPECT_LE(worst, 0x1p-24) << "the mean of 2^25 + 64 samples is off by more than its rounding";
-  EXPECT_GT(moved, n / 4) << "too few pixels whose mean must move";
+  expectLongMean(a, b, preset, renders);
 }
 
 // The display image (what the VTK mapper draws from a device backend): the

@@ -202,7 +202,6 @@ TEST(Accumulation, KeepsConvergingPast2To24Samples)
   Scene scene;
   configureDemo(scene, v, 8);
   const Camera cam = demoCamera(v, 24, 24, 60, -15);
-  const size_t n = size_t(cam.width) * cam.height * 4;
   const uint32_t preset = 1u << 25;
   const int renders = 64;
   CPURenderer r;
@@ -210,31 +209,13 @@ TEST(Accumulation, KeepsConvergingPast2To24Samples)
   rs.seed = 3;
   rs.samplesPerPixel = 1;
   Accumulator a, b;
-  for (Accumulator* acc : { &a, &b })
-  {
-    acc->resize(cam.width, cam.height);
-    acc->setErrorEstimation(false);
-    float* mean = acc->rgbaForOverwrite();
-    std::fill(mean, mean + n, acc == &a ? 0.5f : 0.f);
-    acc->addSamples(preset);
-  }
+  presetLongImages(a, b, cam, preset, false);
   for (int k = 0; k < renders; ++k)
   {
     r.render(scene, cam, rs, nullptr, a);
     r.render(scene, cam, rs, nullptr, b);
   }
-  const double N = double(preset) + renders;
-  const double base = 0.5 * double(preset) / N;
-  double worst = 0;
-  size_t moved = 0;
-  for (size_t i = 0; i < n; ++i)
-  {
-    const double want = base + double(b.rgba()[i]);
-    worst = std::max(worst, std::fabs(double(a.rgba()[i]) - want));
-    moved += std::fabs(want - 0.5) > 2e-7 ? 1u : 0u; // more than 3 float spacings from 0.5
-  }
-  EXPECT_LE(worst, 0x1p-24) << "the mean of 2^25 + 64 samples is off by more than its rounding";
-  EXPECT_GT(moved, n / 4) << "too few pixels whose mean must move";
+  expectLongMean(a, b, preset, renders);
 
   // A synthetic stream through the same per-pixel sums (loadSum, addSample,
   // storeSum): 2^25 samples of k / 2^16, in renders of 8. Their sum is
