@@ -21,6 +21,7 @@
 #include "mcvol/ray/Types.h"
 
 #include <algorithm>
+#include <cmath>
 #include <array>
 #include <cstdint>
 #include <cstring>
@@ -152,6 +153,9 @@ int vtkMultiChannelDemoSource::RequestInformation(
   outInfo->Set(vtkStreamingDemandDrivenPipeline::WHOLE_EXTENT(), extent, 6);
   outInfo->Set(vtkDataObject::SPACING(), spacing, 3);
   outInfo->Set(vtkDataObject::ORIGIN(), origin, 3);
+  // Every voxel is a function of its indices alone, so a piece (an MPI rank's
+  // extent) is generated without the rest of the volume.
+  outInfo->Set(vtkAlgorithm::CAN_PRODUCE_SUB_EXTENT(), 1);
   const bool interleaved = this->Interleaved || !this->SeparateArrays;
   if (interleaved)
   {
@@ -179,11 +183,21 @@ int vtkMultiChannelDemoSource::RequestData(vtkInformation*, vtkInformationVector
   }
 
   const std::string name = this->Dataset ? this->Dataset : "";
+  int whole[6];
+  outInfo->Get(vtkStreamingDemandDrivenPipeline::WHOLE_EXTENT(), whole);
+  std::array<int, 6> extent = { whole[0], whole[1], whole[2], whole[3], whole[4], whole[5] };
+  if (outInfo->Has(vtkStreamingDemandDrivenPipeline::UPDATE_EXTENT()))
+  {
+    outInfo->Get(vtkStreamingDemandDrivenPipeline::UPDATE_EXTENT(), extent.data());
+  }
+  if (extent[1] < extent[0] || extent[3] < extent[2] || extent[5] < extent[4])
+  {
+    return 1; // an empty piece (more ranks than slabs): nothing to generate
+  }
   mcvol::DemoVolume v;
   try
   {
-    v =
-      mcvol::makeDemo(name, { this->Dimensions[0], this->Dimensions[1], this->Dimensions[2] }, this->NumberOfChannels);
+    v = mcvol::makeDemoPiece(name, { whole[1] + 1, whole[3] + 1, whole[5] + 1 }, this->NumberOfChannels, extent);
   }
   catch (const std::exception& e)
   {
@@ -193,7 +207,7 @@ int vtkMultiChannelDemoSource::RequestData(vtkInformation*, vtkInformationVector
   }
 
   const int* d = v.dims;
-  output->SetExtent(0, d[0] - 1, 0, d[1] - 1, 0, d[2] - 1);
+  output->SetExtent(extent.data());
   output->SetSpacing(v.spacing);
   output->SetOrigin(0, 0, 0);
 
@@ -304,9 +318,33 @@ bool vtkMultiChannelDemoSource::GetSuggestedTransferFunction(
     vtkErrorMacro("Channel " << channel << " out of range [0, " << in.TransferFunctions.size() << ")");
     return false;
   }
+  const double range[2] = { in.Ranges[static_cast<size_t>(channel)][0], in.Ranges[static_cast<size_t>(channel)][1] };
+  return this->GetSuggestedTransferFunction(channel, range, color, opacity, unitDistance);
+}
+
+//------------------------------------------------------------------------------
+bool vtkMultiChannelDemoSource::GetSuggestedTransferFunction(int channel, const double range[2],
+  vtkColorTransferFunction* color, vtkPiecewiseFunction* opacity, double* unitDistance)
+{
+  if (!this->UpdateForQuery())
+  {
+    vtkErrorMacro("No suggested transfer function: the source has no valid output.");
+    return false;
+  }
+  const vtkInternals& in = *this->Internals;
+  if (channel < 0 || channel >= static_cast<int>(in.TransferFunctions.size()))
+  {
+    vtkErrorMacro("Channel " << channel << " out of range [0, " << in.TransferFunctions.size() << ")");
+    return false;
+  }
+  if (!std::isfinite(range[0]) || !std::isfinite(range[1]) || range[1] < range[0])
+  {
+    vtkErrorMacro("The range [" << range[0] << ", " << range[1] << "] is not a finite interval.");
+    return false;
+  }
   const mcvol::DemoTransferFunction& tf = in.TransferFunctions[static_cast<size_t>(channel)];
-  const double lo = in.Ranges[static_cast<size_t>(channel)][0];
-  double span = double(in.Ranges[static_cast<size_t>(channel)][1]) - lo;
+  const double lo = range[0];
+  double span = range[1] - lo;
   if (!(span > 0))
   {
     span = 1.0; // constant channel: keep the points distinct

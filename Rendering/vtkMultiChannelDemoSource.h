@@ -22,7 +22,9 @@
  * (default on), also as one N-component point-scalars array named "channels"
  * whose component names are the channel names. The latter is what
  * vtkMultiChannelVolumeMapper reads by default. Large versions (for example
- * 4 x 512^3) are made with SetDimensions.
+ * 4 x 512^3) are made with SetDimensions. The source generates the update
+ * extent it is asked for, the same voxels as those of the whole volume, so
+ * under ParaView's MPI engine each rank generates its own piece alone.
  *
  * Each channel has a suggested transfer function, defined over the channel's
  * data range normalised to [0, 1]; GetSuggestedTransferFunction maps it onto
@@ -115,8 +117,9 @@ public:
   const char* GetChannelName(int channel);
 
   /**
-   * Data range of channel i of the last output (updates the source if
-   * needed). Returns false on error.
+   * Data range of channel i of the last output, a piece's own range when a
+   * piece was asked for (updates the source if needed). Returns false on
+   * error or when the output is an empty piece.
    */
   bool GetChannelRange(int channel, double range[2]);
 
@@ -130,6 +133,17 @@ public:
    */
   bool GetSuggestedTransferFunction(
     int channel, vtkColorTransferFunction* color, vtkPiecewiseFunction* opacity, double* unitDistance);
+
+  /**
+   * The same, mapped onto `range` instead of the output's own data range.
+   * When the output is a piece (the source generates the update extent
+   * alone, so each MPI rank makes only its own part), pass the whole
+   * volume's range, for example from ParaView's data information, so that
+   * every rank classifies its piece alike. False (and an error) for a range
+   * that is not finite or is reversed.
+   */
+  bool GetSuggestedTransferFunction(int channel, const double range[2], vtkColorTransferFunction* color,
+    vtkPiecewiseFunction* opacity, double* unitDistance);
 
   /**
    * Suggested opacity unit distance of channel i in world units (0 on error).

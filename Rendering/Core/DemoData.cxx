@@ -108,19 +108,21 @@ void checkDims(const std::array<int, 3>& d)
   }
 }
 
+/// Visits the generated box's voxels: p indexes the box's channels, (i, j, k)
+/// are the voxel's indices in the whole volume.
 template <typename Fn>
-void forEachVoxel(const int dims[3], Fn fn)
+void forEachVoxel(const DemoVolume& v, Fn fn)
 {
-  const int64_t nz = dims[2];
+  const int64_t nz = v.dims[2];
 #pragma omp parallel for schedule(dynamic, 1)
   for (int64_t k = 0; k < nz; ++k)
   {
-    for (int j = 0; j < dims[1]; ++j)
+    for (int j = 0; j < v.dims[1]; ++j)
     {
-      for (int i = 0; i < dims[0]; ++i)
+      for (int i = 0; i < v.dims[0]; ++i)
       {
-        const size_t v = (size_t(k) * dims[1] + j) * dims[0] + i;
-        fn(v, i, j, int(k));
+        const size_t p = (size_t(k) * v.dims[1] + j) * v.dims[0] + i;
+        fn(p, i + v.offset[0], j + v.offset[1], int(k) + v.offset[2]);
       }
     }
   }
@@ -130,8 +132,8 @@ void forEachVoxel(const int dims[3], Fn fn)
 /// along +X, -X and -Y respectively, overlapping in the middle.
 void makeFigure3(DemoVolume& v)
 {
-  const int* d = v.dims;
-  const size_t voxels = size_t(d[0]) * d[1] * d[2];
+  const int* d = v.wholeDims;
+  const size_t voxels = size_t(v.dims[0]) * v.dims[1] * v.dims[2];
   v.type = ScalarType::Float32;
   v.channelNames = { "red_cube", "green_cube", "blue_cube" };
   v.channels.assign(3, allocate<float>(voxels));
@@ -144,7 +146,7 @@ void makeFigure3(DemoVolume& v)
     const float s = 0.55f;
     return x >= x0 && x <= x0 + s && y >= y0 && y <= y0 + s && z >= z0 && z <= z0 + s;
   };
-  forEachVoxel(d,
+  forEachVoxel(v,
     [&](size_t p, int i, int j, int k)
     {
       const float x = unit(i, 0), y = unit(j, 1), z = unit(k, 2);
@@ -162,8 +164,8 @@ void makeFigure3(DemoVolume& v)
 /// on cell borders, a nucleus in each cell, small bright puncta.
 void makeMicroscopy(DemoVolume& v)
 {
-  const int* d = v.dims;
-  const size_t voxels = size_t(d[0]) * d[1] * d[2];
+  const int* d = v.wholeDims;
+  const size_t voxels = size_t(v.dims[0]) * v.dims[1] * v.dims[2];
   v.type = ScalarType::UInt8;
   v.channelNames = { "membranes", "nuclei", "puncta" };
   v.channels.assign(3, allocate<uint8_t>(voxels));
@@ -179,7 +181,7 @@ void makeMicroscopy(DemoVolume& v)
     out[1] = (float(b) + 0.15f + 0.7f * latticeValue(a, b, c, s + 1)) * period;
     out[2] = (float(c) + 0.15f + 0.7f * latticeValue(a, b, c, s + 2)) * period;
   };
-  forEachVoxel(d,
+  forEachVoxel(v,
     [&](size_t p, int i, int j, int k)
     {
       const float x = float(i), y = float(j), z = float(k) * zScale;
@@ -236,8 +238,8 @@ void makeMicroscopy(DemoVolume& v)
 /// correlated with it (baryon density, temperature, velocity magnitude).
 void makeCosmology(DemoVolume& v)
 {
-  const int* d = v.dims;
-  const size_t voxels = size_t(d[0]) * d[1] * d[2];
+  const int* d = v.wholeDims;
+  const size_t voxels = size_t(v.dims[0]) * v.dims[1] * v.dims[2];
   v.type = ScalarType::Float32;
   v.channelNames = { "dark_matter_density", "baryon_density", "temperature", "velocity_magnitude" };
   v.channels.assign(4, allocate<float>(voxels));
@@ -246,7 +248,7 @@ void makeCosmology(DemoVolume& v)
   float* te = as<float>(v.channels[2]);
   float* ve = as<float>(v.channels[3]);
   const float period = float(std::max({ d[0], d[1], d[2] })) / 3.f;
-  forEachVoxel(d,
+  forEachVoxel(v,
     [&](size_t p, int i, int j, int k)
     {
       const float x = float(i), y = float(j), z = float(k);
@@ -272,8 +274,8 @@ void makeCosmology(DemoVolume& v)
 /// Weather-like: a hurricane vortex on a flat grid with 12 fields.
 void makeWeather(DemoVolume& v)
 {
-  const int* d = v.dims;
-  const size_t voxels = size_t(d[0]) * d[1] * d[2];
+  const int* d = v.wholeDims;
+  const size_t voxels = size_t(v.dims[0]) * v.dims[1] * v.dims[2];
   v.type = ScalarType::Float32;
   v.channelNames = { "pressure", "temperature", "u_wind", "v_wind", "w_wind", "wind_speed", "vapor", "cloud", "rain",
     "snow", "ice", "graupel" };
@@ -285,7 +287,7 @@ void makeWeather(DemoVolume& v)
   }
   const float cx = 0.5f * float(d[0] - 1), cy = 0.5f * float(d[1] - 1);
   const float R = 0.5f * float(std::min(d[0], d[1]));
-  forEachVoxel(d,
+  forEachVoxel(v,
     [&](size_t p, int i, int j, int k)
     {
       const float x = (float(i) - cx) / R, y = (float(j) - cy) / R;
@@ -419,19 +421,38 @@ std::array<int, 3> demoDefaultDims(const std::string& name)
 
 DemoVolume makeDemo(const std::string& name, std::array<int, 3> dims, int channels)
 {
-  const std::array<int, 3> def = demoDefaultDims(name);
   if (dims[0] == 0 && dims[1] == 0 && dims[2] == 0)
   {
-    dims = def;
+    dims = demoDefaultDims(name);
   }
   checkDims(dims);
+  return makeDemoPiece(name, dims, channels, { 0, dims[0] - 1, 0, dims[1] - 1, 0, dims[2] - 1 });
+}
+
+DemoVolume makeDemoPiece(
+  const std::string& name, std::array<int, 3> dims, int channels, const std::array<int, 6>& extent)
+{
+  demoDefaultDims(name); // rejects an unknown name first
+  checkDims(dims);
+  for (int a = 0; a < 3; ++a)
+  {
+    if (extent[2 * a] < 0 || extent[2 * a + 1] >= dims[a] || extent[2 * a] > extent[2 * a + 1])
+    {
+      throw std::invalid_argument("mcvol: a demo piece must be a non-empty box inside the volume");
+    }
+  }
   if (channels < 0 || channels > kMaxChannels)
   {
     throw std::invalid_argument("mcvol: demo channel count must be between 1 and " + std::to_string(kMaxChannels));
   }
   DemoVolume v;
   v.name = name;
-  std::copy(dims.begin(), dims.end(), v.dims);
+  for (int a = 0; a < 3; ++a)
+  {
+    v.wholeDims[a] = dims[a];
+    v.offset[a] = extent[2 * a];
+    v.dims[a] = extent[2 * a + 1] - extent[2 * a] + 1;
+  }
   if (name == "figure3")
     makeFigure3(v);
   else if (name == "microscopy")

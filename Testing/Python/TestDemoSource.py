@@ -2,7 +2,9 @@
 type and channel count, the interleaved "channels" scalars (component names =
 channel names) equal the separate named arrays, suggested transfer functions
 span each channel's data range, generation is deterministic, sizes and channel
-counts can be changed, and an unknown name gives one error and an empty
+counts can be changed, a piece asked for by its update extent (an MPI rank's
+part) holds the whole volume's voxels there, a suggested transfer function
+maps onto a given range, and an unknown name gives one error and an empty
 output. No rendering."""
 
 import os
@@ -93,6 +95,50 @@ s.InterleavedOff()
 s.Update()
 pd = s.GetOutput().GetPointData()
 t.check(pd.GetScalars() is None and pd.GetNumberOfArrays() == 3, "InterleavedOff: scalars %s, %d arrays" % (pd.GetScalars(), pd.GetNumberOfArrays()))
+
+# Pieces: the update extent alone is generated, with the whole volume's
+# values there, on every dataset (odd sizes, pieces touching no face).
+for name, dims, ext in (
+    ("cosmology", (20, 12, 9), (3, 17, 0, 11, 4, 8)),
+    ("microscopy", (33, 30, 10), (0, 32, 7, 21, 2, 2)),
+    ("weather", (24, 20, 7), (10, 23, 0, 19, 0, 3)),
+    ("figure3", (16, 16, 16), (5, 5, 6, 6, 7, 7)),
+):
+    whole = vtkMultiChannelDemoSource()
+    whole.SetDataset(name)
+    whole.SetDimensions(*dims)
+    whole.Update()
+    piece = vtkMultiChannelDemoSource()
+    piece.SetDataset(name)
+    piece.SetDimensions(*dims)
+    piece.UpdateExtent(ext)
+    out = piece.GetOutput()
+    t.check(out.GetExtent() == ext, "%s: piece extent %s, asked %s" % (name, out.GetExtent(), ext))
+    full = vtk_to_numpy(whole.GetOutput().GetPointData().GetScalars())
+    full = full.reshape(dims[2], dims[1], dims[0], -1)[ext[4]:ext[5] + 1, ext[2]:ext[3] + 1, ext[0]:ext[1] + 1]
+    got = vtk_to_numpy(out.GetPointData().GetScalars())
+    t.check(got.size == full.size and np.array_equal(got.reshape(full.shape), full),
+            "%s: the piece differs from the whole volume's voxels there" % name)
+    first = piece.GetChannelName(0)
+    t.check(piece.GetSuggestedUnitDistance(0) == whole.GetSuggestedUnitDistance(0)
+            and piece.GetOutput().GetExtent() == ext,
+            "%s: a query after the piece changed it or the unit distance" % name)
+    t.check(np.array_equal(vtk_to_numpy(out.GetPointData().GetArray(first)), full[..., 0].ravel()),
+            "%s: separate array %s of the piece" % (name, first))
+
+# A suggested transfer function over a given range (a piece's ranks use the
+# whole volume's) spans that range; a reversed or NaN range is an error.
+s = vtkMultiChannelDemoSource()
+s.SetDataset("cosmology")
+s.SetDimensions(8, 8, 8)
+color, opacity = vtkColorTransferFunction(), vtkPiecewiseFunction()
+t.check(s.GetSuggestedTransferFunction(0, [-2.0, 6.0], color, opacity, None), "TF over a given range refused")
+t.check(opacity.GetRange() == (-2.0, 6.0) and color.GetRange() == (-2.0, 6.0),
+        "TF over [-2, 6] spans %s / %s" % (opacity.GetRange(), color.GetRange()))
+for bad in ([6.0, -2.0], [float("nan"), 1.0]):
+    catcher = ErrorCatcher(s)
+    t.check(not s.GetSuggestedTransferFunction(0, bad, color, opacity, None) and len(catcher.errors) == 1,
+            "range %s accepted" % bad)
 
 # Errors: unknown name, bad size, bad channel.
 for setup, what in (

@@ -32,7 +32,11 @@ struct DemoTransferFunction
 struct DemoVolume
 {
   std::string name;
-  int dims[3] = { 0, 0, 0 };
+  int dims[3] = { 0, 0, 0 }; ///< voxels per axis of the generated box (the channels' layout)
+  /// Size of the whole dataset and the generated box's first voxel in it:
+  /// the whole volume unless made by makeDemoPiece.
+  int wholeDims[3] = { 0, 0, 0 };
+  int offset[3] = { 0, 0, 0 };
   double spacing[3] = { 1, 1, 1 };
   ScalarType type = ScalarType::Float32;
   std::vector<std::string> channelNames;
@@ -60,6 +64,14 @@ std::array<int, 3> demoDefaultDims(const std::string& name);
 /// functions, as the paper does for its channel-count study); 0 = natural.
 /// Throws std::invalid_argument for an unknown name or a bad size.
 DemoVolume makeDemo(const std::string& name, std::array<int, 3> dims = { 0, 0, 0 }, int channels = 0);
+
+/// Generates the box `extent` (first and last voxel index per axis, as a VTK
+/// extent) of the dataset of size `dims`: the same values as those voxels of
+/// makeDemo(name, dims, channels), so that each MPI rank can make its own
+/// piece of a volume none of them holds whole. Throws std::invalid_argument
+/// for an extent outside the volume or empty.
+DemoVolume makeDemoPiece(
+  const std::string& name, std::array<int, 3> dims, int channels, const std::array<int, 6>& extent);
 
 /// Samples a demo transfer function into a table of K entries over
 /// [lo, hi], with the unit distance scaled by `spacing`.
