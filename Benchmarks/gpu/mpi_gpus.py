@@ -130,6 +130,12 @@ def main():
     piece = volume.GetClientSideObject().GetOutputDataObject(0)
     t_gen = time.perf_counter() - t0
 
+    def progress(what):
+        if rank == 0:
+            print("progress: %s after %.1f s" % (what, time.perf_counter() - t0), flush=True)
+
+    progress("pieces generated")
+
     # The dataset's suggested functions over the whole volume's range.
     from mcvol import vtkMultiChannelDemoSource  # noqa: E402
     from vtkmodules.vtkCommonDataModel import vtkPiecewiseFunction  # noqa: E402
@@ -188,8 +194,10 @@ def main():
     rep.SampleSequence = "Sobol"
     rep.Estimator = "Expected Value"
     rep.PixelJitter = 1
+    progress("functions set")
     simple.Render(view)
     t_first = time.perf_counter() - t0
+    progress("first frame")
     mapper = T.local_mapper(rep)
 
 

@@ -32,7 +32,7 @@ run_ranks() { # name ranks args...
   MCVOL_BACKEND=cuda bash "$vtk" run "$env_root OMP_NUM_THREADS=$threads mpiexec --bind-to none -n $n \
     -x PYTHONPATH -x PV_PLUGIN_PATH -x OMP_NUM_THREADS -x MCVOL_BACKEND \
     pvbatch --symmetric Benchmarks/gpu/mpi_gpus.py $*" 2>&1 | tee "$res/$name.log" |
-    grep -E "^(RESULT|rank|Traceback|.*Error)" | cut -c1-400
+    grep -E "^(RESULT|rank|progress|Traceback|.*Error)" | cut -c1-400
   grep -h "^RESULT " "$res/$name.log" | sed 's/^RESULT //' >> "$res/results.jsonl"
 }
 
@@ -53,7 +53,7 @@ case "${1:-}" in
     for n in "${@:-4 2}"; do
       for k in $n; do
         run_ranks "weak-2048-${k}gpu" "$k" --dataset cosmology --dims 2048 2048 2048 --channels 4 --size 1024 1024 \
-          --lighting none --ref-spp 256 --frames 10 --label cosmology-4x2048^3
+          --lighting none --ref-spp 256 --frames 10 --spp 1 2 4 8 16 32 64 --label cosmology-4x2048^3
       done
     done
     ;;

@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstdint>
 #include <iomanip>
+#include <limits>
 #include <sstream>
 #include <unordered_set>
 #include <vector>
@@ -19,6 +20,16 @@ namespace
 constexpr double kLowPercentile = 0.1;
 constexpr double kHighPercentile = 99.9;
 constexpr size_t kMaxDistinct = 256;
+constexpr size_t kMaxSample = size_t(1) << 24;
+
+// A 64-bit integer hash (splitmix64's finaliser): the sample's place in a block.
+uint64_t Hash(uint64_t x)
+{
+  x += 0x9e3779b97f4a7c15ull;
+  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
+  x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
+  return x ^ (x >> 31);
+}
 
 // numpy.percentile's default: the order statistics around p / 100 * (n - 1),
 // linearly interpolated. `at(k)` gives the k-th smallest value.
@@ -88,40 +99,74 @@ bool HistogramRange(const T* values, size_t count, int stride, double range[2])
   return true;
 }
 
-// Other types: the finite values copied, order statistics by nth_element.
+// Other types: order statistics by nth_element over the finite values, or,
+// for more than kMaxSample values, over a stratified sample of kMaxSample of
+// them (one value at a hashed place in each of kMaxSample equal blocks, so
+// that no stride of the grid aliases): the 0.1 and 99.9 percentiles of 2^24
+// samples are within about 1e-5 of their rank, while copying and selecting
+// over the billions of values of a large volume would take minutes. The
+// minimum, maximum and the distinct-value test read every value.
 template <typename T>
 bool SortedRange(const T* values, size_t count, int stride, double range[2])
 {
-  std::vector<double> finite;
-  finite.reserve(count);
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  size_t finiteCount = 0;
+  std::unordered_set<double> distinct;
   for (size_t i = 0; i < count; ++i)
   {
     const double v = static_cast<double>(values[i * stride]);
     if (std::isfinite(v))
     {
-      finite.push_back(v);
+      ++finiteCount;
+      lo = std::min(lo, v);
+      hi = std::max(hi, v);
+      if (distinct.size() <= kMaxDistinct)
+      {
+        distinct.insert(v);
+      }
     }
   }
-  if (finite.empty())
+  if (finiteCount == 0)
   {
     return false;
-  }
-  const auto minmax = std::minmax_element(finite.begin(), finite.end());
-  const double lo = *minmax.first, hi = *minmax.second;
-  std::unordered_set<double> distinct;
-  for (double v : finite)
-  {
-    distinct.insert(v);
-    if (distinct.size() > kMaxDistinct)
-    {
-      break;
-    }
   }
   if (lo == hi || distinct.size() <= kMaxDistinct)
   {
     range[0] = lo;
     range[1] = hi;
     return true;
+  }
+  std::vector<double> finite;
+  if (count <= kMaxSample)
+  {
+    finite.reserve(finiteCount);
+    for (size_t i = 0; i < count; ++i)
+    {
+      const double v = static_cast<double>(values[i * stride]);
+      if (std::isfinite(v))
+      {
+        finite.push_back(v);
+      }
+    }
+  }
+  else
+  {
+    finite.reserve(kMaxSample);
+    for (size_t j = 0; j < kMaxSample; ++j)
+    {
+      const size_t first = j * count / kMaxSample, last = (j + 1) * count / kMaxSample;
+      const double v = static_cast<double>(values[(first + Hash(j) % (last - first)) * stride]);
+      if (std::isfinite(v))
+      {
+        finite.push_back(v);
+      }
+    }
+    if (finite.empty())
+    {
+      range[0] = lo;
+      range[1] = hi;
+      return true;
+    }
   }
   auto at = [&](size_t k) {
     std::nth_element(finite.begin(), finite.begin() + static_cast<std::ptrdiff_t>(k), finite.end());

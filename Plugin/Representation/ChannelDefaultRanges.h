@@ -4,7 +4,9 @@
 // ParaView first shows it, the same as mcvol-render's "range": "auto"
 // (Wrapping/Python/mcvol/scenefile/assemble.py, auto_range): the 0.1 and
 // 99.9 percentiles of the finite values (numpy's linear interpolation
-// between order statistics), or min..max when the values take at most 256
+// between order statistics; of floating-point and 32/64-bit integer arrays
+// of more than 2^24 values, those of a stratified sample of 2^24 of them,
+// within about 1e-5 of the percentile's rank), or min..max when the values take at most 256
 // distinct values (labels, masks) or the percentiles coincide.
 #ifndef mcvolChannelDefaultRanges_h
 #define mcvolChannelDefaultRanges_h

@@ -376,12 +376,14 @@ ChannelSource DemoVolume::source(int n) const
 
 std::array<float, 2> DemoVolume::range(int n) const
 {
-  const size_t voxels = size_t(this->dims[0]) * this->dims[1] * this->dims[2];
-  float lo = std::numeric_limits<float>::infinity(), hi = -lo;
+  const int64_t voxels = int64_t(this->dims[0]) * this->dims[1] * this->dims[2];
   const void* data = this->channels.at(size_t(n)).data();
-  for (size_t i = 0; i < voxels; ++i)
+  const ScalarType type = this->type;
+  float lo = std::numeric_limits<float>::infinity(), hi = -lo;
+#pragma omp parallel for reduction(min : lo) reduction(max : hi)
+  for (int64_t i = 0; i < voxels; ++i)
   {
-    const float x = visitScalarType(this->type,
+    const float x = visitScalarType(type,
       [&](auto tag)
       {
         using T = typename decltype(tag)::type;

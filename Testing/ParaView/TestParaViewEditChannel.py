@@ -14,6 +14,10 @@ a channel's transfer functions").
 - Channels from the components of one array: Edit Channel colours by that
   array with the function "array:k", which picks component k, so its range
   is that component's robust range.
+- A float channel of more than 2^24 values gets the percentiles of a
+  stratified sample (so that showing billions of voxels does not copy and
+  select them all): within 0.01 percentile points of numpy's percentiles of
+  every value (the sample's rank error is about 0.0008 points).
 """
 import numpy as np
 from paraview import servermanager as sm
@@ -103,4 +107,31 @@ checks.check(lut1.VectorMode == "Component" and lut1.VectorComponent == 1,
              "the function 'stains:1' picks component 1 (%s %d)" % (lut1.VectorMode, lut1.VectorComponent))
 checks.check(abs(lut1.RGBPoints[0] - crange[0]) < 1e-3 and abs(lut1.RGBPoints[-4] - crange[1]) < 1e-3,
              "its range %.2f..%.2f is component 1's robust range %.2f..%.2f" % (lut1.RGBPoints[0], lut1.RGBPoints[-4], *crange))
+
+# More than 2^24 values: the sampled percentiles (lognormal values, seeded).
+from vtkmodules.util.numpy_support import numpy_to_vtk  # noqa: E402
+from vtkmodules.vtkCommonDataModel import vtkImageData  # noqa: E402
+
+# Sorted, so that a sample of only part of the array would miss an end.
+values = np.sort(np.random.default_rng(5).lognormal(0.0, 1.5, 256 * 256 * 257).astype(np.float32))
+big = vtkImageData()
+big.SetDimensions(256, 256, 257)
+arr = numpy_to_vtk(values, deep=1)
+arr.SetName("big")
+big.GetPointData().AddArray(arr)
+producer = simple.TrivialProducer()
+producer.GetClientSideObject().SetOutput(big)
+simple.Hide(vec, view)
+brep = T.show(producer, view)
+brep.ChannelArrays = ["big"]
+simple.Render(view)
+line = [l for l in T.info(brep, "ChannelDefaultRanges").splitlines() if l.startswith("big\t")]
+lo, hi = (float(x) for x in line[0].split("\t")[2:]) if line else (np.nan, np.nan)
+v = values.astype(np.float64)
+checks.check(np.percentile(v, 0.09) <= lo <= np.percentile(v, 0.11),
+             "2^24+ values: low end %.5g within numpy's 0.09..0.11 percentiles %.5g..%.5g"
+             % (lo, np.percentile(v, 0.09), np.percentile(v, 0.11)))
+checks.check(np.percentile(v, 99.89) <= hi <= np.percentile(v, 99.91),
+             "2^24+ values: high end %.5g within numpy's 99.89..99.91 percentiles %.5g..%.5g"
+             % (hi, np.percentile(v, 99.89), np.percentile(v, 99.91)))
 checks.finish()

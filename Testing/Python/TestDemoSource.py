@@ -58,6 +58,11 @@ for name, (dims, vtype, channel_names) in EXPECTED.items():
         sep = pd.GetArray(cname)
         if t.check(sep is not None and sep.GetNumberOfComponents() == 1, "%s: array %s" % (name, cname)):
             t.check(np.array_equal(vtk_to_numpy(sep), inter[:, c]), "%s: %s differs from component %d" % (name, cname, c))
+            # The range the source stores in the array's range cache.
+            vals = vtk_to_numpy(sep).astype(np.float64)
+            want = (vals.min(), vals.max())
+            t.check(sep.GetRange(0) == want and sep.GetFiniteRange(0) == want,
+                    "%s: %s range %s / finite %s, data %s" % (name, cname, sep.GetRange(0), sep.GetFiniteRange(0), want))
         rng = [0.0, 0.0]
         t.check(src.GetChannelRange(c, rng), "%s: no range for %d" % (name, c))
         data = inter[:, c].astype(np.float64)
