@@ -14,6 +14,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 import numpy as np
 from vtkmodules.util.numpy_support import vtk_to_numpy
+from vtkmodules.vtkCommonCore import vtkDataArray
 from vtkmodules.vtkCommonDataModel import vtkPiecewiseFunction
 from vtkmodules.vtkRenderingCore import vtkColorTransferFunction
 
@@ -59,6 +60,8 @@ for name, (dims, vtype, channel_names) in EXPECTED.items():
         if t.check(sep is not None and sep.GetNumberOfComponents() == 1, "%s: array %s" % (name, cname)):
             t.check(np.array_equal(vtk_to_numpy(sep), inter[:, c]), "%s: %s differs from component %d" % (name, cname, c))
             # The range the source stores in the array's range cache.
+            t.check(sep.GetInformation().Has(vtkDataArray.PER_FINITE_COMPONENT()),
+                    "%s: %s carries no cached range" % (name, cname))
             vals = vtk_to_numpy(sep).astype(np.float64)
             want = (vals.min(), vals.max())
             t.check(sep.GetRange(0) == want and sep.GetFiniteRange(0) == want,
