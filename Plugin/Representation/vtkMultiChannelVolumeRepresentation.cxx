@@ -499,6 +499,25 @@ int vtkMultiChannelVolumeRepresentation::RequestData(
   }
   this->EmptyPieceSomewhere = all == 0;
   this->SetLightingStandInLevel(this->LightingStandInLevel);
+
+  // The channels' default ranges are the whole data set's (every process
+  // must colour its piece alike, and as one process would colour the whole
+  // image): computed here, where every process takes part, again whenever
+  // any process's input changed.
+  vtkImageData* image = vtkImageData::GetData(inputVector[0], 0);
+  const vtkMTimeType time = image ? image->GetMTime() : 0;
+  int changed = (time != this->ChannelDefaultRangesTime || this->ChannelDefaultRangesStale) ? 1 : 0;
+  int anyChanged = changed;
+  if (controller && controller->GetNumberOfProcesses() > 1)
+  {
+    controller->AllReduce(&changed, &anyChanged, 1, vtkCommunicator::MAX_OP);
+  }
+  if (anyChanged)
+  {
+    this->ChannelDefaultRanges = mcvol::RobustRanges(image, controller);
+    this->ChannelDefaultRangesTime = time;
+    this->ChannelDefaultRangesStale = false;
+  }
   return result;
 }
 
@@ -946,21 +965,22 @@ void vtkMultiChannelVolumeRepresentation::UpdateMapperParameters()
 //------------------------------------------------------------------------------
 const char* vtkMultiChannelVolumeRepresentation::GetChannelDefaultRanges()
 {
-  // The input as the source produced it (the representation's own copy is
-  // made only when the view updates), computed again only when it changes.
+  // Computed by RequestData, in the update every process runs. A single
+  // process may be asked before its first update (or after its input
+  // changed without one): it computes them from the input as the source
+  // produced it.
+  vtkMultiProcessController* controller = vtkMultiProcessController::GetGlobalController();
+  const bool single = !controller || controller->GetNumberOfProcesses() <= 1;
   vtkImageData* image = this->GetNumberOfInputConnections(0) > 0
     ? vtkImageData::SafeDownCast(this->GetInputDataObject(0, 0))
     : nullptr;
   const vtkMTimeType time = image ? image->GetMTime() : 0;
-  if (!image)
+  if (single && (time != this->ChannelDefaultRangesTime || this->ChannelDefaultRangesStale))
   {
-    this->ChannelDefaultRanges.clear();
+    this->ChannelDefaultRanges = image ? mcvol::RobustRanges(image) : std::string();
+    this->ChannelDefaultRangesTime = time;
+    this->ChannelDefaultRangesStale = false;
   }
-  else if (time != this->ChannelDefaultRangesTime)
-  {
-    this->ChannelDefaultRanges = mcvol::RobustRanges(image);
-  }
-  this->ChannelDefaultRangesTime = time;
   return this->ChannelDefaultRanges.c_str();
 }
 

@@ -332,6 +332,7 @@ protected:
   std::string ChannelStatus;
   std::string ChannelDefaultRanges;
   vtkMTimeType ChannelDefaultRangesTime = 0;
+  bool ChannelDefaultRangesStale = true; ///< not computed yet
   std::string BackendReport;
   std::string LevelOfDetailReport;
   std::string ChosenEstimator;

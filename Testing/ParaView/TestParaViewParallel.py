@@ -1,6 +1,9 @@
 """`mpiexec -n 2 pvbatch`: the figure3 scene split over two ranks, each
 rendering its piece, composited by ParaView in visibility order, equals the
-single-rank render within the Monte Carlo error.
+single-rank render within the Monte Carlo error. The channels' default
+colour functions (the representation's robust ranges, shown before any are
+set) and the robust range of a z^2 array span the same range in parallel as
+in the single-rank run: those of the whole data set, not of rank 0's piece.
 
 Run with the system Python (it starts pvbatch itself):
   python3 TestParaViewParallel.py --pvbatch pvbatch --mpiexec mpiexec
@@ -47,12 +50,19 @@ def main():
         print("$ " + " ".join(cmd))
         lines = [l for l in res.stdout.splitlines() if l.startswith(("pieces:", "samples:"))]
         print("\n".join(lines))
+        defaults = {}
+        for l in res.stdout.splitlines():
+            if l.startswith("default range "):
+                head, values = l[len("default range "):].split(": ")
+                defaults[head] = tuple(float(v) for v in values.split())
         if res.returncode != 0 or not os.path.exists(out):
             print(res.stdout[-20000:])
             raise SystemExit("FAIL: %s exited with %d" % (name, res.returncode))
         pieces = int([l for l in lines if l.startswith("pieces:")][0].split()[1])
+        runs_defaults[name] = defaults
         return read_png_rgb(out).astype(float), pieces
 
+    runs_defaults = {}
     parallel, pieces = run("parallel", 9, ranks=args.ranks)
     serial, serial_pieces = run("serial", 7)
     serial2, _ = run("serial2", 8)
@@ -67,6 +77,12 @@ def main():
 
     check(pieces == args.ranks and serial_pieces == 1,
           "the data is split into %d pieces in parallel (%d) and 1 serially (%d)" % (args.ranks, pieces, serial_pieces))
+    serial_defaults = runs_defaults["serial"]
+    parallel_defaults = runs_defaults["parallel"]
+    for name in ("channels:0", "channels:1", "channels:2", "height"):
+        want, got = serial_defaults.get(name), parallel_defaults.get(name)
+        check(want is not None and want[0] < want[1] and got == want,
+              "%s: the default range in parallel %s is the single-rank one %s" % (name, got, want))
     drawn = (serial.sum(axis=2) > 30).mean()
     check(drawn > 0.05, "the serial image shows the volume (%.1f%% of pixels)" % (100 * drawn))
     # Interior: drawn pixels more than 2 pixels away from the background;
