@@ -1062,7 +1062,8 @@ public:
   ///@{
   /**
    * What the backend holds on the GPU. GetDeviceMemory(): bytes of device
-   * memory (channels, textures, grids, tables, images); 0 on the CPU, before
+   * memory (channels, textures, grids, tables, images, and the stand-in for
+   * lighting across ranks when it has one); 0 on the CPU, before
    * the first render and after ReleaseGraphicsResources().
    * GetNumberOfDataUploads(): channel copies to the GPU since the backend
    * was created (one per channel per data change: progressive renders,
