@@ -344,18 +344,15 @@ bool vtkMultiChannelDemoSource::GetChannelRange(int channel, double range[2])
 bool vtkMultiChannelDemoSource::GetSuggestedTransferFunction(
   int channel, vtkColorTransferFunction* color, vtkPiecewiseFunction* opacity, double* unitDistance)
 {
-  if (!this->UpdateForQuery())
-  {
-    vtkErrorMacro("No suggested transfer function: the source has no valid output.");
-    return false;
-  }
+  // The output's own range; the overload reports a failed update or a bad
+  // channel.
+  double range[2] = { 0.0, 0.0 };
   const vtkInternals& in = *this->Internals;
-  if (channel < 0 || channel >= static_cast<int>(in.TransferFunctions.size()))
+  if (this->UpdateForQuery() && channel >= 0 && channel < static_cast<int>(in.Ranges.size()))
   {
-    vtkErrorMacro("Channel " << channel << " out of range [0, " << in.TransferFunctions.size() << ")");
-    return false;
+    range[0] = in.Ranges[static_cast<size_t>(channel)][0];
+    range[1] = in.Ranges[static_cast<size_t>(channel)][1];
   }
-  const double range[2] = { in.Ranges[static_cast<size_t>(channel)][0], in.Ranges[static_cast<size_t>(channel)][1] };
   return this->GetSuggestedTransferFunction(channel, range, color, opacity, unitDistance);
 }
 

@@ -80,20 +80,30 @@ struct Exchange
 
   /// Every process's values, concatenated in process order: on every process
   /// (toAll) or on process 0 alone (elsewhere empty).
+  /// Every process's count and where its part starts, in process order.
+  void Layout(vtkIdType length, std::vector<vtkIdType>& lengths, std::vector<vtkIdType>& offsets) const
+  {
+    const int n = this->Controller->GetNumberOfProcesses();
+    lengths.assign(static_cast<size_t>(n), 0);
+    offsets.assign(static_cast<size_t>(n), 0);
+    this->Controller->AllGather(&length, lengths.data(), 1);
+    for (int r = 1; r < n; ++r)
+    {
+      offsets[size_t(r)] = offsets[size_t(r - 1)] + lengths[size_t(r - 1)];
+    }
+  }
+
+  /// Every process's values, concatenated in process order: on every process
+  /// (toAll) or on process 0 alone (elsewhere empty).
   std::vector<double> Gather(const std::vector<double>& mine, bool toAll) const
   {
     if (!this->Parallel())
     {
       return mine;
     }
-    const int n = this->Controller->GetNumberOfProcesses();
-    vtkIdType length = static_cast<vtkIdType>(mine.size());
-    std::vector<vtkIdType> lengths(static_cast<size_t>(n)), offsets(static_cast<size_t>(n), 0);
-    this->Controller->AllGather(&length, lengths.data(), 1);
-    for (int r = 1; r < n; ++r)
-    {
-      offsets[size_t(r)] = offsets[size_t(r - 1)] + lengths[size_t(r - 1)];
-    }
+    const vtkIdType length = static_cast<vtkIdType>(mine.size());
+    std::vector<vtkIdType> lengths, offsets;
+    this->Layout(length, lengths, offsets);
     std::vector<double> all(static_cast<size_t>(offsets.back() + lengths.back()));
     // Gathering an empty buffer is fine; a null pointer is not.
     double dummy = 0.0;
@@ -114,18 +124,13 @@ struct Exchange
     {
       return mine;
     }
-    const int n = this->Controller->GetNumberOfProcesses();
-    vtkIdType length = static_cast<vtkIdType>(mine.size());
-    std::vector<vtkIdType> lengths(static_cast<size_t>(n)), offsets(static_cast<size_t>(n), 0);
-    this->Controller->AllGather(&length, lengths.data(), 1);
-    for (int r = 1; r < n; ++r)
-    {
-      offsets[size_t(r)] = offsets[size_t(r - 1)] + lengths[size_t(r - 1)];
-    }
+    const vtkIdType length = static_cast<vtkIdType>(mine.size());
+    std::vector<vtkIdType> lengths, offsets;
+    this->Layout(length, lengths, offsets);
     std::string all(static_cast<size_t>(offsets.back() + lengths.back()), '\0');
     char dummy = 0;
-    this->Controller->AllGatherV(mine.empty() ? &dummy : mine.data(), all.empty() ? &dummy : &all[0], length,
-      lengths.data(), offsets.data());
+    this->Controller->AllGatherV(
+      mine.empty() ? &dummy : mine.data(), all.empty() ? &dummy : &all[0], length, lengths.data(), offsets.data());
     return all;
   }
 
