@@ -13,8 +13,8 @@ the pieces' ranges), the estimator and sample sequence the product defaults.
 For each lighting (`--lighting none shadows`; shadows = Shade on, one
 directional scene light, ratio-tracking shadows, ambient 0.2, the lighting
 across ranks at its default) rank 0 prints one JSON line with:
-- `ref`: a reference image of `--ref-spp` samples per pixel (seed 1);
-- `converge`: still renders of s samples per pixel, each a fresh image (a new
+- `converge` (against a reference image of `--ref-spp` samples per pixel,
+  seed 1, which `--save` writes): still renders of s samples per pixel, each a fresh image (a new
   seed) traced in one Render() and composited once (the still camera refines
   on every rank without a composite per sample), wall time of the Render()
   and PSNR of the displayed 8-bit image against the reference, up to the
@@ -40,6 +40,7 @@ import statistics
 import subprocess
 import sys
 import tempfile
+import textwrap
 import time
 
 import numpy as np
@@ -75,7 +76,6 @@ def main():
     rank, ranks = controller.GetLocalProcessId(), controller.GetNumberOfProcesses()
     T.load_plugin()
 
-
     def reduce(values, op):
         """The element-wise reduction of `values` (floats) over the ranks, on every rank."""
         send, recv = vtkDoubleArray(), vtkDoubleArray()
@@ -86,7 +86,6 @@ def main():
         controller.AllReduce(send, recv, op)
         return [recv.GetValue(i) for i in range(recv.GetNumberOfTuples())]
 
-
     def broadcast_int(value):
         """Rank 0's integer on every rank (all ranks must render alike)."""
         a = vtkIntArray()
@@ -94,7 +93,6 @@ def main():
         if ranks > 1:
             controller.Broadcast(a, 0)
         return a.GetValue(0)
-
 
     def gather_rows(row):
         """Every rank's row of floats, on every rank (one all-reduce per rank)."""
@@ -104,28 +102,27 @@ def main():
             rows.append(reduce(mine, vtkCommunicator.SUM_OP))
         return rows
 
-
     # ---------------------------------------------------------------- the volume
     t0 = time.perf_counter()
     volume = simple.ProgrammableSource()
     volume.OutputDataSetType = "vtkImageData"
-    volume.ScriptRequestInformation = """
-    from paraview import util
-    from vtkmodules.vtkCommonExecutionModel import vtkAlgorithm
-    util.SetOutputWholeExtent(self, [0, %d, 0, %d, 0, %d])
-    self.GetOutputInformation(0).Set(vtkAlgorithm.CAN_PRODUCE_SUB_EXTENT(), 1)
-    """ % (args.dims[0] - 1, args.dims[1] - 1, args.dims[2] - 1)
-    volume.Script = """
-    from vtkmodules.vtkCommonExecutionModel import vtkStreamingDemandDrivenPipeline as sddp
-    from mcvol import vtkMultiChannelDemoSource
-    demo = vtkMultiChannelDemoSource()
-    demo.SetDataset(%r)
-    demo.SetDimensions(%d, %d, %d)
-    demo.SetNumberOfChannels(%d)
-    demo.InterleavedOff()
-    demo.UpdateExtent(self.GetOutputInformation(0).Get(sddp.UPDATE_EXTENT()))
-    self.GetOutput().ShallowCopy(demo.GetOutput())
-    """ % (args.dataset, *args.dims, args.channels)
+    volume.ScriptRequestInformation = textwrap.dedent("""
+        from paraview import util
+        from vtkmodules.vtkCommonExecutionModel import vtkAlgorithm
+        util.SetOutputWholeExtent(self, [0, %d, 0, %d, 0, %d])
+        self.GetOutputInformation(0).Set(vtkAlgorithm.CAN_PRODUCE_SUB_EXTENT(), 1)
+        """) % (args.dims[0] - 1, args.dims[1] - 1, args.dims[2] - 1)
+    volume.Script = textwrap.dedent("""
+        from vtkmodules.vtkCommonExecutionModel import vtkStreamingDemandDrivenPipeline as sddp
+        from mcvol import vtkMultiChannelDemoSource
+        demo = vtkMultiChannelDemoSource()
+        demo.SetDataset(%r)
+        demo.SetDimensions(%d, %d, %d)
+        demo.SetNumberOfChannels(%d)
+        demo.InterleavedOff()
+        demo.UpdateExtent(self.GetOutputInformation(0).Get(sddp.UPDATE_EXTENT()))
+        self.GetOutput().ShallowCopy(demo.GetOutput())
+        """) % (args.dataset, *args.dims, args.channels)
     volume.UpdatePipeline()
     piece = volume.GetClientSideObject().GetOutputDataObject(0)
     t_gen = time.perf_counter() - t0
@@ -137,9 +134,9 @@ def main():
     progress("pieces generated")
 
     # The dataset's suggested functions over the whole volume's range.
-    from mcvol import vtkMultiChannelDemoSource  # noqa: E402
-    from vtkmodules.vtkCommonDataModel import vtkPiecewiseFunction  # noqa: E402
-    from vtkmodules.vtkRenderingCore import vtkColorTransferFunction  # noqa: E402
+    from mcvol import vtkMultiChannelDemoSource
+    from vtkmodules.vtkCommonDataModel import vtkPiecewiseFunction
+    from vtkmodules.vtkRenderingCore import vtkColorTransferFunction
 
     probe = vtkMultiChannelDemoSource()
     probe.SetDataset(args.dataset)
@@ -200,7 +197,6 @@ def main():
     progress("first frame")
     mapper = T.local_mapper(rep)
 
-
     def device_memory_smi():
         try:
             out = subprocess.run(["nvidia-smi", "--query-compute-apps=pid,used_memory", "--format=csv,noheader,nounits"],
@@ -213,35 +209,30 @@ def main():
                 return float(mib)
         return -1.0
 
-
     shot = os.path.join(tempfile.gettempdir(), "mcvol-mpi-gpus-%d.png" % os.getpid())
-
 
     def displayed():
         """The composited 8-bit image (rank 0; every rank takes part)."""
         simple.SaveScreenshot(shot, view, ImageResolution=list(args.size), TransparentBackground=0)
         return T.read_png(shot).astype(np.float64) if rank == 0 else None
 
-
     def psnr(a, b):
         mse = float(np.mean((a - b) ** 2))
         return 99.0 if mse == 0 else 10.0 * np.log10(255.0 ** 2 / mse)
 
-
     def timed_render():
-        controller.Barrier() if ranks > 1 else None
+        if ranks > 1:
+            controller.Barrier()
         t = time.perf_counter()
         simple.Render(view)
         wall = time.perf_counter() - t
         trace, draw = reduce([mapper.GetLastTraceTime(), mapper.GetLastDrawTime()], vtkCommunicator.MAX_OP)
         return 1e3 * wall, 1e3 * trace, 1e3 * draw
 
-
     def restart(seed, spp, total):
         rep.Seed = seed
         rep.SamplesPerRender = spp
         rep.MaximumTotalSamples = total
-
 
     camera = view.GetActiveCamera()
     for lighting in args.lighting:
