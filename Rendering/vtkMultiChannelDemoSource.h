@@ -24,7 +24,9 @@
  * vtkMultiChannelVolumeMapper reads by default. Large versions (for example
  * 4 x 512^3) are made with SetDimensions. The source generates the update
  * extent it is asked for, the same voxels as those of the whole volume, so
- * under ParaView's MPI engine each rank generates its own piece alone.
+ * under ParaView's MPI engine each rank generates its own piece alone. The
+ * separate arrays carry their ranges in VTK's range cache, so ParaView's data
+ * information does not read billions of voxels again.
  *
  * Each channel has a suggested transfer function, defined over the channel's
  * data range normalised to [0, 1]; GetSuggestedTransferFunction maps it onto
