@@ -499,25 +499,6 @@ int vtkMultiChannelVolumeRepresentation::RequestData(
   }
   this->EmptyPieceSomewhere = all == 0;
   this->SetLightingStandInLevel(this->LightingStandInLevel);
-
-  // The channels' default ranges are the whole data set's (every process
-  // must colour its piece alike, and as one process would colour the whole
-  // image): computed here, where every process takes part, again whenever
-  // any process's input changed.
-  vtkImageData* image = vtkImageData::GetData(inputVector[0], 0);
-  const vtkMTimeType time = image ? image->GetMTime() : 0;
-  int changed = (time != this->ChannelDefaultRangesTime || this->ChannelDefaultRangesStale) ? 1 : 0;
-  int anyChanged = changed;
-  if (controller && controller->GetNumberOfProcesses() > 1)
-  {
-    controller->AllReduce(&changed, &anyChanged, 1, vtkCommunicator::MAX_OP);
-  }
-  if (anyChanged)
-  {
-    this->ChannelDefaultRanges = mcvol::RobustRanges(image, controller);
-    this->ChannelDefaultRangesTime = time;
-    this->ChannelDefaultRangesStale = false;
-  }
   return result;
 }
 
@@ -963,23 +944,40 @@ void vtkMultiChannelVolumeRepresentation::UpdateMapperParameters()
 }
 
 //------------------------------------------------------------------------------
-const char* vtkMultiChannelVolumeRepresentation::GetChannelDefaultRanges()
+void vtkMultiChannelVolumeRepresentation::ComputeChannelDefaultRanges()
 {
-  // Computed by RequestData, in the update every process runs. A single
-  // process may be asked before its first update (or after its input
-  // changed without one): it computes them from the input as the source
-  // produced it.
-  vtkMultiProcessController* controller = vtkMultiProcessController::GetGlobalController();
-  const bool single = !controller || controller->GetNumberOfProcesses() <= 1;
+  // The input as the source produced it (the representation's own copy is
+  // made only when the view updates). Under MPI every process runs this
+  // command together (the proxy invokes it on all of them), so the ranges
+  // are the whole data set's: every process and a single one spread the
+  // default functions alike. Computed again only when an input changed.
   vtkImageData* image = this->GetNumberOfInputConnections(0) > 0
     ? vtkImageData::SafeDownCast(this->GetInputDataObject(0, 0))
     : nullptr;
   const vtkMTimeType time = image ? image->GetMTime() : 0;
-  if (single && (time != this->ChannelDefaultRangesTime || this->ChannelDefaultRangesStale))
+  int changed = (time != this->ChannelDefaultRangesTime || this->ChannelDefaultRangesStale) ? 1 : 0;
+  int anyChanged = changed;
+  vtkMultiProcessController* controller = vtkMultiProcessController::GetGlobalController();
+  if (controller && controller->GetNumberOfProcesses() > 1)
   {
-    this->ChannelDefaultRanges = image ? mcvol::RobustRanges(image) : std::string();
+    controller->AllReduce(&changed, &anyChanged, 1, vtkCommunicator::MAX_OP);
+  }
+  if (anyChanged)
+  {
+    this->ChannelDefaultRanges = mcvol::RobustRanges(image, controller);
     this->ChannelDefaultRangesTime = time;
     this->ChannelDefaultRangesStale = false;
+  }
+}
+
+const char* vtkMultiChannelVolumeRepresentation::GetChannelDefaultRanges()
+{
+  // A single process computes them when asked; several wait for the
+  // collective ComputeChannelDefaultRanges.
+  vtkMultiProcessController* controller = vtkMultiProcessController::GetGlobalController();
+  if (!controller || controller->GetNumberOfProcesses() <= 1)
+  {
+    this->ComputeChannelDefaultRanges();
   }
   return this->ChannelDefaultRanges.c_str();
 }

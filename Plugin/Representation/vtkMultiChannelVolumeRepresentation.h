@@ -261,8 +261,11 @@ public:
   /// The robust range of every point array and component of the input, as
   /// mcvol-render's "range": "auto" computes it, one line each
   /// ("name\tcomponent\tlo\thi"): where the client spreads a channel's
-  /// default transfer functions when it first shows the channel.
+  /// default transfer functions when it first shows the channel. Under MPI
+  /// the whole data set's, after ComputeChannelDefaultRanges(), which every
+  /// process must call together (the proxy does, before it reads them).
   const char* GetChannelDefaultRanges();
+  void ComputeChannelDefaultRanges();
   double GetImportanceMemory();
   double GetImportanceOverflows();
   ///@}

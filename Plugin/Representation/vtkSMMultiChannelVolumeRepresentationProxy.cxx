@@ -199,10 +199,11 @@ bool vtkSMMultiChannelVolumeRepresentationProxy::DefaultRange(const char* array,
     vtkSMProperty* prop = this->GetProperty("ChannelDefaultRanges");
     if (prop && this->ObjectsCreated)
     {
-      // The ranges are computed in the representation's update, which every
-      // server process runs (the whole data set's ranges under MPI): update
-      // first, since the channels may be chosen before the first render.
+      // Computed on every server process together (the whole data set's
+      // ranges under MPI), from the updated input: the channels may be
+      // chosen before the first render.
       this->UpdatePipeline();
+      this->InvokeCommand("ComputeChannelDefaultRanges");
       this->UpdatePropertyInformation(prop);
       const char* text = vtkSMPropertyHelper(prop).GetNumberOfElements() > 0
         ? vtkSMPropertyHelper(prop).GetAsString()
