@@ -1356,7 +1356,7 @@ bool vtkMultiChannelVolumeMapper::UpdateStandIn(RenderPass& pass, StandInStep st
     // Levels of detail above 0 render the piece alone.
     if (standIn && pass.Level == 0)
     {
-      in.Scene.setOutside(standIn, scale, offset);
+      in.Scene.setOutside(standIn, scale, offset, in.StandIn.IsExact());
     }
   }
   catch (const std::exception& e)

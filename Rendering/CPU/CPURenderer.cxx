@@ -49,6 +49,7 @@ void renderRows(const SceneView& s, const CameraView& cam, const FrameParams& fp
   // The even half is neither read nor written by a render that adds no
   // sample of even index (as on the device).
   const bool addsEven = out.even && addedEvenSamples(previous, fp.samplesPerPixel) > 0u;
+  const SceneView& light = lightView(s);
 #pragma omp parallel num_threads(threads > 0 ? threads : omp_get_max_threads()) \
   reduction(+ : dda, tentative, real, samples, scattering, shadowRays, gradients, importance, overflows)
   {
@@ -78,23 +79,23 @@ void renderRows(const SceneView& s, const CameraView& cam, const FrameParams& fp
           ri.segments = seg;
           ri.count = count;
           ri.total = pool->totals[p];
-          renderPixel<Mode, Lit, true>(s, cam, fp, x, y, z, c, sum, &ri, evenOut);
+          renderPixel<Mode, Lit, true>(s, light, cam, fp, x, y, z, c, sum, &ri, evenOut);
         }
         else
         {
           switch (unlit)
           {
             case 1:
-              renderPixel<Mode, Lit, false, 1>(s, cam, fp, x, y, z, c, sum, nullptr, evenOut);
+              renderPixel<Mode, Lit, false, 1>(s, light, cam, fp, x, y, z, c, sum, nullptr, evenOut);
               break;
             case 2:
-              renderPixel<Mode, Lit, false, 2>(s, cam, fp, x, y, z, c, sum, nullptr, evenOut);
+              renderPixel<Mode, Lit, false, 2>(s, light, cam, fp, x, y, z, c, sum, nullptr, evenOut);
               break;
             case 3:
-              renderPixel<Mode, Lit, false, 3>(s, cam, fp, x, y, z, c, sum, nullptr, evenOut);
+              renderPixel<Mode, Lit, false, 3>(s, light, cam, fp, x, y, z, c, sum, nullptr, evenOut);
               break;
             default:
-              renderPixel<Mode, Lit>(s, cam, fp, x, y, z, c, sum, nullptr, evenOut);
+              renderPixel<Mode, Lit>(s, light, cam, fp, x, y, z, c, sum, nullptr, evenOut);
               break;
           }
         }

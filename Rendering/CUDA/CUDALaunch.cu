@@ -54,7 +54,9 @@ __global__ void renderOptimizedKernel(const __grid_constant__ SceneView s, const
     ri.segments = seg;
     ri.count = count;
     ri.total = total;
-    renderIntoPixel<Mode, Lit, true, 0>(s, cam, fp, x, y, z, p, c, &ri, accum, sums, even, evenSums, previous);
+    // The general kernels' light view: lightView() reads through a pointer.
+    renderIntoPixel<Mode, Lit, true, 0>(
+      s, lightView(s), cam, fp, x, y, z, p, c, &ri, accum, sums, even, evenSums, previous);
   }
   // Always counted (one atomic per warp and counter): the overflow count is
   // needed whatever the caller asked for.
@@ -128,11 +130,12 @@ void launchRender(BlendMode mode, bool count, bool lit, bool plain, const SceneV
 }
 
 /// Whether the plain kernels can render `s`: scalar channels only, linear or
-/// nearest interpolation, and no lighting across pieces (kStandInCode,
-/// Lighting.h).
-bool plainScene(const SceneView& s)
+/// nearest interpolation, and no light path that crosses a piece's boundary
+/// (kStandInCode, Lighting.h): no stand-in, or an exact one of plain
+/// channels (`outsidePlain`, OutsideCopy::Plain).
+bool plainScene(const SceneView& s, bool outsidePlain)
 {
-  bool plain = !s.volume.cubic && !s.outside;
+  bool plain = !s.volume.cubic && (!s.outside || (s.outsideExact && outsidePlain));
   for (int n = 0; n < s.volume.numChannels; ++n)
   {
     plain = plain && s.volume.channels[n].format == ChannelFormat::Scalar;
@@ -437,6 +440,7 @@ void CUDARenderer::render(const Scene& scene, const Camera& camera, const Render
   k.depth = in.deviceDepth(depth, P);
   k.previous = accum.samples();
   k.counters = in.Counters.ptr;
+  k.light = s.outside && s.outsideExact ? &in.Outside.HostView : &s;
   k.block = in.Block;
   k.grid = imageGrid(k.block, camera.width, camera.height);
   const FrameParams fp = frameParams(settings, accum.samples());
@@ -457,7 +461,7 @@ void CUDARenderer::render(const Scene& scene, const Camera& camera, const Render
   }
   else
   {
-    launchRender(s.blend.mode, count, lit, in.PlainKernels && plainScene(s), s, cam, fp, k);
+    launchRender(s.blend.mode, count, lit, in.PlainKernels && plainScene(s, in.Outside.Plain), s, cam, fp, k);
   }
   MCVOL_CUDA(cudaGetLastError());
 
@@ -572,7 +576,7 @@ void CUDARenderer::Internal::launchPilots(const Scene& scene, const Camera& came
     k.accum = this->PilotImages.ptr + image * P;
     k.counters = this->PilotCounters.ptr + 9 * j;
     k.stream = this->PilotStreams[j % kPilotStreams];
-    launchRender(scene.view().blend.mode, true, false, this->PlainKernels && plainScene(s), s, cam, fp, k);
+    launchRender(scene.view().blend.mode, true, false, this->PlainKernels && plainScene(s, false), s, cam, fp, k);
     MCVOL_CUDA(cudaGetLastError());
     image += size_t(2 * n);
   }

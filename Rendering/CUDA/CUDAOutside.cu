@@ -119,11 +119,17 @@ void CUDARenderer::Internal::linkOutside(const Scene& scene, const Camera& camer
     c.textureScale = 1.f;
     c.format = src.format;
   }
+  copy.Plain = !o.volume.cubic;
+  for (int n = 0; n < o.volume.numChannels; ++n)
+  {
+    copy.Plain = copy.Plain && o.volume.channels[n].format == ChannelFormat::Scalar;
+  }
   o.tables.texels = copy.Tables.ptr;
   o.grid.majorants = copy.Majorants.ptr;
   o.importance = ImportanceView();
   copy.View.resize(1);
   MCVOL_CUDA(cudaMemcpy(copy.View.ptr, &o, sizeof(SceneView), cudaMemcpyHostToDevice));
+  copy.HostView = o;
   s.outside = copy.View.ptr;
 }
 } // namespace mcvol

@@ -37,6 +37,9 @@ struct RenderLaunch
   double* evenSums = nullptr;             ///< its sums (with even)
   uint32_t previous = 0;                  ///< samples already in the mean
   unsigned long long* counters = nullptr; ///< work counters (counting kernels)
+  /// Lit kernels: the view light paths run in (lightView(): the exact
+  /// stand-in's view with its device pointers, or the render's own view).
+  const SceneView* light = nullptr;
 };
 
 namespace
@@ -60,14 +63,14 @@ __device__ MCVOL_FORCE_INLINE void storePixel(float4* mean, double* sums, size_t
 /// estimate's even half when `even` is not null; the even half is neither
 /// read nor written by a render that adds no sample of even index.
 template <BlendMode Mode, bool Lit, bool Optimized, int Unlit>
-__device__ MCVOL_FORCE_INLINE void renderIntoPixel(const SceneView& s, const CameraView& cam, const FrameParams& fp,
-  int x, int y, float z, size_t p, RayCounters& c, const RayImportance* ri, float4* accum, double* sums, float4* even,
-  double* evenSums, uint32_t previous)
+__device__ MCVOL_FORCE_INLINE void renderIntoPixel(const SceneView& s, const SceneView& light, const CameraView& cam,
+  const FrameParams& fp, int x, int y, float z, size_t p, RayCounters& c, const RayImportance* ri, float4* accum,
+  double* sums, float4* even, double* evenSums, uint32_t previous)
 {
   const bool addsEven = even && addedEvenSamples(previous, fp.samplesPerPixel) > 0u;
   Vec4d sum = pixelSum(sums, p, previous);
   Vec4d evenSum = addsEven ? pixelSum(evenSums, p, evenSampleCount(previous)) : Vec4d();
-  renderPixel<Mode, Lit, Optimized, Unlit>(s, cam, fp, x, y, z, c, sum, ri, addsEven ? &evenSum : nullptr);
+  renderPixel<Mode, Lit, Optimized, Unlit>(s, light, cam, fp, x, y, z, c, sum, ri, addsEven ? &evenSum : nullptr);
   const uint32_t total = previous + uint32_t(fp.samplesPerPixel);
   storePixel(accum, sums, p, sum, total);
   if (addsEven)
@@ -82,8 +85,8 @@ __device__ MCVOL_FORCE_INLINE void renderIntoPixel(const SceneView& s, const Cam
 /// atomic per warp and counter). Lit false compiles the lighting out; Unlit
 /// is the unlit estimator's code (unlitEstimator(), Integrator.h).
 template <BlendMode Mode, bool Count, bool Lit, int Unlit>
-__device__ __forceinline__ void renderKernelBody(const SceneView& s, const CameraView& cam, const FrameParams& fp,
-  const float* __restrict__ depth, float4* __restrict__ accum, double* __restrict__ sums, float4* __restrict__ even,
+__device__ __forceinline__ void renderKernelBody(const SceneView& s, const SceneView& light, const CameraView& cam,
+  const FrameParams& fp, const float* __restrict__ depth, float4* __restrict__ accum, double* __restrict__ sums, float4* __restrict__ even,
   double* __restrict__ evenSums, uint32_t previous, unsigned long long* __restrict__ counters)
 {
   const int x = int(blockIdx.x * blockDim.x + threadIdx.x);
@@ -116,7 +119,8 @@ __device__ __forceinline__ void renderKernelBody(const SceneView& s, const Camer
   {
     const size_t p = size_t(y) * size_t(cam.width) + size_t(x);
     const float z = depth ? depth[p] : 1.f;
-    renderIntoPixel<Mode, Lit, false, Unlit>(s, cam, f, x, y, z, p, c, nullptr, accum, sums, even, evenSums, previous);
+    renderIntoPixel<Mode, Lit, false, Unlit>(
+      s, light, cam, f, x, y, z, p, c, nullptr, accum, sums, even, evenSums, previous);
   }
   if (Count)
   {
@@ -144,17 +148,33 @@ __device__ __forceinline__ void renderKernelBody(const SceneView& s, const Camer
   }
 }
 
-/// The render kernel: renderKernelBody() on the kernel's parameters.
-template <BlendMode Mode, bool Count, bool Lit, int Unlit = 0>
+/// The unlit render kernel: renderKernelBody() on the kernel's parameters.
+template <BlendMode Mode, bool Count, int Unlit = 0>
 __global__ void renderKernel(const __grid_constant__ SceneView s, const __grid_constant__ CameraView cam,
   const __grid_constant__ FrameParams fp, const float* __restrict__ depth, float4* __restrict__ accum,
   double* __restrict__ sums, float4* __restrict__ even, double* __restrict__ evenSums, uint32_t previous,
   unsigned long long* __restrict__ counters)
 {
-  renderKernelBody<Mode, Count, Lit, Unlit>(s, cam, fp, depth, accum, sums, even, evenSums, previous, counters);
+  renderKernelBody<Mode, Count, false, Unlit>(s, s, cam, fp, depth, accum, sums, even, evenSums, previous, counters);
 }
 
-/// Launches renderKernel<Mode, Count, Lit, Unlit> with `count` as Count.
+/// The lit render kernel, with the view its light paths run in
+/// (RenderLaunch::light) as a parameter of its own: read through a pointer
+/// that may be s or a stand-in in device memory, every field of the view
+/// would be a generic load held in a register (150 to 224 registers
+/// per thread, ptxas --resource-usage, sm_90); as a parameter, its fields
+/// stay constant-bank operands, as s's do.
+template <BlendMode Mode, bool Count, int Unlit = 0>
+__global__ void litRenderKernel(const __grid_constant__ SceneView s, const __grid_constant__ SceneView light,
+  const __grid_constant__ CameraView cam, const __grid_constant__ FrameParams fp, const float* __restrict__ depth,
+  float4* __restrict__ accum, double* __restrict__ sums, float4* __restrict__ even, double* __restrict__ evenSums,
+  uint32_t previous, unsigned long long* __restrict__ counters)
+{
+  renderKernelBody<Mode, Count, true, Unlit>(s, light, cam, fp, depth, accum, sums, even, evenSums, previous, counters);
+}
+
+/// Launches renderKernel<Mode, Count, Unlit>, or litRenderKernel when Lit,
+/// with `count` as Count.
 template <BlendMode Mode, bool Lit, int Unlit>
 void launchRenderKernel(
   bool count, const SceneView& s, const CameraView& cam, const FrameParams& fp, const RenderLaunch& k)
@@ -162,9 +182,16 @@ void launchRenderKernel(
   withFlag(count,
     [&](auto counted)
     {
-      renderKernel<Mode, decltype(counted)::value, Lit, Unlit>
-        <<<k.grid, k.block, 0, k.stream>>>(
+      if constexpr (Lit)
+      {
+        litRenderKernel<Mode, decltype(counted)::value, Unlit><<<k.grid, k.block, 0, k.stream>>>(
+          s, k.light ? *k.light : s, cam, fp, k.depth, k.accum, k.sums, k.even, k.evenSums, k.previous, k.counters);
+      }
+      else
+      {
+        renderKernel<Mode, decltype(counted)::value, Unlit><<<k.grid, k.block, 0, k.stream>>>(
           s, cam, fp, k.depth, k.accum, k.sums, k.even, k.evenSums, k.previous, k.counters);
+      }
     });
 }
 

@@ -96,7 +96,7 @@ void Scene::setLighting(const LightingDesc& d)
 
 namespace mcvol
 {
-void Scene::setOutside(const Scene* outside, const double scale[3], const double offset[3])
+void Scene::setOutside(const Scene* outside, const double scale[3], const double offset[3], bool exact)
 {
   if (outside == this)
   {
@@ -114,6 +114,7 @@ void Scene::setOutside(const Scene* outside, const double scale[3], const double
     }
   }
   this->Outside = outside;
+  this->OutsideExact = outside && exact;
   for (int a = 0; a < 3; ++a)
   {
     this->OutsideScale[a] = outside ? sc[a] : 1.0;

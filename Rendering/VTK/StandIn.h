@@ -93,6 +93,8 @@ public:
   void Release();
 
   size_t Bytes() const;
+  /// Whether the stand-in built is level 0 (Scene::setOutside's `exact`).
+  bool IsExact() const { return this->Have && this->Split && this->Resolved == 0; }
   double LastGatherSeconds() const { return this->GatherSeconds; }
   int Builds() const { return this->BuildCount; }
   const std::string& Report() const;

@@ -112,6 +112,7 @@ inline bool prepareOutside(const Scene& scene, const Camera& camera, SceneView& 
   o.outside = nullptr;
   s.outsideScale = Vec3f(float(scale[0]), float(scale[1]), float(scale[2]));
   s.outsideOffset = Vec3f(float(offset[0]), float(offset[1]), float(offset[2]));
+  s.outsideExact = scene.outsideExact();
   return true;
 }
 

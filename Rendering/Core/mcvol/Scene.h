@@ -238,9 +238,19 @@ public:
    * stand-in is not copied: it must outlive its use. Null (default) clears
    * it. Throws std::invalid_argument for this Scene itself, or a scale that
    * is not positive and finite or an offset that is not finite.
+   *
+   * `exact`: the stand-in holds this piece's voxels as they are, at this
+   * Scene's resolution, classified through the same tables (an exact
+   * stand-in: the whole volume). Light paths then continue in the stand-in
+   * from their first vertex (SceneView::outsideExact): one march per
+   * shadow ray instead of one in the piece and one beyond it, the same
+   * expectation. Without it (a coarse stand-in) the part of a light path
+   * inside the piece reads the piece.
    */
-  void setOutside(const Scene* outside, const double scale[3] = nullptr, const double offset[3] = nullptr);
+  void setOutside(
+    const Scene* outside, const double scale[3] = nullptr, const double offset[3] = nullptr, bool exact = false);
   const Scene* outside() const { return this->Outside; }
+  bool outsideExact() const { return this->OutsideExact; }
   /// The map given to setOutside (scale 1, offset 0 without one).
   const double* outsideScale() const { return this->OutsideScale; }
   const double* outsideOffset() const { return this->OutsideOffset; }
@@ -304,6 +314,7 @@ private:
   const Scene* Outside = nullptr;
   double OutsideScale[3] = { 1, 1, 1 };
   double OutsideOffset[3] = { 0, 0, 0 };
+  bool OutsideExact = false;
   std::array<ChannelSource, kMaxChannels> Channels{};
   std::array<bool, kMaxChannels> HasTF{};
   std::array<bool, kMaxChannels> MajorantDirty{};

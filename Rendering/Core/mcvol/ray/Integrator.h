@@ -68,7 +68,8 @@ struct FrameParams
  * optimization with the pixel's list `imp`; without it the tracking code is
  * exactly the unoptimized one (the null list folds away). `even` (optional)
  * is the running sum of the samples of even index firstSample + k, the half
- * the error estimate keeps (Accumulator::estimatedMSE).
+ * the error estimate keeps (Accumulator::estimatedMSE). `light` is
+ * lightView(s), the view lit paths run in (unlit renders never read it).
  * Unlit (a compile-time choice too, so that each kernel carries only its
  * estimator's code and registers; unlitEstimator() decides it): 1 scores
  * unlit camera rays with trackExpected() and lit ones with
@@ -76,8 +77,8 @@ struct FrameParams
  * trackUnbiasedMarch()'s control variates, 0 with the collision estimator.
  */
 template <BlendMode Mode, bool Lit = false, bool Optimized = false, int Unlit = 0>
-MCVOL_FUNC void renderPixel(const SceneView& s, const CameraView& cam, const FrameParams& fp, int x, int y,
-  float depth, RayCounters& c, Vec4d& sum, const RayImportance* imp = nullptr, Vec4d* even = nullptr)
+MCVOL_FUNC void renderPixel(const SceneView& s, const SceneView& light, const CameraView& cam, const FrameParams& fp,
+  int x, int y, float depth, RayCounters& c, Vec4d& sum, const RayImportance* imp = nullptr, Vec4d* even = nullptr)
 {
   const RayImportance* ri = Optimized ? imp : nullptr;
   ShadowCounters sc;
@@ -108,11 +109,11 @@ MCVOL_FUNC void renderPixel(const SceneView& s, const CameraView& cam, const Fra
     Vec4f v;
     if (Lit && Unlit == 1 && !Optimized && Mode != BlendMode::Composite)
     {
-      v = traceLitExpected<Mode>(s, fp.tracker, ray.o, ray.d, ray.world, ray.tmax, rng, c, sc);
+      v = traceLitExpected<Mode>(s, light, fp.tracker, ray.o, ray.d, ray.world, ray.tmax, rng, c, sc);
     }
     else if (Lit)
     {
-      v = traceLitSample<Mode, Optimized>(s, fp.tracker, ray.o, ray.d, ray.world, ray.tmax, rng, c, sc, ri);
+      v = traceLitSample<Mode, Optimized>(s, light, fp.tracker, ray.o, ray.d, ray.world, ray.tmax, rng, c, sc, ri);
     }
     else if (Unlit == 1 && !Optimized && Mode != BlendMode::Composite)
     {

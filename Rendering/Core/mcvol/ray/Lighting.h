@@ -208,13 +208,15 @@ MCVOL_FUNC float boxExit(const VolumeView& vol, Vec3f x, Vec3f d)
 }
 
 /**
- * Whether this compilation carries the lighting across pieces
- * (SceneView::outside). The plain kernels' device code does not
- * (CUDARenderKernels.h): a lit path that may switch to the stand-in keeps a
- * pointer to its view and a second shadow march, which takes the lit
- * kernels from about 150 to 225 registers per thread (ptxas
- * --resource-usage, sm_90) and spills the max and mix ones. The launcher
- * sends a scene with a stand-in to the general kernels.
+ * Whether this compilation carries the lighting across a piece's boundary
+ * (a light path that leaves the piece for its stand-in,
+ * SceneView::outside). The plain kernels' device code does not
+ * (CUDARenderKernels.h): a second shadow march and a second tracking take
+ * the lit kernels from about 150 to 225 registers per thread (ptxas
+ * --resource-usage, sm_90) and spill the max and mix ones. They still
+ * render an exact stand-in (SceneView::outsideExact), whose paths move
+ * into it at their first vertex and never cross a boundary; the launcher
+ * sends a scene with a coarse stand-in to the general kernels.
  */
 #if defined(__CUDA_ARCH__) && defined(MCVOL_DEVICE_PLAIN_CHANNELS)
 constexpr bool kStandInCode = false;
@@ -310,11 +312,12 @@ MCVOL_HOT float scatterFunction(
  * a phase-sampled direction, tracked with the collision estimator, up to
  * maxDepth scattering events, with Russian roulette from the third. Returns
  * the radiance. Optimized: the render runs the visibility optimization
- * (only then can a light ray have one, optimizedShadow()).
+ * (only then can a light ray have one, optimizedShadow()). `light` is
+ * lightView(s), the view the path runs in.
  */
 template <BlendMode Mode, bool Optimized>
-MCVOL_HOT Vec3f litPathFrom(const SceneView& s, Tracker tracker, Vec3f o, Vec3f d, Vec3f w, Hit hit, bool emitFirst,
-  Rng& rng, RayCounters& c, ShadowCounters& sc)
+MCVOL_HOT Vec3f litPathFrom(const SceneView& s, const SceneView& light, Tracker tracker, Vec3f o, Vec3f d, Vec3f w,
+  Hit hit, bool emitFirst, Rng& rng, RayCounters& c, ShadowCounters& sc)
 {
   const ShadowEstimator est =
     s.lighting.shadowEstimator == 1 ? ShadowEstimator::Delta : ShadowEstimator::Ratio;
@@ -323,7 +326,16 @@ MCVOL_HOT Vec3f litPathFrom(const SceneView& s, Tracker tracker, Vec3f o, Vec3f 
   // The view the path is in: this piece, or, once a scattered ray has left
   // the piece and collided beyond it, the stand-in of the whole volume
   // (SceneView::outside), whose own outside is null.
-  const SceneView* v = &s;
+  const SceneView* v = &light;
+  if (s.outside && s.outsideExact)
+  {
+    // `light` is the exact stand-in, which holds this piece as it is: the
+    // whole path runs in it, one march per ray, the same expectation (the
+    // stand-in's hit point is the piece's, t in world units along either
+    // direction).
+    o = toOutside(s, o);
+    d = toOutsideDirection(s, d);
+  }
   for (int depth = 0;; ++depth)
   {
     if (depth > 0)
@@ -497,8 +509,8 @@ MCVOL_FUNC void foldShadowCounters(RayCounters& c, ShadowCounters& sc)
  * direction, `d` its index-space image.
  */
 template <BlendMode Mode, bool Optimized = false>
-MCVOL_HOT Vec4f traceLitSample(const SceneView& s, Tracker tracker, Vec3f o, Vec3f d, Vec3f w, float tmax, Rng& rng,
-  RayCounters& c, ShadowCounters& sc, const RayImportance* imp = nullptr);
+MCVOL_HOT Vec4f traceLitSample(const SceneView& s, const SceneView& light, Tracker tracker, Vec3f o, Vec3f d, Vec3f w,
+  float tmax, Rng& rng, RayCounters& c, ShadowCounters& sc, const RayImportance* imp = nullptr);
 
 /**
  * Lighting under post-render compositing: each active channel lit as if it
@@ -518,8 +530,9 @@ MCVOL_HOT Vec4f traceLitComposite(const SceneView& s, Tracker tracker, Vec3f o, 
   Vec4f out;
   for (int i = 0; i < s.numActive; ++i)
   {
+    const SceneView& alone = one.alone(s.active[i]);
     const Vec4f v =
-      traceLitSample<BlendMode::Density, Optimized>(one.alone(s.active[i]), tracker, o, d, w, tmax, rng, c, sc, imp);
+      traceLitSample<BlendMode::Density, Optimized>(alone, lightView(alone), tracker, o, d, w, tmax, rng, c, sc, imp);
     out.r += v.r;
     out.g += v.g;
     out.b += v.b;
@@ -529,8 +542,8 @@ MCVOL_HOT Vec4f traceLitComposite(const SceneView& s, Tracker tracker, Vec3f o, 
 }
 
 template <BlendMode Mode, bool Optimized>
-MCVOL_HOT Vec4f traceLitSample(const SceneView& s, Tracker tracker, Vec3f o, Vec3f d, Vec3f w, float tmax, Rng& rng,
-  RayCounters& c, ShadowCounters& sc, const RayImportance* imp)
+MCVOL_HOT Vec4f traceLitSample(const SceneView& s, const SceneView& light, Tracker tracker, Vec3f o, Vec3f d, Vec3f w,
+  float tmax, Rng& rng, RayCounters& c, ShadowCounters& sc, const RayImportance* imp)
 {
   if (Mode == BlendMode::Composite)
   {
@@ -541,7 +554,7 @@ MCVOL_HOT Vec4f traceLitSample(const SceneView& s, Tracker tracker, Vec3f o, Vec
                                              : trackNDDA<Mode>(s, o, d, 0.f, tmax, rng, c, imp);
   if (hit.found())
   {
-    const Vec3f radiance = litPathFrom<Mode, Optimized>(s, tracker, o, d, w, hit, true, rng, c, sc);
+    const Vec3f radiance = litPathFrom<Mode, Optimized>(s, light, tracker, o, d, w, hit, true, rng, c, sc);
     out = Vec4f{ radiance.x, radiance.y, radiance.z, 1.f };
   }
   foldShadowCounters(c, sc);
@@ -651,8 +664,8 @@ MCVOL_HOT LitPointOptics litPointOptics(const SceneView& s, Vec3f p, uint32_t pr
  * loop carries no lighting code.
  */
 template <BlendMode Mode>
-MCVOL_HOT Vec4f traceLitExpected(const SceneView& s, Tracker tracker, Vec3f o, Vec3f d, Vec3f w, float tmax, Rng& rng,
-  RayCounters& c, ShadowCounters& sc)
+MCVOL_HOT Vec4f traceLitExpected(const SceneView& s, const SceneView& light, Tracker tracker, Vec3f o, Vec3f d, Vec3f w,
+  float tmax, Rng& rng, RayCounters& c, ShadowCounters& sc)
 {
   if (s.numActive == 0)
   {
@@ -713,7 +726,7 @@ MCVOL_HOT Vec4f traceLitExpected(const SceneView& s, Tracker tracker, Vec3f o, V
   if (hit.found())
   {
     ++c.real;
-    L += litPathFrom<Mode, false>(s, tracker, o, d, w, hit, false, rng, c, sc);
+    L += litPathFrom<Mode, false>(s, light, tracker, o, d, w, hit, false, rng, c, sc);
   }
   foldShadowCounters(c, sc);
   return premultipliedRGBA(L, T);

@@ -223,7 +223,22 @@ struct SceneView
   /// outsideOffset (per axis); index directions scale by outsideScale.
   Vec3f outsideScale = Vec3f(1.f, 1.f, 1.f);
   Vec3f outsideOffset;
+  /**
+   * The stand-in holds this piece exactly (Scene::setOutside's `exact`):
+   * a light path moves into it at its first vertex (litPathFrom()), so
+   * every shadow ray and scattered ray is one march through the whole
+   * volume and the kernels need no second march (kStandInCode).
+   */
+  bool outsideExact = false;
 };
+
+/// The view a light path runs in (litPathFrom()): s's exact stand-in
+/// (SceneView::outsideExact), else s. A GPU kernel takes it as a parameter
+/// of its own, so that its reads stay constant-bank operands as s's do.
+MCVOL_FUNC const SceneView& lightView(const SceneView& s)
+{
+  return s.outside && s.outsideExact ? *s.outside : s;
+}
 
 /// An index point of view s in its stand-in's index space (SceneView::outside).
 MCVOL_FUNC Vec3f toOutside(const SceneView& s, Vec3f p)
