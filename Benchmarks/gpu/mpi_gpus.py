@@ -28,7 +28,10 @@ across ranks at its default) rank 0 prints one JSON line with:
   `--still-spp` samples per pixel, and the samples per second it gives;
 - `memory`: per rank, the backend's device memory (GetDeviceMemory), the
   process's device memory as nvidia-smi reports it, the piece's voxels and
-  the process's peak host memory.
+  the process's peak host memory;
+- `outline_ms`: the median wall time of a moving-camera Render() of
+  ParaView's own Outline representation alone, at the same size and rank
+  count: the cost of a composited frame, whatever it draws.
 
     mpiexec -n 2 pvbatch --symmetric Benchmarks/gpu/mpi_gpus.py --dims 512 512 512 --channels 4
 """
@@ -235,6 +238,24 @@ def main():
         rep.MaximumTotalSamples = total
 
     camera = view.GetActiveCamera()
+
+    # ParaView's own Outline representation alone at the same size and rank
+    # count, on the moving camera: what a composited frame costs whatever it
+    # draws (IceT, the read-back and draw of the window), the floor under
+    # any representation's frame.
+    outline = simple.Show(simple.Outline(Input=volume), view)
+    rep.Visibility = 0
+    simple.Render(view)
+    walls = []
+    for _ in range(args.frames):
+        camera.Azimuth(0.5)
+        walls.append(timed_render()[0])
+    for _ in range(args.frames):
+        camera.Azimuth(-0.5)
+    outline.Visibility = 0
+    rep.Visibility = 1
+    outline_ms = round(statistics.median(walls), 3)
+
     for lighting in args.lighting:
         if lighting == "shadows":
             view.UseLight = 0  # the light kit off: the scene light alone
@@ -302,6 +323,7 @@ def main():
         result["generate_s"] = round(t_gen, 2)
         result["first_frame_s"] = round(t_first, 2)
         result["stand_in"] = T.info(rep, "LightingStandInReport") if lighting != "none" else ""
+        result["outline_ms"] = outline_ms
         if rank == 0:
             print("RESULT " + json.dumps(result), flush=True)
     print("rank %d: %s" % (rank, mapper.GetBackendReport()), flush=True)

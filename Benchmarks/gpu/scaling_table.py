@@ -15,18 +15,19 @@ def main(path):
         print("\n%s, %s\n" % (one["label"] or one["dataset"], "unlit" if lighting == "none" else "lit (" + lighting + ")"))
         print("| GPUs | time to %g dB (ms, spp) | speed-up | its trace (ms) | moving frame (ms) | trace / draw (ms) |"
               " still frame of %d spp (ms) | its trace (ms) | samples/s (10^6) | backend memory per rank (MiB) |"
-              % (35, 16))
-        print("|---|---|---|---|---|---|---|---|---|---|")
+              " ParaView's Outline frame (ms) |" % (35, 16))
+        print("|---|---|---|---|---|---|---|---|---|---|---|")
         base = one["time_to_db"]
         for r in sel:
             hit = r["converge"][-1]
             t = r["time_to_db"]
             mem = "/".join("%.0f" % m["backend_mib"] for m in r["memory"])
-            print("| %d | %s | %s | %.2f | %.2f | %.2f / %.2f | %.2f | %.2f | %.0f | %s |" % (
+            outline = "%.2f" % r["outline_ms"] if "outline_ms" in r else "-"
+            print("| %d | %s | %s | %.2f | %.2f | %.2f / %.2f | %.2f | %.2f | %.0f | %s | %s |" % (
                 r["ranks"], "%.1f (%d)" % (t, r["spp_to_db"]) if t else "not reached",
                 "%.2fx" % (base / t) if t and base else "-", hit["trace_ms"],
                 r["moving"]["ms"], r["moving"]["trace_ms"], r["moving"]["draw_ms"],
-                r["still"]["ms"], r["still"]["trace_ms"], r["still"]["samples_per_s"] / 1e6, mem))
+                r["still"]["ms"], r["still"]["trace_ms"], r["still"]["samples_per_s"] / 1e6, mem, outline))
 
 
 if __name__ == "__main__":
