@@ -218,15 +218,19 @@ struct ImportanceLaunch
  * - CUDAPyramid.cu: classifyLevel(), pyramid levels built on the device.
  */
 /// Device copy of a Scene's stand-in for lighting across pieces
-/// (Scene::setOutside): its channels as packed arrays (read in software, as
-/// the CPU reads them), tables and host-built majorants, and the per-render
-/// view the kernels' SceneView::outside points to.
+/// (Scene::setOutside): its channels, tables and host-built majorants, and
+/// the per-render view the kernels' SceneView::outside points to. A scalar
+/// channel of finite voxels is a texture under texture sampling, as the
+/// piece's channels are (light paths spend most of their time reading the
+/// stand-in once it is exact); the others are packed arrays read in
+/// software, as the CPU reads them.
 struct OutsideCopy
 {
   uint64_t SceneId = 0;
   uint64_t ContentVersion = ~0ull;
   uint64_t DataVersion = ~0ull;
   DeviceBuffer<uint8_t> Channels[kMaxChannels];
+  DeviceChannel Textures[kMaxChannels];
   DeviceBuffer<float> Tables;
   DeviceBuffer<float> Majorants;
   DeviceBuffer<SceneView> View;
@@ -242,6 +246,10 @@ struct OutsideCopy
     for (const DeviceBuffer<uint8_t>& c : this->Channels)
     {
       b += c.bytes();
+    }
+    for (const DeviceChannel& t : this->Textures)
+    {
+      b += t.array ? t.arrayBytes : 0;
     }
     return b;
   }
@@ -368,9 +376,10 @@ struct CUDARenderer::Internal
 
   /// Holds each channel once: a texture (Texture sampling, if it fits) or a dense array.
   void uploadChannels(const Scene& scene);
-  /// Makes dc a texture-held channel from dense host voxels of dc.type;
-  /// false (nothing allocated) when the device has no room.
-  bool uploadTexture(DeviceChannel& dc, const void* host);
+  /// Makes dc a texture-held channel from dense host voxels of dc.type,
+  /// of the Scene's dimensions or `dims`; false (nothing allocated) when
+  /// the device has no room.
+  bool uploadTexture(DeviceChannel& dc, const void* host, const int* dims = nullptr);
   /// After buildRanges(): texture-held channels with NaN or Inf voxels move
   /// to dense arrays (the core's NaN rule needs unfiltered reads).
   void moveNonFiniteToArrays(const Scene& scene);

@@ -2,14 +2,16 @@
 //
 // CUDA backend: the stand-in of the other pieces of a split volume for lit
 // rendering (Scene::setOutside, SceneView::outside) on the device. Its
-// channels are held as packed arrays and read in software (no textures), its
-// macrocells and majorants are the host's, so the kernels trace the parts
-// of light paths beyond the piece exactly as the CPU backend does.
+// scalar channels of finite voxels are textures under texture sampling, as
+// the piece's are; the others are packed arrays read in software. Its
+// macrocells and majorants are the host's, so the kernels trace the light
+// paths in it as the CPU backend does.
 #include "CUDAInternal.h"
 
 #include "mcvol/RenderSetup.h"
 #include "mcvol/Scene.h"
 
+#include <cmath>
 #include <cstring>
 #include <vector>
 
@@ -64,6 +66,23 @@ const void* packedChannel(const ChannelSource& src, size_t voxels, std::vector<u
   }
   return staging.data();
 }
+/// Whether the voxels (dense, of `type`) are all finite: hardware filtering
+/// would drop a non-finite corner whose weight rounds to 0, where the
+/// core's rule makes the sample NaN, so such a channel stays an array.
+bool allFinite(const void* voxels, ScalarType type, size_t count)
+{
+  if (type != ScalarType::Float32)
+  {
+    return type != ScalarType::Float64 && type != ScalarType::Float16; // integers
+  }
+  const float* v = static_cast<const float*>(voxels);
+  bool finite = true;
+  for (size_t i = 0; i < count; ++i)
+  {
+    finite = finite && std::isfinite(v[i]);
+  }
+  return finite;
+}
 } // namespace
 
 void CUDARenderer::Internal::linkOutside(const Scene& scene, const Camera& camera, SceneView& s)
@@ -81,12 +100,28 @@ void CUDARenderer::Internal::linkOutside(const Scene& scene, const Camera& camer
   const size_t voxels = size_t(dims[0]) * size_t(dims[1]) * size_t(dims[2]);
   if (!same || copy.ContentVersion != standIn.contentVersion())
   {
+    const bool fits = dims[0] <= this->Props.maxTexture3D[0] && dims[1] <= this->Props.maxTexture3D[1] &&
+      dims[2] <= this->Props.maxTexture3D[2];
     std::vector<uint8_t> staging;
+    for (int n = 0; n < kMaxChannels; ++n)
+    {
+      copy.Channels[n].release();
+      copy.Textures[n].releaseTexture();
+    }
     for (int n = 0; n < standIn.numChannels(); ++n)
     {
+      const ChannelSource& src = standIn.channel(n);
       size_t bytes = 0;
       ScalarType type = ScalarType::Float32;
-      const void* host = packedChannel(standIn.channel(n), voxels, staging, bytes, type);
+      const void* host = packedChannel(src, voxels, staging, bytes, type);
+      DeviceChannel& tex = copy.Textures[n];
+      tex.type = type;
+      tex.format = src.format;
+      if (this->Sampling == CudaSampling::Texture && fits && src.format == ChannelFormat::Scalar &&
+        allFinite(host, type, voxels) && this->uploadTexture(tex, host, dims))
+      {
+        continue;
+      }
       copy.Channels[n].resize(bytes);
       MCVOL_CUDA(cudaMemcpy(copy.Channels[n].ptr, host, bytes, cudaMemcpyHostToDevice));
     }
@@ -105,18 +140,22 @@ void CUDARenderer::Internal::linkOutside(const Scene& scene, const Camera& camer
     copy.DataVersion = standIn.dataVersion();
   }
   copy.SceneId = standIn.id();
-  // The per-render view with device pointers: channels read in software.
+  // The per-render view with device pointers: textures where they are held
+  // (as the piece's, renderView()), else arrays read in software.
   for (int n = 0; n < standIn.numChannels(); ++n)
   {
     const ChannelSource& src = standIn.channel(n);
+    const DeviceChannel& tex = copy.Textures[n];
     ChannelView& c = o.volume.channels[n];
-    c.data = copy.Channels[n].ptr;
+    c.data = copy.Channels[n].ptr; // null for a texture-held channel
     c.type = src.type == ScalarType::Float64 ? ScalarType::Float32 : src.type;
     c.stride = src.format == ChannelFormat::Extinction ? 4 : 1;
     c.offset = 0.0;
-    c.texture = 0;
-    c.voxelTexture = 0;
-    c.textureScale = 1.f;
+    c.texture = tex.array ? (o.volume.nearest ? tex.point : tex.linear) : 0;
+    c.voxelTexture = tex.array ? tex.point : 0;
+    c.voxelTextureDims[0] = dims[0];
+    c.voxelTextureDims[1] = dims[1];
+    c.textureScale = tex.array ? tex.textureScale : 1.f;
     c.format = src.format;
   }
   copy.Plain = !o.volume.cubic;

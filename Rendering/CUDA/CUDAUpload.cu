@@ -73,9 +73,9 @@ const void* denseHostVoxels(const ChannelSource& src, size_t voxels, std::vector
 
 } // namespace
 
-bool CUDARenderer::Internal::uploadTexture(DeviceChannel& dc, const void* host)
+bool CUDARenderer::Internal::uploadTexture(DeviceChannel& dc, const void* host, const int* dims)
 {
-  const int* d = this->Dims;
+  const int* d = dims ? dims : this->Dims;
   cudaTextureReadMode mode = cudaReadModeElementType;
   cudaChannelFormatDesc fmt;
   size_t es = 0;
