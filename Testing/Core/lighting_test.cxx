@@ -655,26 +655,15 @@ struct SplitScene
         values[size_t(z) * kNx * kNy + size_t(i)] = (z >= 3 && z <= 5) ? 0.5f : (z >= 15 && z <= 20) ? 1.f : 0.f;
       }
     }
-    const TransferFunctionDesc tf = slabFunction();
-    const int wholeDims[3] = { kNx, kNy, kNz };
-    const int lowerDims[3] = { kNx, kNy, kSplit + 1 };
-    const int upperDims[3] = { kNx, kNy, kNz - kSplit };
-    const ChannelSource all{ values.data(), ScalarType::Float32, 1, 0.0 };
-    const ChannelSource top{ values.data() + size_t(kSplit) * kNx * kNy, ScalarType::Float32, 1, 0.0 };
-    whole.setVolume(wholeDims, 1, &all);
-    lower.setVolume(lowerDims, 1, &all);
-    upper.setVolume(upperDims, 1, &top);
-    for (Scene* s : { &whole, &lower, &upper })
-    {
-      s->setTransferFunction(0, tf);
-      s->setMacrocellSize(4);
-      s->setLighting(ld);
-      s->update();
-    }
+    build(whole, values.data(), kNz, ld);
+    build(lower, values.data(), kSplit + 1, ld);
+    build(upper, values.data() + size_t(kSplit) * kNx * kNy, kNz - kSplit, ld);
   }
 
-  /// Extinction 0.2 at 0.5 (the faint slab), 0.5 at 1 (the dense one).
-  static TransferFunctionDesc slabFunction()
+  /// `scene` of the kNx x kNy x nz values at `values` (not copied), with
+  /// the slabs' function: extinction 0.2 at 0.5 (the faint slab), 0.5 at 1
+  /// (the dense one).
+  static void build(Scene& scene, const float* values, int nz, const LightingDesc& ld)
   {
     TransferFunctionDesc tf = flatTF(0.f, 0.9f, 0.85f, 0.8f, 1.f, 64);
     for (int k = 0; k < 64; ++k)
@@ -682,7 +671,13 @@ struct SplitScene
       const double v = k / 63.0;
       tf.opacity[size_t(k)] = opacityFor(v <= 0.5 ? 0.4 * v : 0.2 + 0.6 * (v - 0.5), 1.0);
     }
-    return tf;
+    const int dims[3] = { kNx, kNy, nz };
+    const ChannelSource src{ values, ScalarType::Float32, 1, 0.0 };
+    scene.setVolume(dims, 1, &src);
+    scene.setTransferFunction(0, tf);
+    scene.setMacrocellSize(4);
+    scene.setLighting(ld);
+    scene.update();
   }
 
   /// The whole volume as the pieces' stand-in; `exact` tells them it holds
@@ -834,13 +829,7 @@ TEST(Lighting, ExactStandInCarriesTheWholePath)
     std::fill_n(lie.begin() + ptrdiff_t(z) * SplitScene::kNx * SplitScene::kNy, SplitScene::kNx * SplitScene::kNy, 1.f);
   }
   Scene liar;
-  const int dims[3] = { SplitScene::kNx, SplitScene::kNy, SplitScene::kNz };
-  const ChannelSource src{ lie.data(), ScalarType::Float32, 1, 0.0 };
-  liar.setVolume(dims, 1, &src);
-  liar.setTransferFunction(0, SplitScene::slabFunction());
-  liar.setMacrocellSize(4);
-  liar.setLighting(ld);
-  liar.update();
+  SplitScene::build(liar, lie.data(), SplitScene::kNz, ld);
 
   const Camera cam = lookingUp(0);
   RenderSettings rs;
@@ -848,9 +837,9 @@ TEST(Lighting, ExactStandInCarriesTheWholePath)
   rs.seed = 7;
   const std::unique_ptr<Renderer> r = testRenderer();
   const size_t P = size_t(cam.width) * size_t(cam.height);
-  auto render = [&](const Scene* standIn, bool exact)
+  auto render = [&](const Scene* standIn, bool exact, const double* offset = nullptr)
   {
-    split.lower.setOutside(standIn, nullptr, nullptr, exact);
+    split.lower.setOutside(standIn, nullptr, offset, exact);
     Accumulator acc;
     r->render(split.lower, cam, rs, nullptr, acc);
     return std::vector<float>(acc.rgba(), acc.rgba() + 4 * P);
@@ -876,18 +865,9 @@ TEST(Lighting, ExactStandInCarriesTheWholePath)
   std::vector<float> padded(size_t(SplitScene::kNx) * SplitScene::kNy * 4, 0.f);
   padded.insert(padded.end(), split.values.begin(), split.values.end());
   Scene shifted;
-  const int paddedDims[3] = { SplitScene::kNx, SplitScene::kNy, SplitScene::kNz + 4 };
-  const ChannelSource paddedSrc{ padded.data(), ScalarType::Float32, 1, 0.0 };
-  shifted.setVolume(paddedDims, 1, &paddedSrc);
-  shifted.setTransferFunction(0, SplitScene::slabFunction());
-  shifted.setMacrocellSize(4);
-  shifted.setLighting(ld);
-  shifted.update();
+  SplitScene::build(shifted, padded.data(), SplitScene::kNz + 4, ld);
   const double offset[3] = { 0, 0, 4 };
-  split.lower.setOutside(&shifted, nullptr, offset, true);
-  Accumulator acc;
-  r->render(split.lower, cam, rs, nullptr, acc);
-  const double moved = mean(std::vector<float>(acc.rgba(), acc.rgba() + 4 * P));
+  const double moved = mean(render(&shifted, true, offset));
   std::printf("exact stand-in: red mean %.5f with the true stand-in, %.5f with the absorber, %.5f shifted\n", truth,
     lied, moved);
   EXPECT_GT(truth, 0.0);
