@@ -873,6 +873,16 @@ TEST(Lighting, ExactStandInCarriesTheWholePath)
   EXPECT_GT(truth, 0.0);
   EXPECT_LT(lied, 0.5 * truth);
   EXPECT_NEAR(moved, truth, 0.02 * truth);
+
+  // Under the visibility optimization, which acts on light rays inside the
+  // piece, the piece's paths keep reading the piece: exact or not, the
+  // same image.
+  ImportanceDesc imp;
+  imp.enabled = true;
+  imp.tables = { std::vector<float>(64, 0.5f) };
+  split.lower.setImportance(imp);
+  split.lower.update();
+  EXPECT_EQ(render(&liar, true), render(&liar, false));
 }
 
 // The stand-in is read only by lit renders, and bad stand-ins are errors:

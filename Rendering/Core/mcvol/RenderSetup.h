@@ -112,7 +112,10 @@ inline bool prepareOutside(const Scene& scene, const Camera& camera, SceneView& 
   o.outside = nullptr;
   s.outsideScale = Vec3f(float(scale[0]), float(scale[1]), float(scale[2]));
   s.outsideOffset = Vec3f(float(offset[0]), float(offset[1]), float(offset[2]));
-  s.outsideExact = scene.outsideExact();
+  // The visibility optimization acts on light rays inside the piece
+  // (Lerzer and Dachsbacher, Sec. 5.3), which only the piece's view
+  // carries: its light paths keep reading the piece.
+  s.outsideExact = scene.outsideExact() && !scene.view().importance.enabled;
   return true;
 }
 

@@ -244,8 +244,9 @@ public:
    * stand-in: the whole volume). Light paths then continue in the stand-in
    * from their first vertex (SceneView::outsideExact): one march per
    * shadow ray instead of one in the piece and one beyond it, the same
-   * expectation. Without it (a coarse stand-in) the part of a light path
-   * inside the piece reads the piece.
+   * expectation. Without it (a coarse stand-in), and under the visibility
+   * optimization, the part of a light path inside the piece reads the
+   * piece.
    */
   void setOutside(
     const Scene* outside, const double scale[3] = nullptr, const double offset[3] = nullptr, bool exact = false);

@@ -325,7 +325,8 @@ MCVOL_HOT Vec3f litPathFrom(const SceneView& s, const SceneView& light, Tracker 
   Vec3f throughput(1.f, 1.f, 1.f);
   // The view the path is in: this piece, or, once a scattered ray has left
   // the piece and collided beyond it, the stand-in of the whole volume
-  // (SceneView::outside), whose own outside is null.
+  // (SceneView::outside), whose own outside is null; with an exact
+  // stand-in, the stand-in from the start.
   const SceneView* v = &light;
   if (s.outside && s.outsideExact)
   {
