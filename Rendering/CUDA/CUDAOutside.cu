@@ -66,6 +66,7 @@ const void* packedChannel(const ChannelSource& src, size_t voxels, std::vector<u
   }
   return staging.data();
 }
+
 /// Whether the voxels (dense, of `type`) are all finite: hardware filtering
 /// would drop a non-finite corner whose weight rounds to 0, where the
 /// core's rule makes the sample NaN, so such a channel stays an array.
