@@ -237,9 +237,6 @@ struct OutsideCopy
   /// The per-render view as the host sends it to a lit kernel as its
   /// light view (RenderLaunch::light) when the stand-in is exact.
   SceneView HostView;
-  /// The stand-in's channels are scalar, linear or nearest: an exact
-  /// stand-in of a plain scene keeps the plain kernels (plainScene()).
-  bool Plain = false;
   size_t bytes() const
   {
     size_t b = this->Tables.bytes() + this->Majorants.bytes() + this->View.bytes();

@@ -129,18 +129,25 @@ void launchRender(BlendMode mode, bool count, bool lit, bool plain, const SceneV
   withBlendMode(mode, [&](auto m) { launchKernel<decltype(m)::value>(lit, unlit, count, s, cam, fp, k); });
 }
 
-/// Whether the plain kernels can render `s`: scalar channels only, linear or
-/// nearest interpolation, and no light path that crosses a piece's boundary
-/// (kStandInCode, Lighting.h): no stand-in, or an exact one of plain
-/// channels (`outsidePlain`, OutsideCopy::Plain).
-bool plainScene(const SceneView& s, bool outsidePlain)
+/// Whether the plain kernels can sample `v`: scalar channels only, linear
+/// or nearest interpolation.
+bool plainChannels(const SceneView& v)
 {
-  bool plain = !s.volume.cubic && (!s.outside || (s.outsideExact && outsidePlain));
-  for (int n = 0; n < s.volume.numChannels; ++n)
+  bool plain = !v.volume.cubic;
+  for (int n = 0; n < v.volume.numChannels; ++n)
   {
-    plain = plain && s.volume.channels[n].format == ChannelFormat::Scalar;
+    plain = plain && v.volume.channels[n].format == ChannelFormat::Scalar;
   }
   return plain;
+}
+
+/// Whether the plain kernels can render `s`, whose light paths run in
+/// `light` (RenderLaunch::light): plain channels in both, and no light path
+/// that crosses a piece's boundary (kStandInCode, Lighting.h): no stand-in,
+/// or an exact one.
+bool plainScene(const SceneView& s, const SceneView& light)
+{
+  return plainChannels(s) && (!s.outside || (s.outsideExact && plainChannels(light)));
 }
 
 /// Adds the device's counters (`c`: DDA steps, tentative, real, channel
@@ -461,7 +468,7 @@ void CUDARenderer::render(const Scene& scene, const Camera& camera, const Render
   }
   else
   {
-    launchRender(s.blend.mode, count, lit, in.PlainKernels && plainScene(s, in.Outside.Plain), s, cam, fp, k);
+    launchRender(s.blend.mode, count, lit, in.PlainKernels && plainScene(s, *k.light), s, cam, fp, k);
   }
   MCVOL_CUDA(cudaGetLastError());
 
@@ -576,7 +583,7 @@ void CUDARenderer::Internal::launchPilots(const Scene& scene, const Camera& came
     k.accum = this->PilotImages.ptr + image * P;
     k.counters = this->PilotCounters.ptr + 9 * j;
     k.stream = this->PilotStreams[j % kPilotStreams];
-    launchRender(scene.view().blend.mode, true, false, this->PlainKernels && plainScene(s, false), s, cam, fp, k);
+    launchRender(scene.view().blend.mode, true, false, this->PlainKernels && plainScene(s, s), s, cam, fp, k);
     MCVOL_CUDA(cudaGetLastError());
     image += size_t(2 * n);
   }

@@ -67,14 +67,15 @@ const void* packedChannel(const ChannelSource& src, size_t voxels, std::vector<u
   return staging.data();
 }
 
-/// Whether the voxels (dense, of `type`) are all finite: hardware filtering
-/// would drop a non-finite corner whose weight rounds to 0, where the
-/// core's rule makes the sample NaN, so such a channel stays an array.
+/// Whether the voxels (dense, of `type`: packedChannel()'s, float32 or
+/// integers) are all finite: hardware filtering would drop a non-finite
+/// corner whose weight rounds to 0, where the core's rule makes the sample
+/// NaN, so such a channel stays an array.
 bool allFinite(const void* voxels, ScalarType type, size_t count)
 {
   if (type != ScalarType::Float32)
   {
-    return type != ScalarType::Float64 && type != ScalarType::Float16; // integers
+    return true;
   }
   const float* v = static_cast<const float*>(voxels);
   bool finite = true;
@@ -158,11 +159,6 @@ void CUDARenderer::Internal::linkOutside(const Scene& scene, const Camera& camer
     c.voxelTextureDims[1] = dims[1];
     c.textureScale = tex.array ? tex.textureScale : 1.f;
     c.format = src.format;
-  }
-  copy.Plain = !o.volume.cubic;
-  for (int n = 0; n < o.volume.numChannels; ++n)
-  {
-    copy.Plain = copy.Plain && o.volume.channels[n].format == ChannelFormat::Scalar;
   }
   o.tables.texels = copy.Tables.ptr;
   o.grid.majorants = copy.Majorants.ptr;
