@@ -44,7 +44,8 @@ void renderRows(const SceneView& s, const CameraView& cam, const FrameParams& fp
   const int H = cam.height;
   Accumulator::ImportancePool* pool = Optimized ? imp.pool : nullptr;
   const int pass = pool ? pool->passes : 0;
-  const int unlit = unlitEstimator(fp.estimator, Mode, Lit, Optimized, s.marchControlVariates);
+  const int unlit =
+    unlitEstimator(fp.estimator, Mode, Lit, Optimized, s.marchControlVariates, localLighting(s.lighting));
   const uint32_t total = previous + uint32_t(fp.samplesPerPixel);
   // The even half is neither read nor written by a render that adds no
   // sample of even index (as on the device).
@@ -85,6 +86,18 @@ void renderRows(const SceneView& s, const CameraView& cam, const FrameParams& fp
         {
           switch (unlit)
           {
+            case kLocalLight:
+              if constexpr (Lit)
+              {
+                renderPixel<Mode, Lit, false, kLocalLight>(s, light, cam, fp, x, y, z, c, sum, nullptr, evenOut);
+              }
+              break;
+            case 1 + kLocalLight:
+              if constexpr (Lit)
+              {
+                renderPixel<Mode, Lit, false, 1 + kLocalLight>(s, light, cam, fp, x, y, z, c, sum, nullptr, evenOut);
+              }
+              break;
             case 1:
               renderPixel<Mode, Lit, false, 1>(s, light, cam, fp, x, y, z, c, sum, nullptr, evenOut);
               break;

@@ -120,7 +120,8 @@ void launchOptimized(BlendMode mode, bool lit, const SceneView& s, const CameraV
 void launchRender(BlendMode mode, bool count, bool lit, bool plain, const SceneView& s, const CameraView& cam,
   const FrameParams& fp, const RenderLaunch& k)
 {
-  const int unlit = unlitEstimator(fp.estimator, mode, lit, false, s.marchControlVariates);
+  const int unlit =
+    unlitEstimator(fp.estimator, mode, lit, false, s.marchControlVariates, localLighting(s.lighting));
   if (plain)
   {
     launchPlain(mode, lit, unlit, count, s, cam, fp, k);

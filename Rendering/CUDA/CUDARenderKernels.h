@@ -228,7 +228,8 @@ void launchUnlit(
 
 /// Launches the lit kernel of estimator code `unlit` (unlitEstimator(): 1
 /// the expected-value estimator of lit camera rays, 0 the collision
-/// estimator), with or without counters. This backend refuses to light
+/// estimator, each plus kLocalLight for light paths that end at the camera
+/// ray's collision), with or without counters. This backend refuses to light
 /// post-render composite before it launches (CUDARenderer::render), so no
 /// lit composite kernel is compiled: it would only spill registers.
 template <BlendMode Mode>
@@ -241,8 +242,21 @@ void launchLit(
   }
   else
   {
-    unlit == 1 ? launchRenderKernel<Mode, true, 1>(count, s, cam, fp, k)
-               : launchRenderKernel<Mode, true, 0>(count, s, cam, fp, k);
+    switch (unlit)
+    {
+      case 1 + kLocalLight:
+        launchRenderKernel<Mode, true, 1 + kLocalLight>(count, s, cam, fp, k);
+        break;
+      case kLocalLight:
+        launchRenderKernel<Mode, true, kLocalLight>(count, s, cam, fp, k);
+        break;
+      case 1:
+        launchRenderKernel<Mode, true, 1>(count, s, cam, fp, k);
+        break;
+      default:
+        launchRenderKernel<Mode, true, 0>(count, s, cam, fp, k);
+        break;
+    }
   }
 }
 

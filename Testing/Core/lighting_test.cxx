@@ -9,6 +9,7 @@
 #include "mcvol/ray/Integrator.h"
 #include "mcvol/ray/Lighting.h"
 #include "mcvol/RayMarcher.h"
+#include "mcvol/RenderSetup.h"
 
 #include <cstring>
 
@@ -1003,6 +1004,114 @@ TEST(Lighting, ExpectedValueEqualsTheCollisionEstimator)
   }
 }
 
+// Where no ray follows the camera ray's collision (no shadows, one
+// scattering vertex), the lit kernels compile the light path without the
+// code of those rays (litPathFrom()'s Local). It must be the same path: on
+// every pixel, both estimators, three blends, two lights (both, or one
+// chosen), ambient light and gradient shading, the Local code gives the
+// pixel's sum bit for bit.
+namespace
+{
+/// Pixel (x, y) lit by the full light path and by its Local code, with the
+/// lit estimator `code` (0 or 1).
+template <BlendMode Mode>
+void fullAndLocal(int code, const SceneView& s, const CameraView& cam, const FrameParams& fp, int x, int y,
+  RayCounters& cFull, Vec4d& full, RayCounters& cLocal, Vec4d& local)
+{
+  if (code == 1)
+  {
+    renderPixel<Mode, true, false, 1>(s, s, cam, fp, x, y, 1.f, cFull, full);
+    renderPixel<Mode, true, false, 1 + kLocalLight>(s, s, cam, fp, x, y, 1.f, cLocal, local);
+  }
+  else
+  {
+    renderPixel<Mode, true, false, 0>(s, s, cam, fp, x, y, 1.f, cFull, full);
+    renderPixel<Mode, true, false, kLocalLight>(s, s, cam, fp, x, y, 1.f, cLocal, local);
+  }
+}
+} // namespace
+
+TEST(Lighting, LocalLightPathIsTheFullPath)
+{
+  const DemoVolume v = makeDemo("cosmology", { 16, 16, 16 });
+  const Camera camera = orbitCamera(v.dims, v.spacing, 12, 12, 30, 20);
+  const CameraView cam = toView(camera);
+  for (BlendMode mode : { BlendMode::Density, BlendMode::Max, BlendMode::Mix })
+  {
+    Scene scene;
+    configureDemo(scene, v, 4, 128, 0.5, mode);
+    for (int config = 0; config < 2; ++config)
+    {
+      LightingDesc ld;
+      ld.lights = { testSun(1.5), testLamp(300) };
+      ld.albedo = { 0.9f, 0.6f, 0.8f, 0.3f };
+      ld.anisotropy = { 0.4f, -0.2f, 0.f, 0.7f };
+      ld.shadows = false;
+      ld.ambient[0] = ld.ambient[1] = ld.ambient[2] = 0.3;
+      ld.gradientShading = config == 1;
+      ld.sampleOneLight = config == 1;
+      scene.setLighting(ld);
+      ASSERT_TRUE(scene.lit());
+      SceneView s = scene.view();
+      ASSERT_TRUE(localLighting(s.lighting));
+      s.sigmaLimit = extinctionLimit(cam);
+      setLightingFrame(s, camera);
+      for (Estimator e : { Estimator::Collision, Estimator::ExpectedValue })
+      {
+        RenderSettings rs;
+        rs.estimator = e;
+        rs.samplesPerPixel = 8;
+        const FrameParams fp = frameParams(rs, 0);
+        const int code = unlitEstimator(e, mode, true, false);
+        ASSERT_EQ(unlitEstimator(e, mode, true, false, false, true), code + kLocalLight);
+        double total = 0;
+        uint64_t differ = 0;
+        RayCounters cFull, cLocal;
+        for (int y = 0; y < cam.height; ++y)
+        {
+          for (int x = 0; x < cam.width; ++x)
+          {
+            Vec4d full, local;
+            switch (mode)
+            {
+              case BlendMode::Max:
+                fullAndLocal<BlendMode::Max>(code, s, cam, fp, x, y, cFull, full, cLocal, local);
+                break;
+              case BlendMode::Mix:
+                fullAndLocal<BlendMode::Mix>(code, s, cam, fp, x, y, cFull, full, cLocal, local);
+                break;
+              default:
+                fullAndLocal<BlendMode::Density>(code, s, cam, fp, x, y, cFull, full, cLocal, local);
+                break;
+            }
+            differ += (full.r != local.r || full.g != local.g || full.b != local.b || full.a != local.a) ? 1u : 0u;
+            total += full.r + full.g + full.b;
+          }
+        }
+        const std::string what = std::string(toString(mode)) + (config ? ", one light, gradients" : ", two lights") +
+          (code ? ", expected value" : ", collision");
+        EXPECT_EQ(differ, 0u) << what;
+        EXPECT_GT(total, 0.0) << what;
+        EXPECT_GT(cFull.scattering, 0u) << what;
+        EXPECT_EQ(cFull.scattering, cLocal.scattering) << what;
+        EXPECT_EQ(cLocal.shadowRays, 0u) << what;
+      }
+    }
+  }
+  LightingView L;
+  L.enabled = true;
+  L.shadows = false;
+  EXPECT_TRUE(localLighting(L));
+  L.maxDepth = 2;
+  EXPECT_FALSE(localLighting(L)) << "scattered rays";
+  L.maxDepth = 1;
+  L.shadows = true;
+  EXPECT_FALSE(localLighting(L)) << "shadow rays";
+  L.shadows = false;
+  L.enabled = false;
+  EXPECT_FALSE(localLighting(L)) << "unlit";
+}
+
 // Which estimator a lit camera ray runs: the expected-value one where asked
 // for (the default), the collision estimator where asked for, under the
 // visibility optimization and under post-render compositing, and for the
@@ -1015,5 +1124,9 @@ TEST(Lighting, LitEstimatorCodes)
   EXPECT_EQ(unlitEstimator(Estimator::UnbiasedMarch, BlendMode::Density, true, false), 0);
   EXPECT_EQ(unlitEstimator(Estimator::ExpectedValue, BlendMode::Density, true, true), 0);
   EXPECT_EQ(unlitEstimator(Estimator::ExpectedValue, BlendMode::Composite, true, false), 0);
+  EXPECT_EQ(unlitEstimator(Estimator::ExpectedValue, BlendMode::Density, true, false, false, true), 1 + kLocalLight);
+  EXPECT_EQ(unlitEstimator(Estimator::Collision, BlendMode::Mix, true, false, false, true), kLocalLight);
+  EXPECT_EQ(unlitEstimator(Estimator::ExpectedValue, BlendMode::Density, true, true, false, true), 0);
+  EXPECT_EQ(unlitEstimator(Estimator::ExpectedValue, BlendMode::Composite, true, false, false, true), 0);
   EXPECT_EQ(RenderSettings().estimator, Estimator::ExpectedValue);
 }

@@ -9,6 +9,10 @@
 
 namespace mcvol
 {
+/// Added to a lit estimator code (0 or 1) where localLighting() holds: the
+/// kernels then compile litPathFrom()'s Local path.
+constexpr int kLocalLight = 4;
+
 /// The estimator a render's camera rays use, as the kernels' compile-time
 /// code: 0 collision, 1 expected value (lit: traceLitExpected()), 2
 /// unbiased march with plain strata, 3 unbiased march with control variates
@@ -16,8 +20,10 @@ namespace mcvol
 /// marchControlVariates()). The last three only when asked for, not
 /// optimized and not post-render compositing, and the marches only unlit
 /// (the others keep the collision estimator, Estimator's documentation says
-/// why).
-MCVOL_FUNC int unlitEstimator(Estimator e, BlendMode mode, bool lit, bool optimized, bool controlVariates = false)
+/// why). Lit with `local` (localLighting()), not optimized and not
+/// post-render compositing: the lit code plus kLocalLight.
+MCVOL_FUNC int unlitEstimator(
+  Estimator e, BlendMode mode, bool lit, bool optimized, bool controlVariates = false, bool local = false)
 {
   if (optimized || mode == BlendMode::Composite)
   {
@@ -25,7 +31,7 @@ MCVOL_FUNC int unlitEstimator(Estimator e, BlendMode mode, bool lit, bool optimi
   }
   if (lit)
   {
-    return e == Estimator::ExpectedValue ? 1 : 0;
+    return (e == Estimator::ExpectedValue ? 1 : 0) + (local ? kLocalLight : 0);
   }
   if (e == Estimator::UnbiasedMarch)
   {
@@ -74,12 +80,15 @@ struct FrameParams
  * estimator's code and registers; unlitEstimator() decides it): 1 scores
  * unlit camera rays with trackExpected() and lit ones with
  * traceLitExpected(), 2 with trackUnbiasedMarch(), 3 with
- * trackUnbiasedMarch()'s control variates, 0 with the collision estimator.
+ * trackUnbiasedMarch()'s control variates, 0 with the collision estimator;
+ * lit, kLocalLight added compiles the light path's Local code.
  */
 template <BlendMode Mode, bool Lit = false, bool Optimized = false, int Unlit = 0>
 MCVOL_FUNC void renderPixel(const SceneView& s, const SceneView& light, const CameraView& cam, const FrameParams& fp,
   int x, int y, float depth, RayCounters& c, Vec4d& sum, const RayImportance* imp = nullptr, Vec4d* even = nullptr)
 {
+  constexpr bool Local = Lit && (Unlit & kLocalLight) != 0;
+  constexpr int Code = Unlit & ~kLocalLight;
   const RayImportance* ri = Optimized ? imp : nullptr;
   ShadowCounters sc;
   const uint32_t pixel = uint32_t(y) * uint32_t(cam.width) + uint32_t(x);
@@ -107,21 +116,22 @@ MCVOL_FUNC void renderPixel(const SceneView& s, const SceneView& light, const Ca
       continue;
     }
     Vec4f v;
-    if (Lit && Unlit == 1 && !Optimized && Mode != BlendMode::Composite)
+    if (Lit && Code == 1 && !Optimized && Mode != BlendMode::Composite)
     {
-      v = traceLitExpected<Mode>(s, light, fp.tracker, ray.o, ray.d, ray.world, ray.tmax, rng, c, sc);
+      v = traceLitExpected<Mode, Local>(s, light, fp.tracker, ray.o, ray.d, ray.world, ray.tmax, rng, c, sc);
     }
     else if (Lit)
     {
-      v = traceLitSample<Mode, Optimized>(s, light, fp.tracker, ray.o, ray.d, ray.world, ray.tmax, rng, c, sc, ri);
+      v = traceLitSample<Mode, Optimized, Local>(
+        s, light, fp.tracker, ray.o, ray.d, ray.world, ray.tmax, rng, c, sc, ri);
     }
-    else if (Unlit == 1 && !Optimized && Mode != BlendMode::Composite)
+    else if (Code == 1 && !Optimized && Mode != BlendMode::Composite)
     {
       v = trackExpected<Mode>(s, ray.o, ray.d, 0.f, ray.tmax, rng, c);
     }
-    else if ((Unlit == 2 || Unlit == 3) && !Optimized && Mode != BlendMode::Composite)
+    else if ((Code == 2 || Code == 3) && !Optimized && Mode != BlendMode::Composite)
     {
-      v = trackUnbiasedMarch<Mode, Unlit == 3>(s, ray.o, ray.d, 0.f, ray.tmax, rng, c);
+      v = trackUnbiasedMarch<Mode, Code == 3>(s, ray.o, ray.d, 0.f, ray.tmax, rng, c);
     }
     else
     {

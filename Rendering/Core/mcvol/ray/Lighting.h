@@ -301,6 +301,18 @@ MCVOL_HOT float scatterFunction(
 }
 
 /**
+ * Whether every light path of `L` ends at the camera ray's collision: no
+ * shadow rays and one scattering vertex. Its radiance is then a function of
+ * that point alone, so the lit kernels that leave the other rays' code out
+ * (litPathFrom()'s Local) render it, with the same random numbers and the
+ * same image as the full path.
+ */
+MCVOL_FUNC bool localLighting(const LightingView& L)
+{
+  return L.enabled && !L.shadows && L.maxDepth <= 1;
+}
+
+/**
  * The lit path from a real collision `hit` of the ray o + t d (index space;
  * `w` its unit world direction): the collision scatters with probability
  * albedo_n of its channel n and otherwise absorbs, emitting the blend's
@@ -313,9 +325,12 @@ MCVOL_HOT float scatterFunction(
  * maxDepth scattering events, with Russian roulette from the third. Returns
  * the radiance. Optimized: the render runs the visibility optimization
  * (only then can a light ray have one, optimizedShadow()). `light` is
- * lightView(s), the view the path runs in.
+ * lightView(s), the view the path runs in. Local (a compile-time choice,
+ * for scenes where localLighting() holds): the same path without the code
+ * of the rays it never casts there, the tracking of scattered rays and the
+ * shadow rays, which would otherwise hold registers in every lit kernel.
  */
-template <BlendMode Mode, bool Optimized>
+template <BlendMode Mode, bool Optimized, bool Local = false>
 MCVOL_HOT Vec3f litPathFrom(const SceneView& s, const SceneView& light, Tracker tracker, Vec3f o, Vec3f d, Vec3f w,
   Hit hit, bool emitFirst, Rng& rng, RayCounters& c, ShadowCounters& sc)
 {
@@ -339,7 +354,7 @@ MCVOL_HOT Vec3f litPathFrom(const SceneView& s, const SceneView& light, Tracker 
   }
   for (int depth = 0;; ++depth)
   {
-    if (depth > 0)
+    if (!Local && depth > 0)
     {
       // The visibility optimization acts on the camera ray only (its segment
       // list belongs to the pixel).
@@ -439,7 +454,7 @@ MCVOL_HOT Vec3f litPathFrom(const SceneView& s, const SceneView& light, Tracker 
         continue;
       }
       float T = 1.f;
-      if (L.shadows)
+      if (!Local && L.shadows)
       {
         ++c.shadowRays;
         const float tPiece = boxExit(v->volume, x, dl);
@@ -458,7 +473,7 @@ MCVOL_HOT Vec3f litPathFrom(const SceneView& s, const SceneView& light, Tracker 
       rng.sequence2(kGroupAmbient, u0, u1);
       const Vec3f wa = directionAround(w, sampleHGCosine(g, u0), u1);
       float T = 1.f;
-      if (L.shadows)
+      if (!Local && L.shadows)
       {
         ++c.shadowRays;
         const Vec3f da = mul3(L.toIndex, wa);
@@ -473,7 +488,7 @@ MCVOL_HOT Vec3f litPathFrom(const SceneView& s, const SceneView& light, Tracker 
     }
     // From here on the path draws from the PCG stream.
     rng.endSequence();
-    if (depth + 1 >= L.maxDepth)
+    if (Local || depth + 1 >= L.maxDepth)
     {
       break;
     }
@@ -509,7 +524,7 @@ MCVOL_FUNC void foldShadowCounters(RayCounters& c, ShadowCounters& sc)
  * which litPathFrom() scatters or absorbs. `w` is the ray's unit world
  * direction, `d` its index-space image.
  */
-template <BlendMode Mode, bool Optimized = false>
+template <BlendMode Mode, bool Optimized = false, bool Local = false>
 MCVOL_HOT Vec4f traceLitSample(const SceneView& s, const SceneView& light, Tracker tracker, Vec3f o, Vec3f d, Vec3f w,
   float tmax, Rng& rng, RayCounters& c, ShadowCounters& sc, const RayImportance* imp = nullptr);
 
@@ -542,7 +557,7 @@ MCVOL_HOT Vec4f traceLitComposite(const SceneView& s, Tracker tracker, Vec3f o, 
   return out;
 }
 
-template <BlendMode Mode, bool Optimized>
+template <BlendMode Mode, bool Optimized, bool Local>
 MCVOL_HOT Vec4f traceLitSample(const SceneView& s, const SceneView& light, Tracker tracker, Vec3f o, Vec3f d, Vec3f w,
   float tmax, Rng& rng, RayCounters& c, ShadowCounters& sc, const RayImportance* imp)
 {
@@ -555,7 +570,7 @@ MCVOL_HOT Vec4f traceLitSample(const SceneView& s, const SceneView& light, Track
                                              : trackNDDA<Mode>(s, o, d, 0.f, tmax, rng, c, imp);
   if (hit.found())
   {
-    const Vec3f radiance = litPathFrom<Mode, Optimized>(s, light, tracker, o, d, w, hit, true, rng, c, sc);
+    const Vec3f radiance = litPathFrom<Mode, Optimized, Local>(s, light, tracker, o, d, w, hit, true, rng, c, sc);
     out = Vec4f{ radiance.x, radiance.y, radiance.z, 1.f };
   }
   foldShadowCounters(c, sc);
@@ -664,7 +679,7 @@ MCVOL_HOT LitPointOptics litPointOptics(const SceneView& s, Vec3f p, uint32_t pr
  * scattering vertex is handled after the traversal, so the camera ray's
  * loop carries no lighting code.
  */
-template <BlendMode Mode>
+template <BlendMode Mode, bool Local = false>
 MCVOL_HOT Vec4f traceLitExpected(const SceneView& s, const SceneView& light, Tracker tracker, Vec3f o, Vec3f d, Vec3f w,
   float tmax, Rng& rng, RayCounters& c, ShadowCounters& sc)
 {
@@ -727,7 +742,7 @@ MCVOL_HOT Vec4f traceLitExpected(const SceneView& s, const SceneView& light, Tra
   if (hit.found())
   {
     ++c.real;
-    L += litPathFrom<Mode, false>(s, light, tracker, o, d, w, hit, false, rng, c, sc);
+    L += litPathFrom<Mode, false, Local>(s, light, tracker, o, d, w, hit, false, rng, c, sc);
   }
   foldShadowCounters(c, sc);
   return premultipliedRGBA(L, T);
