@@ -43,7 +43,6 @@ and prints a Markdown table.
 
 import argparse
 import copy
-import csv
 import json
 import math
 import os
@@ -141,10 +140,6 @@ def gain(var, cost):
     return float(var.sum() * cost.sum() / (s * np.sqrt(cost)).sum() ** 2)
 
 
-def psnr(mse):
-    return float("inf") if mse <= 0 else 10.0 * math.log10(1.0 / mse)
-
-
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--out", required=True)
@@ -182,10 +177,10 @@ def main():
         pixel_cost = np.repeat(np.repeat(cost / args.tile ** 2, args.tile, 0), args.tile, 1)
         row = {
             "scene": scene[0],
-            "psnr_256": round(psnr(cap_mse), 2),
-            "oracle_psnr": round(psnr(oracle_mse), 2),
+            "psnr_256": round(stop_rule.psnr(cap_mse), 2),
+            "oracle_psnr": round(stop_rule.psnr(oracle_mse), 2),
             "oracle_time_ratio": round(float((counts * cost).sum() / (256.0 * cost.sum())), 3),
-            "oracle_minus_256_db": round(psnr(oracle_mse) - psnr(cap_mse), 2),
+            "oracle_minus_256_db": round(stop_rule.psnr(oracle_mse) - stop_rule.psnr(cap_mse), 2),
             "uniform_minus_256_db": round(10.0 * math.log10(args.time_fraction), 2),
             "gain_tiles": round(gain(var_tile, cost), 2),
             "gain_pixels": round(gain(var_pixel, pixel_cost), 2),
@@ -195,10 +190,7 @@ def main():
         rows.append(row)
         print(json.dumps(row))
         sys.stdout.flush()
-    with open(os.path.join(args.out, "adaptive_bound.csv"), "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=list(rows[0].keys()))
-        w.writeheader()
-        w.writerows(rows)
+    stop_rule.write_rows(os.path.join(args.out, "adaptive_bound.csv"), rows)
     print("\n| scene | PSNR at 256 | oracle at %.2f of the time | oracle - 256 (dB) | G tiles | G pixels | G needed |"
           % args.time_fraction)
     print("|---|---|---|---|---|---|---|")

@@ -11,6 +11,13 @@ table.
         the target (the first sample count at or above it, cumulative render
         time) and the lit ray march's (the coarsest step at or above it, one
         march), and the march's time over the default's
+    python3 Benchmarks/studies/lit_accuracy_table.py pictures OUT.png DIR...
+        equal-time pictures, as Lerzer and Dachsbacher's Fig. 5: one row per
+        DIR (an --out folder of mcvol-accuracy run without --score-only, one
+        lighting each), the reference, then each Monte Carlo series' and
+        the ray march's best image within the time the default Monte Carlo
+        series takes to reach --target dB (scored here: premultiplied RGB
+        over black, clipped, peak 1)
 """
 import argparse
 import csv
@@ -75,6 +82,95 @@ def table(paths, target):
         print("| %s, %s | %s | %s | %s | %s |" % (dataset, lighting, cell(ev, "spp"), cell(co, "spp"), march, ratio))
 
 
+def load_image(folder, name, w, h):
+    import numpy as np
+
+    return np.fromfile(os.path.join(folder, name), dtype=np.float32).reshape(h, w, 4)
+
+
+def shown(img):
+    """Premultiplied RGB over black, clipped as the screen shows it, top row first."""
+    import numpy as np
+
+    return np.clip(img[::-1, :, :3], 0.0, 1.0)
+
+
+def psnr_of(img, ref):
+    import math
+
+    import numpy as np
+
+    mse = float(np.mean((shown(img) - shown(ref)) ** 2))
+    return float("inf") if mse <= 0 else 10.0 * math.log10(1.0 / mse)
+
+
+def pictures(out, folders, target):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    rows = []
+    for folder in folders:
+        m = meta(folder)
+        w, h = (int(x) for x in m["size"].split())
+        ref = load_image(folder, "reference.f32", w, h)
+        reference_name = "reference"
+        series = {}
+        with open(os.path.join(folder, "timings.csv")) as f:
+            for r in csv.DictReader(f):
+                if r["method"] == "reference":
+                    if r["variant"] in ("raymarch", "montecarlo-reference"):
+                        reference_name = ("lit ray march, %s voxel" % r["param"] if r["variant"] == "raymarch"
+                                          else "Monte Carlo, %s spp" % r["param"])
+                    continue
+                if r["method"] == "montecarlo":
+                    key = "Monte Carlo, %s" % r["estimator"]
+                    name = "mc_%s_%s_%s_%d.f32" % (r["estimator"], r["sampler"], r["variant"], int(float(r["param"])))
+                    label = "%d spp" % int(float(r["param"]))
+                else:
+                    key = "lit ray march"
+                    name = "rm_%s_%g.f32" % (r["variant"], float(r["param"]))
+                    label = "step %g voxel" % float(r["param"])
+                img = load_image(folder, name, w, h)
+                series.setdefault(key, []).append((float(r["ms"]), label, psnr_of(img, ref), img))
+        default = series.get("Monte Carlo, expected-value", [])
+        reached = [x for x in default if x[2] >= target]
+        budget = reached[0][0] if reached else max(x[0] for x in default)
+        cells = [("reference: %s" % reference_name, None, ref)]
+        for key in ("Monte Carlo, expected-value", "Monte Carlo, collision", "lit ray march"):
+            within = [x for x in series.get(key, []) if x[0] <= budget * 1.0001]
+            if not within:
+                cells.append((key, None, None))
+                continue
+            best = max(within, key=lambda x: x[2])
+            cells.append((key, best, best[3]))
+        rows.append((m, budget, cells))
+    ncols = max(len(r[2]) for r in rows)
+    fig, axes = plt.subplots(len(rows), ncols, figsize=(2.6 * ncols, 2.9 * len(rows)), squeeze=False)
+    for i, (m, budget, cells) in enumerate(rows):
+        for j, (key, best, img) in enumerate(cells):
+            ax = axes[i][j]
+            ax.axis("off")
+            if img is None:
+                ax.text(0.5, 0.5, "no image within\n%.0f ms" % budget, ha="center", va="center", fontsize=8)
+                ax.set_title(key, fontsize=7)
+                continue
+            ax.imshow(shown(img), interpolation="nearest")
+            if best is None:
+                ax.set_title("%s, %s\n%s" % (m["dataset"], m["lighting"], key), fontsize=7)
+            else:
+                ax.set_title("%s\n%s, %.0f ms, %.1f dB" % (key, best[1], best[0], best[2]), fontsize=7)
+    fig.suptitle("Equal time: each method's best image within the time the default reaches %g dB" % target,
+                 fontsize=9)
+    fig.tight_layout()
+    fig.savefig(out, dpi=100)
+    plt.close(fig)
+    for m, budget, cells in rows:
+        print("| %s, %s | %.0f ms | %s |" % (m["dataset"], m["lighting"], budget, " | ".join(
+            "-" if c[1] is None else "%s: %s, %.1f dB" % (c[0], c[1][1], c[1][2]) for c in cells[1:])))
+
+
 def main():
     p = argparse.ArgumentParser()
     sub = p.add_subparsers(dest="command", required=True)
@@ -84,9 +180,15 @@ def main():
     t = sub.add_parser("table")
     t.add_argument("csv", nargs="+")
     t.add_argument("--target", type=float, default=35.0)
+    q = sub.add_parser("pictures")
+    q.add_argument("out")
+    q.add_argument("folders", nargs="+")
+    q.add_argument("--target", type=float, default=35.0)
     args = p.parse_args()
     if args.command == "merge":
         merge(args.out, args.folders)
+    elif args.command == "pictures":
+        pictures(args.out, args.folders, args.target)
     else:
         table(args.csv, args.target)
 

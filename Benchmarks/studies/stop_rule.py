@@ -114,6 +114,14 @@ def display(img, background):
     return np.clip(np.round(rgb * 255.0), 0, 255)
 
 
+def write_rows(path, rows):
+    """The rows (dicts of one set of keys) as a CSV file."""
+    with open(path, "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=list(rows[0].keys()))
+        w.writeheader()
+        w.writerows(rows)
+
+
 def psnr(mse, peak=1.0):
     return float("inf") if mse <= 0 else 10.0 * math.log10(peak * peak / mse)
 
@@ -171,10 +179,7 @@ def main():
             rows.append(row)
             print(json.dumps(row))
             sys.stdout.flush()
-    with open(os.path.join(args.out, "stop_rule.csv"), "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=list(rows[0].keys()))
-        w.writeheader()
-        w.writerows(rows)
+    write_rows(os.path.join(args.out, "stop_rule.csv"), rows)
     print("\n| scene | target | stop spp | time / 256's | PSNR stop | PSNR 256 | 8-bit PSNR stop | 8-bit PSNR 256 |")
     print("|---|---|---|---|---|---|---|---|")
     for r in rows:
