@@ -139,9 +139,14 @@ def pictures(out, folders, target):
         budget = reached[0][0] if reached else max(x[0] for x in default)
         cells = [("reference: %s" % reference_name, None, ref)]
         for key in ("Monte Carlo, expected-value", "Monte Carlo, collision", "lit ray march"):
-            within = [x for x in series.get(key, []) if x[0] <= budget * 1.0001]
+            if key not in series:
+                cells.append((key, "not in this run\n(the march renders single\nscattering only)", None))
+                continue
+            within = [x for x in series[key] if x[0] <= budget * 1.0001]
             if not within:
-                cells.append((key, None, None))
+                first = min(series[key], key=lambda x: x[0])
+                cells.append((key, "no image within %.0f ms\n(the cheapest: %s,\n%.0f ms, %.1f dB)" % (
+                    budget, first[1], first[0], first[2]), None))
                 continue
             best = max(within, key=lambda x: x[2])
             cells.append((key, best, best[3]))
@@ -153,7 +158,7 @@ def pictures(out, folders, target):
             ax = axes[i][j]
             ax.axis("off")
             if img is None:
-                ax.text(0.5, 0.5, "no image within\n%.0f ms" % budget, ha="center", va="center", fontsize=8)
+                ax.text(0.5, 0.5, best, ha="center", va="center", fontsize=8)
                 ax.set_title(key, fontsize=7)
                 continue
             ax.imshow(shown(img), interpolation="nearest")
@@ -168,7 +173,7 @@ def pictures(out, folders, target):
     plt.close(fig)
     for m, budget, cells in rows:
         print("| %s, %s | %.0f ms | %s |" % (m["dataset"], m["lighting"], budget, " | ".join(
-            "-" if c[1] is None else "%s: %s, %.1f dB" % (c[0], c[1][1], c[1][2]) for c in cells[1:])))
+            "-" if c[2] is None else "%s: %s, %.1f dB" % (c[0], c[1][1], c[1][2]) for c in cells[1:])))
 
 
 def main():
