@@ -124,8 +124,10 @@ int main(int argc, char** argv)
     g->setSampling(o.sampling == "global" ? mcvol::CudaSampling::Global : mcvol::CudaSampling::Texture);
     g->setBlockSize(o.blockX, o.blockY);
     g->setPlainKernels(!o.generalKernels);
+    g->setDeferredShadows(!o.inlineShadows);
     device = g->deviceDescription() + "; sampling " + o.sampling + "; block " + std::to_string(o.blockX) + "x" +
-      std::to_string(o.blockY) + (o.generalKernels ? "; general kernels" : "");
+      std::to_string(o.blockY) + (o.generalKernels ? "; general kernels" : "") +
+      (o.inlineShadows ? "; inline shadow rays" : "");
   }
 #endif
   const bool hostAccel = !(r->device() && r->device()->buildsAccelerationOnDevice());

@@ -69,6 +69,9 @@ ArgParser makeParser(Options& o)
     .add("--general-kernels", 0, "",
       "CUDA: render plain scenes with the general kernels, not their plain compilation (for comparisons)",
       [&](const Args&) { o.generalKernels = true; })
+    .add("--inline-shadows", 0, "",
+      "CUDA: trace shadow rays in the camera rays' kernel, not deferred to a kernel of their own (for comparisons)",
+      [&](const Args&) { o.inlineShadows = true; })
     .add("--block", 2, "X Y", "CUDA: render-kernel block size (default 8 8)",
       [&](const Args& v)
       {

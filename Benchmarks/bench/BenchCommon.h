@@ -40,6 +40,7 @@ struct Options
   std::string label; ///< e.g. "NYX-like", printed with the dataset
   std::string sampling = "texture";
   bool generalKernels = false; ///< CUDA: the general kernels for plain scenes too
+  bool inlineShadows = false;  ///< CUDA: shadow rays traced in the camera rays' kernel (no deferral)
   int blockX = 8;
   int blockY = 8;
   double psnr = 35.0;

@@ -7,6 +7,7 @@
 
 #include "mcvol/CUDARenderer.h"
 
+#include "mcvol/ray/Lighting.h"
 #include "mcvol/ray/SceneView.h"
 
 #include <cuda_runtime.h>
@@ -293,6 +294,11 @@ struct CUDARenderer::Internal
   bool AccumSumsCurrent = false;
   bool SkipEvenReadBack = false; ///< set by render() for RenderSettings::readBackEven off
   bool PlainKernels = true;      ///< setPlainKernels()
+  bool DeferShadows = true;      ///< setDeferredShadows()
+  /// The deferred shadow rays' queue (RenderLaunch::deferred), one entry
+  /// per pixel, and its count.
+  DeviceBuffer<DeferredShadows> Deferred;
+  DeviceBuffer<unsigned> DeferredCount;
   bool DeviceLevels = true;      ///< setDeviceLevels()
   /// displayImage(): the 8-bit image on the device and its page-locked host copy.
   DeviceBuffer<uchar4> Display;

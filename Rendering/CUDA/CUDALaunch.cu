@@ -469,6 +469,17 @@ void CUDARenderer::render(const Scene& scene, const Camera& camera, const Render
   }
   else
   {
+    if (lit && !count && in.DeferShadows && deferrableShadows(s, fp.sampler))
+    {
+      // One queue entry per pixel, kept at the largest image rendered.
+      if (in.Deferred.count < P)
+      {
+        in.Deferred.resize(P);
+      }
+      in.DeferredCount.resize(1);
+      k.deferred = in.Deferred.ptr;
+      k.deferredCount = in.DeferredCount.ptr;
+    }
     launchRender(s.blend.mode, count, lit, in.PlainKernels && plainScene(s, *k.light), s, cam, fp, k);
   }
   MCVOL_CUDA(cudaGetLastError());

@@ -40,6 +40,11 @@ struct RenderLaunch
   /// Lit kernels: the view light paths run in (lightView(): the exact
   /// stand-in's view with its device pointers, or the render's own view).
   const SceneView* light = nullptr;
+  /// Lit renders whose shadow rays wait for a kernel of their own
+  /// (deferrableShadows(), CUDARenderer::setDeferredShadows): room for one
+  /// DeferredShadows per pixel, and the count queued. Null otherwise.
+  DeferredShadows* deferred = nullptr;
+  unsigned* deferredCount = nullptr;
 };
 
 namespace
@@ -148,6 +153,133 @@ __device__ __forceinline__ void renderKernelBody(const SceneView& s, const Scene
   }
 }
 
+/// Folds one sample of index `index` into pixel p (none when `v` is null:
+/// the ray missed the volume): renderIntoPixel() for a render of one sample.
+__device__ MCVOL_FORCE_INLINE void foldOneSample(const Vec4f* v, uint32_t index, size_t p, float4* accum,
+  double* sums, float4* even, double* evenSums, uint32_t previous)
+{
+  Vec4d sum = pixelSum(sums, p, previous);
+  if (v)
+  {
+    addSample(sum, *v);
+  }
+  storePixel(accum, sums, p, sum, previous + 1u);
+  if (even && addedEvenSamples(previous, 1) > 0u)
+  {
+    Vec4d evenSum = pixelSum(evenSums, p, evenSampleCount(previous));
+    if (v && (index & 1u) == 0u)
+    {
+      addSample(evenSum, *v);
+    }
+    storePixel(even, evenSums, p, evenSum, evenSampleCount(previous + 1u));
+  }
+}
+
+/**
+ * The camera rays of a lit render with deferred shadow rays, one sample per
+ * pixel (fp.samplesPerPixel 1): a pixel whose path records shadow rays
+ * (DeferredShadows) is queued, with its sample so far, for
+ * deferredShadowKernel(); the others are folded into the image here. The
+ * queue's order depends on the scheduling, the image does not: each entry
+ * finishes its own pixel. One atomic per warp.
+ */
+template <BlendMode Mode, int Unlit>
+__global__ void litDeferKernel(const __grid_constant__ SceneView s, const __grid_constant__ CameraView cam,
+  const __grid_constant__ FrameParams fp, const float* __restrict__ depth, float4* __restrict__ accum,
+  double* __restrict__ sums, float4* __restrict__ even, double* __restrict__ evenSums, uint32_t previous,
+  DeferredShadows* __restrict__ queue, unsigned* __restrict__ queued)
+{
+  const int x = int(blockIdx.x * blockDim.x + threadIdx.x);
+  const int y = int(blockIdx.y * blockDim.y + threadIdx.y);
+  DeferredShadows d;
+  bool deferred = false;
+  if (x < cam.width && y < cam.height)
+  {
+    const size_t p = size_t(y) * size_t(cam.width) + size_t(x);
+    RayCounters c;
+    ShadowCounters sc;
+    Vec4f v;
+    const bool sampled = renderSample<Mode, true, false, Unlit + kDeferredShadows>(
+      s, s, cam, fp, x, y, depth ? depth[p] : 1.f, fp.firstSample, c, sc, nullptr, v, &d);
+    if (sampled && d.count > 0)
+    {
+      d.sample = v;
+      d.pixel = uint32_t(p);
+      deferred = true;
+    }
+    else
+    {
+      foldOneSample(sampled ? &v : nullptr, fp.firstSample, p, accum, sums, even, evenSums, previous);
+    }
+  }
+  // Every thread of the block reaches this point; a warp's lanes are its
+  // threads in linear order, the last warp of a block possibly partial.
+  const unsigned linear = threadIdx.y * blockDim.x + threadIdx.x;
+  const unsigned lane = linear & 31u;
+  const unsigned inWarp = min(32u, blockDim.x * blockDim.y - (linear & ~31u));
+  const unsigned warp = inWarp == 32u ? 0xffffffffu : (1u << inWarp) - 1u;
+  const unsigned ballot = __ballot_sync(warp, deferred);
+  if (ballot != 0u)
+  {
+    const int leader = __ffs(ballot) - 1;
+    unsigned base = 0;
+    if (int(lane) == leader)
+    {
+      base = atomicAdd(queued, unsigned(__popc(ballot)));
+    }
+    base = __shfl_sync(warp, base, leader);
+    if (deferred)
+    {
+      queue[base + unsigned(__popc(ballot & ((1u << lane) - 1u)))] = d;
+    }
+  }
+}
+
+/// The queued shadow rays of litDeferKernel(), one pixel per thread in full
+/// warps: each sample finished (finishDeferredSample()) and folded into its
+/// pixel.
+template <BlendMode Mode>
+__global__ void deferredShadowKernel(const __grid_constant__ SceneView s, uint32_t index, float4* __restrict__ accum,
+  double* __restrict__ sums, float4* __restrict__ even, double* __restrict__ evenSums, uint32_t previous,
+  const DeferredShadows* __restrict__ queue, const unsigned* __restrict__ queued)
+{
+  const unsigned i = blockIdx.x * blockDim.x + threadIdx.x;
+  if (i >= *queued)
+  {
+    return;
+  }
+  DeferredShadows d = queue[i];
+  const Vec4f v = finishDeferredSample<Mode>(s, d);
+  foldOneSample(&v, index, d.pixel, accum, sums, even, evenSums, previous);
+}
+
+/// Threads per block of deferredShadowKernel().
+constexpr unsigned kDeferredBlock = 128;
+
+/// A lit render with deferred shadow rays (RenderLaunch::deferred): per
+/// sample, litDeferKernel() and deferredShadowKernel(), one after the other
+/// on the launch's stream. The samples go into the image one at a time as
+/// renderPixel() adds them, so the image is the same however many a render
+/// asks for.
+template <BlendMode Mode, int Unlit>
+void launchDeferred(const SceneView& s, const CameraView& cam, const FrameParams& fp, const RenderLaunch& k)
+{
+  const size_t P = size_t(cam.width) * size_t(cam.height);
+  const unsigned blocks = unsigned((P + kDeferredBlock - 1) / kDeferredBlock);
+  FrameParams one = fp;
+  one.samplesPerPixel = 1;
+  for (int j = 0; j < fp.samplesPerPixel; ++j)
+  {
+    one.firstSample = fp.firstSample + uint32_t(j);
+    const uint32_t previous = k.previous + uint32_t(j);
+    MCVOL_CUDA(cudaMemsetAsync(k.deferredCount, 0, sizeof(unsigned), k.stream));
+    litDeferKernel<Mode, Unlit><<<k.grid, k.block, 0, k.stream>>>(
+      s, cam, one, k.depth, k.accum, k.sums, k.even, k.evenSums, previous, k.deferred, k.deferredCount);
+    deferredShadowKernel<Mode><<<blocks, kDeferredBlock, 0, k.stream>>>(
+      s, one.firstSample, k.accum, k.sums, k.even, k.evenSums, previous, k.deferred, k.deferredCount);
+  }
+}
+
 /// The unlit render kernel: renderKernelBody() on the kernel's parameters.
 template <BlendMode Mode, bool Count, int Unlit = 0>
 __global__ void renderKernel(const __grid_constant__ SceneView s, const __grid_constant__ CameraView cam,
@@ -229,7 +361,8 @@ void launchUnlit(
 /// Launches the lit kernel of estimator code `unlit` (unlitEstimator(): 1
 /// the expected-value estimator of lit camera rays, 0 the collision
 /// estimator, each plus kLocalLight for light paths that end at the camera
-/// ray's collision), with or without counters. This backend refuses to light
+/// ray's collision), with or without counters; with RenderLaunch::deferred
+/// and without counters (the pilots count), the deferred pair of kernels. This backend refuses to light
 /// post-render composite before it launches (CUDARenderer::render), so no
 /// lit composite kernel is compiled: it would only spill registers.
 template <BlendMode Mode>
@@ -242,6 +375,18 @@ void launchLit(
   }
   else
   {
+    if (k.deferred && !count && (unlit == 0 || unlit == 1))
+    {
+      if (unlit == 1)
+      {
+        launchDeferred<Mode, 1>(s, cam, fp, k);
+      }
+      else
+      {
+        launchDeferred<Mode, 0>(s, cam, fp, k);
+      }
+      return;
+    }
     switch (unlit)
     {
       case 1 + kLocalLight:

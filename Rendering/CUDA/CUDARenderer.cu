@@ -213,6 +213,16 @@ bool CUDARenderer::plainKernels() const
   return this->In->PlainKernels;
 }
 
+void CUDARenderer::setDeferredShadows(bool on)
+{
+  this->In->DeferShadows = on;
+}
+
+bool CUDARenderer::deferredShadows() const
+{
+  return this->In->DeferShadows;
+}
+
 bool CUDARenderer::buildsLevelsOnDevice() const
 {
   return this->In->DeviceLevels;
@@ -260,7 +270,8 @@ CudaMemoryStats CUDARenderer::memory() const
   m.macrocellBytes = this->In->Ranges.bytes();
   m.majorantBytes = this->In->Majorants.bytes();
   m.imageBytes = this->In->Accum.bytes() + this->In->Even.bytes() + this->In->AccumSums.bytes() +
-    this->In->EvenSums.bytes() + this->In->Depth.bytes() + this->In->Display.bytes();
+    this->In->EvenSums.bytes() + this->In->Depth.bytes() + this->In->Display.bytes() + this->In->Deferred.bytes() +
+    this->In->DeferredCount.bytes();
   for (const auto& li : this->In->LevelInputs)
   {
     m.levelInputBytes += li->data.bytes();

@@ -947,6 +947,66 @@ TEST(CudaRender, PlainKernelsEqualGeneral)
   }
 }
 
+// Deferred shadow rays (CUDARenderer::setDeferredShadows, the default) give
+// the image of the shadow rays traced in the camera rays' kernel: plain and
+// general kernels, both lit estimators, three blends, one light with ratio
+// tracking, and two lights of which one is chosen per vertex with ambient
+// light, gradient shading and delta tracking. The queue is allocated only
+// where the rays were deferred.
+TEST(CudaRender, DeferredShadowsEqualTraced)
+{
+  EXPECT_TRUE(CUDARenderer().deferredShadows()); // on by default
+  const TypedVolume v(ScalarType::UInt16, 3, 30, 28, 26);
+  const Camera cam = orbitCamera(v.dims, std::array<double, 3>{ 1, 1, 1 }.data(), 24, 24, 30, 20);
+  const size_t queueBytes = size_t(cam.width) * size_t(cam.height) * sizeof(DeferredShadows);
+  for (BlendMode mode : { BlendMode::Density, BlendMode::Max, BlendMode::Mix })
+  {
+    for (int config = 0; config < 2; ++config)
+    {
+      Scene scene;
+      v.configure(scene, mode);
+      LightingDesc ld = sunAndSky(config == 0 ? 1 : 2, config == 0 ? 0.0 : 0.2);
+      ld.sampleOneLight = config == 1;
+      ld.gradientShading = config == 1;
+      ld.deltaShadows = config == 1;
+      scene.setLighting(ld);
+      scene.update();
+      for (Estimator e : { Estimator::Collision, Estimator::ExpectedValue })
+      {
+        for (bool plain : { true, false })
+        {
+          std::vector<float> image[2];
+          size_t bytes[2] = { 0, 0 };
+          for (int deferred = 0; deferred < 2; ++deferred)
+          {
+            CUDARenderer g;
+            g.setPlainKernels(plain);
+            g.setDeferredShadows(deferred == 1);
+            Accumulator acc; // keeps the error estimate's even half (the default)
+            RenderSettings rs;
+            rs.seed = 9;
+            rs.estimator = e;
+            rs.samplesPerPixel = 3;
+            g.render(scene, cam, rs, nullptr, acc);
+            rs.samplesPerPixel = 2;
+            g.render(scene, cam, rs, nullptr, acc);
+            image[deferred].assign(acc.rgba(), acc.rgba() + size_t(cam.width) * cam.height * 4);
+            ASSERT_NE(acc.evenRGBA(), nullptr);
+            image[deferred].insert(image[deferred].end(), acc.evenRGBA(), acc.evenRGBA() + size_t(cam.width) * cam.height * 4);
+            bytes[deferred] = g.memory().imageBytes;
+          }
+          const auto [worst, sum] = worstAndSum(image[0], image[1]);
+          const std::string what = std::string(toString(mode)) + " config " + std::to_string(config) + " " +
+            toString(e) + (plain ? " plain" : " general");
+          EXPECT_GT(sum, 1.0) << what;
+          EXPECT_LE(worst, 1e-6) << what;
+          EXPECT_GE(bytes[1], bytes[0] + queueBytes) << what;
+        }
+      }
+    }
+  }
+}
+
 // The estimator choice's pilots rendered at once (CUDARenderer::renderPilots:
 // each replicate's samples as one-sample renders of their own, folded on the
 // host) equal the renders one after the other (Renderer::renderPilots, the

@@ -1112,6 +1112,161 @@ TEST(Lighting, LocalLightPathIsTheFullPath)
   EXPECT_FALSE(localLighting(L)) << "unlit";
 }
 
+// Where the shadow rays are deferred (deferrableShadows(): the GPU traces
+// them in a kernel of their own), the recorded rays, finished afterwards,
+// must give the traced path's sample bit for bit: on every pixel and sample,
+// both estimators, three blends, one light with ratio-tracking shadows, and
+// two lights of which one is chosen per vertex with ambient light, gradient
+// shading and delta-tracking shadows (two rays per vertex).
+namespace
+{
+/// Sample `index` of pixel (x, y) traced, and deferred then finished, with
+/// the lit estimator `code` (0 or 1); `rays` gets the deferred ray count.
+template <BlendMode Mode, int Code>
+void tracedAndDeferred(const SceneView& s, const CameraView& cam, const FrameParams& fp, int x, int y,
+  uint32_t index, Vec4f& traced, Vec4f& deferred, int& rays)
+{
+  RayCounters c;
+  ShadowCounters sc;
+  traced = Vec4f();
+  deferred = Vec4f();
+  renderSample<Mode, true, false, Code>(s, s, cam, fp, x, y, 1.f, index, c, sc, nullptr, traced);
+  DeferredShadows d;
+  RayCounters cd;
+  ShadowCounters scd;
+  renderSample<Mode, true, false, Code + kDeferredShadows>(s, s, cam, fp, x, y, 1.f, index, cd, scd, nullptr, deferred, &d);
+  rays = d.count;
+  if (d.count > 0)
+  {
+    d.sample = deferred;
+    deferred = finishDeferredSample<Mode>(s, d);
+  }
+}
+
+template <BlendMode Mode>
+void tracedAndDeferred(int code, const SceneView& s, const CameraView& cam, const FrameParams& fp, int x, int y,
+  uint32_t index, Vec4f& traced, Vec4f& deferred, int& rays)
+{
+  if (code == 1)
+  {
+    tracedAndDeferred<Mode, 1>(s, cam, fp, x, y, index, traced, deferred, rays);
+  }
+  else
+  {
+    tracedAndDeferred<Mode, 0>(s, cam, fp, x, y, index, traced, deferred, rays);
+  }
+}
+} // namespace
+
+TEST(Lighting, DeferredShadowRaysAreTheTracedOnes)
+{
+  const DemoVolume v = makeDemo("cosmology", { 16, 16, 16 });
+  const Camera camera = orbitCamera(v.dims, v.spacing, 12, 12, 30, 20);
+  const CameraView cam = toView(camera);
+  for (BlendMode mode : { BlendMode::Density, BlendMode::Max, BlendMode::Mix })
+  {
+    Scene scene;
+    configureDemo(scene, v, 4, 128, 0.5, mode);
+    for (int config = 0; config < 2; ++config)
+    {
+      LightingDesc ld;
+      ld.lights = { testSun(1.5) };
+      ld.albedo = { 0.9f, 0.6f, 0.8f, 0.3f };
+      ld.anisotropy = { 0.4f, -0.2f, 0.f, 0.7f };
+      if (config == 1)
+      {
+        ld.lights.push_back(testLamp(300));
+        ld.sampleOneLight = true;
+        ld.ambient[0] = ld.ambient[1] = ld.ambient[2] = 0.3;
+        ld.gradientShading = true;
+        ld.deltaShadows = true;
+      }
+      scene.setLighting(ld);
+      SceneView s = scene.view();
+      s.sigmaLimit = extinctionLimit(cam);
+      setLightingFrame(s, camera);
+      ASSERT_TRUE(deferrableShadows(s, Sampler::Sobol));
+      for (Estimator e : { Estimator::Collision, Estimator::ExpectedValue })
+      {
+        RenderSettings rs;
+        rs.estimator = e;
+        const FrameParams fp = frameParams(rs, 0);
+        const int code = unlitEstimator(e, mode, true, false);
+        uint64_t differ = 0, deferredSamples = 0, twoRays = 0;
+        double total = 0, shadowed = 0;
+        for (int y = 0; y < cam.height; ++y)
+        {
+          for (int x = 0; x < cam.width; ++x)
+          {
+            for (uint32_t index = 0; index < 8; ++index)
+            {
+              Vec4f traced, deferred;
+              int rays = 0;
+              switch (mode)
+              {
+                case BlendMode::Max:
+                  tracedAndDeferred<BlendMode::Max>(code, s, cam, fp, x, y, index, traced, deferred, rays);
+                  break;
+                case BlendMode::Mix:
+                  tracedAndDeferred<BlendMode::Mix>(code, s, cam, fp, x, y, index, traced, deferred, rays);
+                  break;
+                default:
+                  tracedAndDeferred<BlendMode::Density>(code, s, cam, fp, x, y, index, traced, deferred, rays);
+                  break;
+              }
+              differ += (traced.r != deferred.r || traced.g != deferred.g || traced.b != deferred.b ||
+                          traced.a != deferred.a)
+                ? 1u
+                : 0u;
+              deferredSamples += rays > 0 ? 1u : 0u;
+              twoRays += rays == 2 ? 1u : 0u;
+              total += traced.r + traced.g + traced.b;
+              shadowed += rays > 0 ? traced.r + traced.g + traced.b : 0.0;
+            }
+          }
+        }
+        const std::string what = std::string(toString(mode)) + (config ? ", two lights, ambient" : ", one light") +
+          (code ? ", expected value" : ", collision");
+        EXPECT_EQ(differ, 0u) << what;
+        EXPECT_GT(deferredSamples, 50u) << what;
+        EXPECT_GT(shadowed, 0.0) << what;
+        EXPECT_GT(total, shadowed) << what; // some emission without shadow rays
+        if (config == 1)
+        {
+          EXPECT_GT(twoRays, 0u) << what;
+        }
+      }
+    }
+  }
+  // Where a path's shadow rays cannot wait.
+  Scene scene;
+  configureDemo(scene, v, 4, 128, 0.5, BlendMode::Density);
+  LightingDesc ld;
+  ld.lights = { testSun(1.5) };
+  scene.setLighting(ld);
+  SceneView s = scene.view();
+  EXPECT_TRUE(deferrableShadows(s, Sampler::Independent));
+  s.lighting.ambient = Vec3f(0.2f, 0.2f, 0.2f);
+  EXPECT_TRUE(deferrableShadows(s, Sampler::Sobol));
+  EXPECT_FALSE(deferrableShadows(s, Sampler::Independent)) << "the ambient direction drawn between two shadow rays";
+  s.lighting.numLights = 2;
+  EXPECT_FALSE(deferrableShadows(s, Sampler::Sobol)) << "three rays per vertex";
+  s.lighting.sampleOneLight = true;
+  EXPECT_TRUE(deferrableShadows(s, Sampler::Sobol));
+  s.lighting.maxDepth = 2;
+  EXPECT_FALSE(deferrableShadows(s, Sampler::Sobol)) << "scattered rays follow the shadow rays";
+  s.lighting.maxDepth = 1;
+  s.lighting.shadows = false;
+  EXPECT_FALSE(deferrableShadows(s, Sampler::Sobol)) << "no shadow rays";
+  s.lighting.shadows = true;
+  SceneView other = s;
+  s.outside = &other;
+  EXPECT_FALSE(deferrableShadows(s, Sampler::Sobol)) << "a stand-in of other pieces";
+  s.outside = nullptr;
+  s.lighting.enabled = false;
+  EXPECT_FALSE(deferrableShadows(s, Sampler::Sobol)) << "unlit";
+}
+
 // Which estimator a lit camera ray runs: the expected-value one where asked
 // for (the default), the collision estimator where asked for, under the
 // visibility optimization and under post-render compositing, and for the

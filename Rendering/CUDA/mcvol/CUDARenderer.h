@@ -24,7 +24,7 @@ struct CudaMemoryStats
   size_t textureBytes = 0;    ///< channels held as 3D textures (each channel is held one way only)
   size_t macrocellBytes = 0;  ///< per-cell per-channel scalar ranges
   size_t majorantBytes = 0;   ///< per-cell per-channel majorants
-  size_t imageBytes = 0;      ///< accumulation (with the error estimate's even half) and depth buffers
+  size_t imageBytes = 0;      ///< accumulation (with the error estimate's even half), depth and deferred shadow rays
   size_t levelInputBytes = 0; ///< classifyLevel()'s kept copies of its inputs (ClassifyInput::dataVersion)
 };
 
@@ -154,6 +154,18 @@ public:
    */
   void setPlainKernels(bool on);
   bool plainKernels() const;
+  /**
+   * On by default: lit renders whose shadow rays can wait
+   * (deferrableShadows(): shadows, single scattering, one process) trace
+   * the camera rays first, queue the pixels whose path scattered, and trace
+   * their shadow rays in a second kernel, in full warps; otherwise the few
+   * threads of a warp that cast a shadow ray hold up the rest. The image is
+   * the same either way (CudaRender.DeferredShadowsEqualTraced); the queue
+   * takes sizeof(DeferredShadows), about 150 bytes, per pixel (CudaMemoryStats::imageBytes). Off, for
+   * comparisons.
+   */
+  void setDeferredShadows(bool on);
+  bool deferredShadows() const;
   /// Threads per block (x, y) of the render kernel (default 8 x 8).
   void setBlockSize(int x, int y);
 

@@ -12,6 +12,10 @@ namespace mcvol
 /// Added to a lit estimator code (0 or 1) where localLighting() holds: the
 /// kernels then compile litPathFrom()'s Local path.
 constexpr int kLocalLight = 4;
+/// Added to a lit estimator code (0 or 1) where the shadow rays are
+/// deferred (deferrableShadows()): renderSample() then records them into its
+/// DeferredShadows instead of tracing them.
+constexpr int kDeferredShadows = 8;
 
 /// The estimator a render's camera rays use, as the kernels' compile-time
 /// code: 0 collision, 1 expected value (lit: traceLitExpected()), 2
@@ -62,83 +66,104 @@ struct FrameParams
 };
 
 /**
- * Adds `samplesPerPixel` Monte Carlo samples of pixel (x, y), premultiplied
- * RGBA, to the pixel's running sum `sum` one at a time, in double precision
- * (addSample()). Sample k of a pixel draws from Rng(pixel, firstSample + k,
- * seed) (and, with Sampler::Sobol, the pixel's scrambled Sobol' point of
- * that sample index), so the samples depend on nothing but the pixel, the
- * sample indices and the seed; since each is added to the sum of all the
- * pixel's earlier samples, the sum does not depend on how the samples were
- * batched into renders either.
- * Optimized (a compile-time choice, as Lit) tracks through the visibility
- * optimization with the pixel's list `imp`; without it the tracking code is
- * exactly the unoptimized one (the null list folds away). `even` (optional)
- * is the running sum of the samples of even index firstSample + k, the half
- * the error estimate keeps (Accumulator::estimatedMSE). `light` is
- * lightView(s), the view lit paths run in (unlit renders never read it).
- * Unlit (a compile-time choice too, so that each kernel carries only its
- * estimator's code and registers; unlitEstimator() decides it): 1 scores
- * unlit camera rays with trackExpected() and lit ones with
+ * Sample `index` of pixel (x, y), premultiplied RGBA, into `v`; false when
+ * the pixel's ray misses the volume's box (the sample is then transparent
+ * and `v` is not written). The sample draws from Rng(pixel, index, seed)
+ * (and, with Sampler::Sobol, the pixel's scrambled Sobol' point of that
+ * sample index), so it depends on nothing but the pixel, the sample index
+ * and the seed. Optimized (a compile-time choice, as Lit) tracks through the
+ * visibility optimization with the pixel's list `ri`; without it the
+ * tracking code is exactly the unoptimized one (the null list folds away).
+ * `light` is lightView(s), the view lit paths run in (unlit renders never
+ * read it). Unlit (a compile-time choice too, so that each kernel carries
+ * only its estimator's code and registers; unlitEstimator() decides it): 1
+ * scores unlit camera rays with trackExpected() and lit ones with
  * traceLitExpected(), 2 with trackUnbiasedMarch(), 3 with
  * trackUnbiasedMarch()'s control variates, 0 with the collision estimator;
- * lit, kLocalLight added compiles the light path's Local code.
+ * lit, kLocalLight added compiles the light path's Local code, and
+ * kDeferredShadows added its Defer code, which records the shadow rays into
+ * `defer` (its count 0 on entry) and leaves their terms out of `v`.
+ */
+template <BlendMode Mode, bool Lit, bool Optimized, int Unlit>
+MCVOL_FUNC bool renderSample(const SceneView& s, const SceneView& light, const CameraView& cam, const FrameParams& fp,
+  int x, int y, float depth, uint32_t index, RayCounters& c, ShadowCounters& sc, const RayImportance* ri, Vec4f& v,
+  DeferredShadows* defer = nullptr)
+{
+  constexpr bool Local = Lit && (Unlit & kLocalLight) != 0;
+  constexpr bool Defer = Lit && (Unlit & kDeferredShadows) != 0;
+  constexpr int Code = Unlit & ~(kLocalLight | kDeferredShadows);
+  const uint32_t pixel = uint32_t(y) * uint32_t(cam.width) + uint32_t(x);
+  Rng rng(pixel, index, fp.seed);
+  if (fp.sampler == Sampler::Sobol)
+  {
+    rng.startSequence(pixel, index, fp.seed);
+  }
+  float jx = 0.5f, jy = 0.5f;
+  if (fp.jitter)
+  {
+    rng.sequence2(kGroupPixel, jx, jy);
+    if (cam.jitterScale != 1.f)
+    {
+      jx = 0.5f + (jx - 0.5f) * cam.jitterScale;
+      jy = 0.5f + (jy - 0.5f) * cam.jitterScale;
+    }
+  }
+  IndexRay ray;
+  if (!generateRay(cam, s.volume, float(x) + jx, float(y) + jy, depth, ray))
+  {
+    return false;
+  }
+  if (Lit && Code == 1 && !Optimized && Mode != BlendMode::Composite)
+  {
+    v = traceLitExpected<Mode, Local, Defer>(s, light, fp.tracker, ray.o, ray.d, ray.world, ray.tmax, rng, c, sc, defer);
+  }
+  else if (Lit)
+  {
+    v = traceLitSample<Mode, Optimized, Local, Defer>(
+      s, light, fp.tracker, ray.o, ray.d, ray.world, ray.tmax, rng, c, sc, ri, defer);
+  }
+  else if (Code == 1 && !Optimized && Mode != BlendMode::Composite)
+  {
+    v = trackExpected<Mode>(s, ray.o, ray.d, 0.f, ray.tmax, rng, c);
+  }
+  else if ((Code == 2 || Code == 3) && !Optimized && Mode != BlendMode::Composite)
+  {
+    v = trackUnbiasedMarch<Mode, Code == 3>(s, ray.o, ray.d, 0.f, ray.tmax, rng, c);
+  }
+  else
+  {
+    v = traceSample<Mode>(s, fp.tracker, ray.o, ray.d, 0.f, ray.tmax, rng, c, ri);
+  }
+  return true;
+}
+
+/**
+ * Adds `samplesPerPixel` Monte Carlo samples of pixel (x, y) (renderSample(),
+ * sample indices firstSample, firstSample + 1, ...) to the pixel's running
+ * sum `sum` one at a time, in double precision (addSample()); since each is
+ * added to the sum of all the pixel's earlier samples, the sum does not
+ * depend on how the samples were batched into renders. `even` (optional)
+ * is the running sum of the samples of even index, the half the error
+ * estimate keeps (Accumulator::estimatedMSE). The other parameters are
+ * renderSample()'s; Unlit does not take kDeferredShadows here.
  */
 template <BlendMode Mode, bool Lit = false, bool Optimized = false, int Unlit = 0>
 MCVOL_FUNC void renderPixel(const SceneView& s, const SceneView& light, const CameraView& cam, const FrameParams& fp,
   int x, int y, float depth, RayCounters& c, Vec4d& sum, const RayImportance* imp = nullptr, Vec4d* even = nullptr)
 {
-  constexpr bool Local = Lit && (Unlit & kLocalLight) != 0;
-  constexpr int Code = Unlit & ~kLocalLight;
+  static_assert((Unlit & kDeferredShadows) == 0, "deferred shadow rays are finished by finishDeferredSample()");
   const RayImportance* ri = Optimized ? imp : nullptr;
   ShadowCounters sc;
-  const uint32_t pixel = uint32_t(y) * uint32_t(cam.width) + uint32_t(x);
   for (int k = 0; k < fp.samplesPerPixel; ++k)
   {
     const uint32_t index = fp.firstSample + uint32_t(k);
-    Rng rng(pixel, index, fp.seed);
-    if (fp.sampler == Sampler::Sobol)
-    {
-      rng.startSequence(pixel, index, fp.seed);
-    }
-    float jx = 0.5f, jy = 0.5f;
-    if (fp.jitter)
-    {
-      rng.sequence2(kGroupPixel, jx, jy);
-      if (cam.jitterScale != 1.f)
-      {
-        jx = 0.5f + (jx - 0.5f) * cam.jitterScale;
-        jy = 0.5f + (jy - 0.5f) * cam.jitterScale;
-      }
-    }
-    IndexRay ray;
-    if (!generateRay(cam, s.volume, float(x) + jx, float(y) + jy, depth, ray))
+    Vec4f v;
+    if (!renderSample<Mode, Lit, Optimized, Unlit>(s, light, cam, fp, x, y, depth, index, c, sc, ri, v))
     {
       continue;
     }
-    Vec4f v;
-    if (Lit && Code == 1 && !Optimized && Mode != BlendMode::Composite)
-    {
-      v = traceLitExpected<Mode, Local>(s, light, fp.tracker, ray.o, ray.d, ray.world, ray.tmax, rng, c, sc);
-    }
-    else if (Lit)
-    {
-      v = traceLitSample<Mode, Optimized, Local>(
-        s, light, fp.tracker, ray.o, ray.d, ray.world, ray.tmax, rng, c, sc, ri);
-    }
-    else if (Code == 1 && !Optimized && Mode != BlendMode::Composite)
-    {
-      v = trackExpected<Mode>(s, ray.o, ray.d, 0.f, ray.tmax, rng, c);
-    }
-    else if ((Code == 2 || Code == 3) && !Optimized && Mode != BlendMode::Composite)
-    {
-      v = trackUnbiasedMarch<Mode, Code == 3>(s, ray.o, ray.d, 0.f, ray.tmax, rng, c);
-    }
-    else
-    {
-      v = traceSample<Mode>(s, fp.tracker, ray.o, ray.d, 0.f, ray.tmax, rng, c, ri);
-    }
     addSample(sum, v);
-    if (even && ((fp.firstSample + uint32_t(k)) & 1u) == 0u)
+    if (even && (index & 1u) == 0u)
     {
       addSample(*even, v);
     }

@@ -312,6 +312,94 @@ MCVOL_FUNC bool localLighting(const LightingView& L)
   return L.enabled && !L.shadows && L.maxDepth <= 1;
 }
 
+/// Most shadow rays one deferred scattering vertex holds (DeferredShadows):
+/// a light's and the ambient light's.
+constexpr int kDeferredRays = 2;
+
+/**
+ * The shadow rays of a lit sample's scattering vertex, recorded instead of
+ * traced (litPathFrom()'s Defer), and what the sample needs to be finished
+ * by finishDeferredSample(). The rays draw from the path's stream as it
+ * stands at the first of them, in the order the traced path draws, and
+ * their terms are added in its order too: the finished sample is the traced
+ * one bit for bit. On the GPU the few pixels whose camera ray scatters then
+ * trace their shadow rays in full warps of their own, and the camera rays'
+ * kernel carries no shadow-ray code (CUDARenderKernels.h).
+ */
+struct DeferredShadows
+{
+  Rng rng;            ///< the path's stream at its first shadow ray
+  Vec4f sample;       ///< the sample without the rays' terms
+  Vec3f x;            ///< the vertex, index space
+  int count = 0;      ///< rays recorded
+  uint32_t pixel = 0; ///< the pixel the sample belongs to (row-major)
+  Vec3f dir[kDeferredRays];
+  float tmax[kDeferredRays];
+  Vec3f scale[kDeferredRays]; ///< the path's throughput times the light's radiance
+  float f[kDeferredRays];     ///< the scatter function towards the light
+  float falloff[kDeferredRays];
+  float weight[kDeferredRays]; ///< the light's selection weight
+};
+
+/**
+ * Whether the lit paths of view `s` can defer their shadow rays
+ * (DeferredShadows): shadows on, one scattering vertex, no stand-in of
+ * other pieces, no visibility optimization of light rays, at most
+ * kDeferredRays rays per vertex, and with ambient light the Sobol' sampler,
+ * which draws the ambient direction from its own set: the independent
+ * sampler would draw it from the stream the light's shadow ray draws from
+ * before it.
+ */
+MCVOL_FUNC bool deferrableShadows(const SceneView& s, Sampler sampler)
+{
+  const LightingView& L = s.lighting;
+  if (!L.enabled || !L.shadows || L.maxDepth > 1 || s.outside || (s.importance.enabled && s.importance.lightRays))
+  {
+    return false;
+  }
+  const bool ambient = L.ambient.x > 0.f || L.ambient.y > 0.f || L.ambient.z > 0.f;
+  if (ambient && sampler != Sampler::Sobol)
+  {
+    return false;
+  }
+  return (L.sampleOneLight ? 1 : L.numLights) + (ambient ? 1 : 0) <= kDeferredRays;
+}
+
+/**
+ * A light's term of the radiance at a scattering vertex: `scale` (the path's
+ * throughput times the light's radiance) times the scatter function f, the
+ * transmittance T, the falloff and the light's selection weight, in this
+ * order wherever it is computed, so that a deferred shadow ray adds what a
+ * traced one adds.
+ */
+MCVOL_FUNC Vec3f shadowedLight(Vec3f scale, float f, float T, float falloff, float weight)
+{
+  return scale * (f * T * falloff * weight);
+}
+
+/// Records a shadow ray of the vertex x into `d` (litPathFrom()'s Defer).
+/// deferrableShadows() keeps the count within kDeferredRays.
+MCVOL_FUNC void recordShadowRay(DeferredShadows& d, const Rng& rng, Vec3f x, Vec3f dir, float tmax, Vec3f scale,
+  float f, float falloff, float weight)
+{
+  if (d.count >= kDeferredRays)
+  {
+    return;
+  }
+  if (d.count == 0)
+  {
+    d.rng = rng;
+    d.x = x;
+  }
+  const int i = d.count++;
+  d.dir[i] = dir;
+  d.tmax[i] = tmax;
+  d.scale[i] = scale;
+  d.f[i] = f;
+  d.falloff[i] = falloff;
+  d.weight[i] = weight;
+}
+
 /**
  * The lit path from a real collision `hit` of the ray o + t d (index space;
  * `w` its unit world direction): the collision scatters with probability
@@ -329,10 +417,13 @@ MCVOL_FUNC bool localLighting(const LightingView& L)
  * for scenes where localLighting() holds): the same path without the code
  * of the rays it never casts there, the tracking of scattered rays and the
  * shadow rays, which would otherwise hold registers in every lit kernel.
+ * Defer (for scenes where deferrableShadows() holds): the same path with its
+ * shadow rays recorded into `defer` instead of traced, and their terms left
+ * out of the radiance (finishDeferredShadows() adds them).
  */
-template <BlendMode Mode, bool Optimized, bool Local = false>
+template <BlendMode Mode, bool Optimized, bool Local = false, bool Defer = false>
 MCVOL_HOT Vec3f litPathFrom(const SceneView& s, const SceneView& light, Tracker tracker, Vec3f o, Vec3f d, Vec3f w,
-  Hit hit, bool emitFirst, Rng& rng, RayCounters& c, ShadowCounters& sc)
+  Hit hit, bool emitFirst, Rng& rng, RayCounters& c, ShadowCounters& sc, DeferredShadows* defer = nullptr)
 {
   const ShadowEstimator est =
     s.lighting.shadowEstimator == 1 ? ShadowEstimator::Delta : ShadowEstimator::Ratio;
@@ -354,7 +445,7 @@ MCVOL_HOT Vec3f litPathFrom(const SceneView& s, const SceneView& light, Tracker 
   }
   for (int depth = 0;; ++depth)
   {
-    if (!Local && depth > 0)
+    if (!Local && !Defer && depth > 0)
     {
       // The visibility optimization acts on the camera ray only (its segment
       // list belongs to the pixel).
@@ -453,6 +544,13 @@ MCVOL_HOT Vec3f litPathFrom(const SceneView& s, const SceneView& light, Tracker 
       {
         continue;
       }
+      if (Defer && L.shadows)
+      {
+        ++c.shadowRays;
+        recordShadowRay(*defer, rng, x, dl, minf(boxExit(v->volume, x, dl), dist), throughput * L.lightRadiance[l], f,
+          falloff, lightWeight);
+        continue;
+      }
       float T = 1.f;
       if (!Local && L.shadows)
       {
@@ -464,7 +562,7 @@ MCVOL_HOT Vec3f litPathFrom(const SceneView& s, const SceneView& light, Tracker 
           T *= outsideShadow<Mode>(*v, x, dl, tPiece, dist, est, rng, sc);
         }
       }
-      radiance += throughput * L.lightRadiance[l] * (f * T * falloff * lightWeight);
+      radiance += shadowedLight(throughput * L.lightRadiance[l], f, T, falloff, lightWeight);
     }
     if (L.ambient.x > 0.f || L.ambient.y > 0.f || L.ambient.z > 0.f)
     {
@@ -472,23 +570,34 @@ MCVOL_HOT Vec3f litPathFrom(const SceneView& s, const SceneView& light, Tracker 
       float u0, u1;
       rng.sequence2(kGroupAmbient, u0, u1);
       const Vec3f wa = directionAround(w, sampleHGCosine(g, u0), u1);
-      float T = 1.f;
-      if (!Local && L.shadows)
+      if (Defer && L.shadows)
       {
+        // Its term is the scale times T (shadowedLight() with f, falloff
+        // and weight 1), as below.
         ++c.shadowRays;
         const Vec3f da = mul3(L.toIndex, wa);
-        const float tPiece = boxExit(v->volume, x, da);
-        T = optimizedShadow<Mode, Optimized>(*v, x, da, tPiece, est, rng, sc);
-        if (T > 0.f)
-        {
-          T *= outsideShadow<Mode>(*v, x, da, tPiece, 3.4e38f, est, rng, sc);
-        }
+        recordShadowRay(*defer, rng, x, da, boxExit(v->volume, x, da), throughput * L.ambient, 1.f, 1.f, 1.f);
       }
-      radiance += throughput * L.ambient * T;
+      else
+      {
+        float T = 1.f;
+        if (!Local && L.shadows)
+        {
+          ++c.shadowRays;
+          const Vec3f da = mul3(L.toIndex, wa);
+          const float tPiece = boxExit(v->volume, x, da);
+          T = optimizedShadow<Mode, Optimized>(*v, x, da, tPiece, est, rng, sc);
+          if (T > 0.f)
+          {
+            T *= outsideShadow<Mode>(*v, x, da, tPiece, 3.4e38f, est, rng, sc);
+          }
+        }
+        radiance += throughput * L.ambient * T;
+      }
     }
     // From here on the path draws from the PCG stream.
     rng.endSequence();
-    if (Local || depth + 1 >= L.maxDepth)
+    if (Local || Defer || depth + 1 >= L.maxDepth)
     {
       break;
     }
@@ -508,6 +617,39 @@ MCVOL_HOT Vec3f litPathFrom(const SceneView& s, const SceneView& light, Tracker 
   return radiance;
 }
 
+/**
+ * The radiance a deferred vertex's shadow rays add (DeferredShadows), in
+ * view `s` (no stand-in: deferrableShadows()): each ray's transmittance
+ * from d.rng, in the order recorded, times its term.
+ */
+template <BlendMode Mode>
+MCVOL_HOT Vec3f finishDeferredShadows(const SceneView& s, DeferredShadows& d, ShadowCounters& sc)
+{
+  const ShadowEstimator est =
+    s.lighting.shadowEstimator == 1 ? ShadowEstimator::Delta : ShadowEstimator::Ratio;
+  Vec3f radiance;
+  for (int i = 0; i < d.count; ++i)
+  {
+    const float T = shadowTransmittance<Mode>(s, s.active, s.numActive, d.x, d.dir[i], d.tmax[i], est, d.rng, sc);
+    radiance += shadowedLight(d.scale[i], d.f[i], T, d.falloff[i], d.weight[i]);
+  }
+  return radiance;
+}
+
+/// The sample of a deferred vertex with its shadow rays' radiance added: the
+/// sample the path would have returned with the rays traced.
+template <BlendMode Mode>
+MCVOL_HOT Vec4f finishDeferredSample(const SceneView& s, DeferredShadows& d)
+{
+  ShadowCounters sc;
+  const Vec3f radiance = finishDeferredShadows<Mode>(s, d, sc);
+  Vec4f v = d.sample;
+  v.r += radiance.x;
+  v.g += radiance.y;
+  v.b += radiance.z;
+  return v;
+}
+
 /// Moves the shadow rays' importance counts into the ray counters.
 MCVOL_FUNC void foldShadowCounters(RayCounters& c, ShadowCounters& sc)
 {
@@ -524,9 +666,10 @@ MCVOL_FUNC void foldShadowCounters(RayCounters& c, ShadowCounters& sc)
  * which litPathFrom() scatters or absorbs. `w` is the ray's unit world
  * direction, `d` its index-space image.
  */
-template <BlendMode Mode, bool Optimized = false, bool Local = false>
+template <BlendMode Mode, bool Optimized = false, bool Local = false, bool Defer = false>
 MCVOL_HOT Vec4f traceLitSample(const SceneView& s, const SceneView& light, Tracker tracker, Vec3f o, Vec3f d, Vec3f w,
-  float tmax, Rng& rng, RayCounters& c, ShadowCounters& sc, const RayImportance* imp = nullptr);
+  float tmax, Rng& rng, RayCounters& c, ShadowCounters& sc, const RayImportance* imp = nullptr,
+  DeferredShadows* defer = nullptr);
 
 /**
  * Lighting under post-render compositing: each active channel lit as if it
@@ -557,9 +700,9 @@ MCVOL_HOT Vec4f traceLitComposite(const SceneView& s, Tracker tracker, Vec3f o, 
   return out;
 }
 
-template <BlendMode Mode, bool Optimized, bool Local>
+template <BlendMode Mode, bool Optimized, bool Local, bool Defer>
 MCVOL_HOT Vec4f traceLitSample(const SceneView& s, const SceneView& light, Tracker tracker, Vec3f o, Vec3f d, Vec3f w,
-  float tmax, Rng& rng, RayCounters& c, ShadowCounters& sc, const RayImportance* imp)
+  float tmax, Rng& rng, RayCounters& c, ShadowCounters& sc, const RayImportance* imp, DeferredShadows* defer)
 {
   if (Mode == BlendMode::Composite)
   {
@@ -570,7 +713,8 @@ MCVOL_HOT Vec4f traceLitSample(const SceneView& s, const SceneView& light, Track
                                              : trackNDDA<Mode>(s, o, d, 0.f, tmax, rng, c, imp);
   if (hit.found())
   {
-    const Vec3f radiance = litPathFrom<Mode, Optimized, Local>(s, light, tracker, o, d, w, hit, true, rng, c, sc);
+    const Vec3f radiance =
+      litPathFrom<Mode, Optimized, Local, Defer>(s, light, tracker, o, d, w, hit, true, rng, c, sc, defer);
     out = Vec4f{ radiance.x, radiance.y, radiance.z, 1.f };
   }
   foldShadowCounters(c, sc);
@@ -679,9 +823,9 @@ MCVOL_HOT LitPointOptics litPointOptics(const SceneView& s, Vec3f p, uint32_t pr
  * scattering vertex is handled after the traversal, so the camera ray's
  * loop carries no lighting code.
  */
-template <BlendMode Mode, bool Local = false>
+template <BlendMode Mode, bool Local = false, bool Defer = false>
 MCVOL_HOT Vec4f traceLitExpected(const SceneView& s, const SceneView& light, Tracker tracker, Vec3f o, Vec3f d, Vec3f w,
-  float tmax, Rng& rng, RayCounters& c, ShadowCounters& sc)
+  float tmax, Rng& rng, RayCounters& c, ShadowCounters& sc, DeferredShadows* defer = nullptr)
 {
   if (s.numActive == 0)
   {
@@ -742,7 +886,7 @@ MCVOL_HOT Vec4f traceLitExpected(const SceneView& s, const SceneView& light, Tra
   if (hit.found())
   {
     ++c.real;
-    L += litPathFrom<Mode, false, Local>(s, light, tracker, o, d, w, hit, false, rng, c, sc);
+    L += litPathFrom<Mode, false, Local, Defer>(s, light, tracker, o, d, w, hit, false, rng, c, sc, defer);
   }
   foldShadowCounters(c, sc);
   return premultipliedRGBA(L, T);

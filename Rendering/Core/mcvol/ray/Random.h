@@ -28,6 +28,13 @@ MCVOL_FUNC uint64_t splitmix64(uint64_t x)
 class Rng
 {
 public:
+  /// A placeholder stream, for a copy to be assigned (DeferredShadows).
+  MCVOL_FUNC Rng()
+    : State(0)
+    , Inc(1)
+  {
+  }
+
   MCVOL_FUNC Rng(uint32_t pixel, uint32_t sample, uint32_t seed)
   {
     const uint64_t key = splitmix64((uint64_t(seed) << 32) ^ pixel);
