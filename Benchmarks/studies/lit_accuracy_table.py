@@ -18,6 +18,10 @@ table.
         the ray march's best image within the time the default Monte Carlo
         series takes to reach --target dB (scored here: premultiplied RGB
         over black, clipped, peak 1)
+    python3 Benchmarks/studies/lit_accuracy_table.py prune DIR...
+        deletes the images of DIR that pictures would not show, keeping every
+        image's score in DIR/psnr.csv, which pictures then reads: what a run
+        on a remote machine needs to send back
 """
 import argparse
 import csv
@@ -104,64 +108,96 @@ def psnr_of(img, ref):
     return float("inf") if mse <= 0 else 10.0 * math.log10(1.0 / mse)
 
 
+def equal_time(folder, target):
+    """One pictures row: the folder's meta, the time budget (the default
+    series' time to the target) and the cells, the reference first, then each
+    series' best image within the budget as (title, (ms, label, dB, file) or
+    a note, file or None). Scores come from the folder's psnr.csv where prune
+    left one, else from the images."""
+    m = meta(folder)
+    w, h = (int(x) for x in m["size"].split())
+    ref = None
+    scores = {}
+    kept = os.path.join(folder, "psnr.csv")
+    if os.path.exists(kept):
+        with open(kept) as f:
+            scores = {r["file"]: float(r["psnr"]) for r in csv.DictReader(f)}
+    reference_name = "reference"
+    series = {}
+    with open(os.path.join(folder, "timings.csv")) as f:
+        for r in csv.DictReader(f):
+            if r["method"] == "reference":
+                if r["variant"] in ("raymarch", "montecarlo-reference"):
+                    reference_name = ("lit ray march, %s voxel" % r["param"] if r["variant"] == "raymarch"
+                                      else "Monte Carlo, %s spp" % r["param"])
+                continue
+            if r["method"] == "montecarlo":
+                key = "Monte Carlo, %s" % r["estimator"]
+                name = "mc_%s_%s_%s_%d.f32" % (r["estimator"], r["sampler"], r["variant"], int(float(r["param"])))
+                label = "%d spp" % int(float(r["param"]))
+            else:
+                key = "lit ray march"
+                name = "rm_%s_%g.f32" % (r["variant"], float(r["param"]))
+                label = "step %g voxel" % float(r["param"])
+            if name not in scores:
+                if ref is None:
+                    ref = load_image(folder, "reference.f32", w, h)
+                scores[name] = psnr_of(load_image(folder, name, w, h), ref)
+            series.setdefault(key, []).append((float(r["ms"]), label, scores[name], name))
+    default = series.get("Monte Carlo, expected-value", [])
+    reached = [x for x in default if x[2] >= target]
+    budget = reached[0][0] if reached else max(x[0] for x in default)
+    cells = [("reference: %s" % reference_name, None, "reference.f32")]
+    for key in ("Monte Carlo, expected-value", "Monte Carlo, collision", "lit ray march"):
+        if key not in series:
+            cells.append((key, "not in this run\n(the march renders single\nscattering only)", None))
+            continue
+        within = [x for x in series[key] if x[0] <= budget * 1.0001]
+        if not within:
+            first = min(series[key], key=lambda x: x[0])
+            cells.append((key, "no image within %.0f ms\n(the cheapest: %s,\n%.0f ms, %.1f dB)" % (
+                budget, first[1], first[0], first[2]), None))
+            continue
+        best = max(within, key=lambda x: x[2])
+        cells.append((key, best, best[3]))
+    return m, budget, cells, scores
+
+
+def prune(folders, target):
+    """Keeps only the images a pictures run of these folders shows, with every
+    image's score in psnr.csv: what a remote machine's runs need to send back."""
+    for folder in folders:
+        m, budget, cells, scores = equal_time(folder, target)
+        with open(os.path.join(folder, "psnr.csv"), "w", newline="") as f:
+            w = csv.writer(f)
+            w.writerow(["file", "psnr"])
+            for name, value in sorted(scores.items()):
+                w.writerow([name, value])
+        keep = {c[2] for c in cells if c[2]}
+        for name in os.listdir(folder):
+            if name.endswith(".f32") and name not in keep:
+                os.remove(os.path.join(folder, name))
+
+
 def pictures(out, folders, target):
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    rows = []
-    for folder in folders:
-        m = meta(folder)
-        w, h = (int(x) for x in m["size"].split())
-        ref = load_image(folder, "reference.f32", w, h)
-        reference_name = "reference"
-        series = {}
-        with open(os.path.join(folder, "timings.csv")) as f:
-            for r in csv.DictReader(f):
-                if r["method"] == "reference":
-                    if r["variant"] in ("raymarch", "montecarlo-reference"):
-                        reference_name = ("lit ray march, %s voxel" % r["param"] if r["variant"] == "raymarch"
-                                          else "Monte Carlo, %s spp" % r["param"])
-                    continue
-                if r["method"] == "montecarlo":
-                    key = "Monte Carlo, %s" % r["estimator"]
-                    name = "mc_%s_%s_%s_%d.f32" % (r["estimator"], r["sampler"], r["variant"], int(float(r["param"])))
-                    label = "%d spp" % int(float(r["param"]))
-                else:
-                    key = "lit ray march"
-                    name = "rm_%s_%g.f32" % (r["variant"], float(r["param"]))
-                    label = "step %g voxel" % float(r["param"])
-                img = load_image(folder, name, w, h)
-                series.setdefault(key, []).append((float(r["ms"]), label, psnr_of(img, ref), img))
-        default = series.get("Monte Carlo, expected-value", [])
-        reached = [x for x in default if x[2] >= target]
-        budget = reached[0][0] if reached else max(x[0] for x in default)
-        cells = [("reference: %s" % reference_name, None, ref)]
-        for key in ("Monte Carlo, expected-value", "Monte Carlo, collision", "lit ray march"):
-            if key not in series:
-                cells.append((key, "not in this run\n(the march renders single\nscattering only)", None))
-                continue
-            within = [x for x in series[key] if x[0] <= budget * 1.0001]
-            if not within:
-                first = min(series[key], key=lambda x: x[0])
-                cells.append((key, "no image within %.0f ms\n(the cheapest: %s,\n%.0f ms, %.1f dB)" % (
-                    budget, first[1], first[0], first[2]), None))
-                continue
-            best = max(within, key=lambda x: x[2])
-            cells.append((key, best, best[3]))
-        rows.append((m, budget, cells))
+    rows = [equal_time(folder, target)[:3] for folder in folders]
     ncols = max(len(r[2]) for r in rows)
     fig, axes = plt.subplots(len(rows), ncols, figsize=(2.6 * ncols, 2.9 * len(rows)), squeeze=False)
     for i, (m, budget, cells) in enumerate(rows):
-        for j, (key, best, img) in enumerate(cells):
+        w, h = (int(x) for x in m["size"].split())
+        for j, (key, best, name) in enumerate(cells):
             ax = axes[i][j]
             ax.axis("off")
-            if img is None:
+            if name is None:
                 ax.text(0.5, 0.5, best, ha="center", va="center", fontsize=8)
                 ax.set_title(key, fontsize=7)
                 continue
-            ax.imshow(shown(img), interpolation="nearest")
+            ax.imshow(shown(load_image(folders[i], name, w, h)), interpolation="nearest")
             if best is None:
                 ax.set_title("%s, %s\n%s" % (m["dataset"], m["lighting"], key), fontsize=7)
             else:
@@ -189,11 +225,16 @@ def main():
     q.add_argument("out")
     q.add_argument("folders", nargs="+")
     q.add_argument("--target", type=float, default=35.0)
+    r = sub.add_parser("prune")
+    r.add_argument("folders", nargs="+")
+    r.add_argument("--target", type=float, default=35.0)
     args = p.parse_args()
     if args.command == "merge":
         merge(args.out, args.folders)
     elif args.command == "pictures":
         pictures(args.out, args.folders, args.target)
+    elif args.command == "prune":
+        prune(args.folders, args.target)
     else:
         table(args.csv, args.target)
 
