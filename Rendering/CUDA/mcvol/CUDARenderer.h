@@ -161,7 +161,7 @@ public:
    * their shadow rays in a second kernel, in full warps; otherwise the few
    * threads of a warp that cast a shadow ray hold up the rest. The image is
    * the same either way (CudaRender.DeferredShadowsEqualTraced); the queue
-   * takes sizeof(DeferredShadows), about 150 bytes, per pixel (CudaMemoryStats::imageBytes). Off, for
+   * takes sizeof(DeferredShadows), 152 bytes, per pixel (CudaMemoryStats::imageBytes). Off, for
    * comparisons.
    */
   void setDeferredShadows(bool on);
