@@ -295,11 +295,11 @@ struct CUDARenderer::Internal
   bool SkipEvenReadBack = false; ///< set by render() for RenderSettings::readBackEven off
   bool PlainKernels = true;      ///< setPlainKernels()
   bool DeferShadows = true;      ///< setDeferredShadows()
+  bool DeviceLevels = true;      ///< setDeviceLevels()
   /// The deferred shadow rays' queue (RenderLaunch::deferred), one entry
   /// per pixel, and its count.
   DeviceBuffer<DeferredShadows> Deferred;
   DeviceBuffer<unsigned> DeferredCount;
-  bool DeviceLevels = true;      ///< setDeviceLevels()
   /// displayImage(): the 8-bit image on the device and its page-locked host copy.
   DeviceBuffer<uchar4> Display;
   uint8_t* DisplayHost = nullptr;

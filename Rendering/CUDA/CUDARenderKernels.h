@@ -155,8 +155,8 @@ __device__ __forceinline__ void renderKernelBody(const SceneView& s, const Scene
 
 /// Folds one sample of index `index` into pixel p (none when `v` is null:
 /// the ray missed the volume): renderIntoPixel() for a render of one sample.
-__device__ MCVOL_FORCE_INLINE void foldOneSample(const Vec4f* v, uint32_t index, size_t p, float4* accum,
-  double* sums, float4* even, double* evenSums, uint32_t previous)
+__device__ MCVOL_FORCE_INLINE void foldOneSample(const Vec4f* v, uint32_t index, size_t p, float4* accum, double* sums,
+  float4* even, double* evenSums, uint32_t previous)
 {
   Vec4d sum = pixelSum(sums, p, previous);
   if (v)
@@ -362,9 +362,9 @@ void launchUnlit(
 /// the expected-value estimator of lit camera rays, 0 the collision
 /// estimator, each plus kLocalLight for light paths that end at the camera
 /// ray's collision), with or without counters; with RenderLaunch::deferred
-/// and without counters (the pilots count), the deferred pair of kernels. This backend refuses to light
-/// post-render composite before it launches (CUDARenderer::render), so no
-/// lit composite kernel is compiled: it would only spill registers.
+/// and without counters, the deferred pair of kernels. This backend refuses
+/// to light post-render composite before it launches (CUDARenderer::render),
+/// so no lit composite kernel is compiled: it would only spill registers.
 template <BlendMode Mode>
 void launchLit(
   int unlit, bool count, const SceneView& s, const CameraView& cam, const FrameParams& fp, const RenderLaunch& k)

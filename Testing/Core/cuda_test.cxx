@@ -992,7 +992,8 @@ TEST(CudaRender, DeferredShadowsEqualTraced)
             g.render(scene, cam, rs, nullptr, acc);
             image[deferred].assign(acc.rgba(), acc.rgba() + size_t(cam.width) * cam.height * 4);
             ASSERT_NE(acc.evenRGBA(), nullptr);
-            image[deferred].insert(image[deferred].end(), acc.evenRGBA(), acc.evenRGBA() + size_t(cam.width) * cam.height * 4);
+            image[deferred].insert(
+              image[deferred].end(), acc.evenRGBA(), acc.evenRGBA() + size_t(cam.width) * cam.height * 4);
             bytes[deferred] = g.memory().imageBytes;
           }
           const auto [worst, sum] = worstAndSum(image[0], image[1]);

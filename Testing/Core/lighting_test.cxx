@@ -1123,8 +1123,8 @@ namespace
 /// Sample `index` of pixel (x, y) traced, and deferred then finished, with
 /// the lit estimator `code` (0 or 1); `rays` gets the deferred ray count.
 template <BlendMode Mode, int Code>
-void tracedAndDeferred(const SceneView& s, const CameraView& cam, const FrameParams& fp, int x, int y,
-  uint32_t index, Vec4f& traced, Vec4f& deferred, int& rays)
+void tracedAndDeferred(const SceneView& s, const CameraView& cam, const FrameParams& fp, int x, int y, uint32_t index,
+  Vec4f& traced, Vec4f& deferred, int& rays)
 {
   RayCounters c;
   ShadowCounters sc;
@@ -1134,7 +1134,8 @@ void tracedAndDeferred(const SceneView& s, const CameraView& cam, const FramePar
   DeferredShadows d;
   RayCounters cd;
   ShadowCounters scd;
-  renderSample<Mode, true, false, Code + kDeferredShadows>(s, s, cam, fp, x, y, 1.f, index, cd, scd, nullptr, deferred, &d);
+  renderSample<Mode, true, false, Code + kDeferredShadows>(
+    s, s, cam, fp, x, y, 1.f, index, cd, scd, nullptr, deferred, &d);
   rays = d.count;
   if (d.count > 0)
   {
@@ -1214,8 +1215,8 @@ TEST(Lighting, DeferredShadowRaysAreTheTracedOnes)
                   tracedAndDeferred<BlendMode::Density>(code, s, cam, fp, x, y, index, traced, deferred, rays);
                   break;
               }
-              differ += (traced.r != deferred.r || traced.g != deferred.g || traced.b != deferred.b ||
-                          traced.a != deferred.a)
+              differ +=
+                (traced.r != deferred.r || traced.g != deferred.g || traced.b != deferred.b || traced.a != deferred.a)
                 ? 1u
                 : 0u;
               deferredSamples += rays > 0 ? 1u : 0u;

@@ -156,13 +156,14 @@ public:
   bool plainKernels() const;
   /**
    * On by default: lit renders whose shadow rays can wait
-   * (deferrableShadows(): shadows, single scattering, one process) trace
-   * the camera rays first, queue the pixels whose path scattered, and trace
-   * their shadow rays in a second kernel, in full warps; otherwise the few
-   * threads of a warp that cast a shadow ray hold up the rest. The image is
-   * the same either way (CudaRender.DeferredShadowsEqualTraced); the queue
-   * takes sizeof(DeferredShadows), 152 bytes, per pixel (CudaMemoryStats::imageBytes). Off, for
-   * comparisons.
+   * (deferrableShadows(): shadows, single scattering, no stand-in of other
+   * pieces) trace the camera rays first, queue the pixels whose path
+   * scattered, and trace their shadow rays in a second kernel, in full
+   * warps; otherwise the few threads of a warp that cast a shadow ray hold
+   * up the rest. The image is the same either way
+   * (CudaRender.DeferredShadowsEqualTraced); the queue takes
+   * sizeof(DeferredShadows), 152 bytes, per pixel
+   * (CudaMemoryStats::imageBytes). Off, for comparisons.
    */
   void setDeferredShadows(bool on);
   bool deferredShadows() const;

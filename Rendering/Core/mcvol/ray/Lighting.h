@@ -379,8 +379,8 @@ MCVOL_FUNC Vec3f shadowedLight(Vec3f scale, float f, float T, float falloff, flo
 
 /// Records a shadow ray of the vertex x into `d` (litPathFrom()'s Defer).
 /// deferrableShadows() keeps the count within kDeferredRays.
-MCVOL_FUNC void recordShadowRay(DeferredShadows& d, const Rng& rng, Vec3f x, Vec3f dir, float tmax, Vec3f scale,
-  float f, float falloff, float weight)
+MCVOL_FUNC void recordShadowRay(
+  DeferredShadows& d, const Rng& rng, Vec3f x, Vec3f dir, float tmax, Vec3f scale, float f, float falloff, float weight)
 {
   if (d.count >= kDeferredRays)
   {
@@ -625,8 +625,7 @@ MCVOL_HOT Vec3f litPathFrom(const SceneView& s, const SceneView& light, Tracker 
 template <BlendMode Mode>
 MCVOL_HOT Vec3f finishDeferredShadows(const SceneView& s, DeferredShadows& d, ShadowCounters& sc)
 {
-  const ShadowEstimator est =
-    s.lighting.shadowEstimator == 1 ? ShadowEstimator::Delta : ShadowEstimator::Ratio;
+  const ShadowEstimator est = s.lighting.shadowEstimator == 1 ? ShadowEstimator::Delta : ShadowEstimator::Ratio;
   Vec3f radiance;
   for (int i = 0; i < d.count; ++i)
   {
