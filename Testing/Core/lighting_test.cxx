@@ -1004,6 +1004,30 @@ TEST(Lighting, ExpectedValueEqualsTheCollisionEstimator)
   }
 }
 
+namespace
+{
+/// The scene and view of the lit path tests: the four-channel 16^3 cosmology
+/// demo, seen by 12x12 pixels.
+struct LitPathView
+{
+  DemoVolume v = makeDemo("cosmology", { 16, 16, 16 });
+  Camera camera = orbitCamera(v.dims, v.spacing, 12, 12, 30, 20);
+  CameraView cam = toView(camera);
+  void configure(Scene& scene, BlendMode mode) const { configureDemo(scene, v, 4, 128, 0.5, mode); }
+};
+
+/// Lights for the four-channel demo of the lit path tests, with a different
+/// albedo and anisotropy per channel.
+LightingDesc fourChannelLighting(std::vector<LightDesc> lights)
+{
+  LightingDesc ld;
+  ld.lights = std::move(lights);
+  ld.albedo = { 0.9f, 0.6f, 0.8f, 0.3f };
+  ld.anisotropy = { 0.4f, -0.2f, 0.f, 0.7f };
+  return ld;
+}
+} // namespace
+
 // Where no ray follows the camera ray's collision (no shadows, one
 // scattering vertex), the lit kernels compile the light path without the
 // code of those rays (litPathFrom()'s Local). It must be the same path: on
@@ -1033,19 +1057,15 @@ void fullAndLocal(int code, const SceneView& s, const CameraView& cam, const Fra
 
 TEST(Lighting, LocalLightPathIsTheFullPath)
 {
-  const DemoVolume v = makeDemo("cosmology", { 16, 16, 16 });
-  const Camera camera = orbitCamera(v.dims, v.spacing, 12, 12, 30, 20);
-  const CameraView cam = toView(camera);
+  const LitPathView view;
+  const CameraView& cam = view.cam;
   for (BlendMode mode : { BlendMode::Density, BlendMode::Max, BlendMode::Mix })
   {
     Scene scene;
-    configureDemo(scene, v, 4, 128, 0.5, mode);
+    view.configure(scene, mode);
     for (int config = 0; config < 2; ++config)
     {
-      LightingDesc ld;
-      ld.lights = { testSun(1.5), testLamp(300) };
-      ld.albedo = { 0.9f, 0.6f, 0.8f, 0.3f };
-      ld.anisotropy = { 0.4f, -0.2f, 0.f, 0.7f };
+      LightingDesc ld = fourChannelLighting({ testSun(1.5), testLamp(300) });
       ld.shadows = false;
       ld.ambient[0] = ld.ambient[1] = ld.ambient[2] = 0.3;
       ld.gradientShading = config == 1;
@@ -1055,7 +1075,7 @@ TEST(Lighting, LocalLightPathIsTheFullPath)
       SceneView s = scene.view();
       ASSERT_TRUE(localLighting(s.lighting));
       s.sigmaLimit = extinctionLimit(cam);
-      setLightingFrame(s, camera);
+      setLightingFrame(s, view.camera);
       for (Estimator e : { Estimator::Collision, Estimator::ExpectedValue })
       {
         RenderSettings rs;
@@ -1161,19 +1181,15 @@ void tracedAndDeferred(int code, const SceneView& s, const CameraView& cam, cons
 
 TEST(Lighting, DeferredShadowRaysAreTheTracedOnes)
 {
-  const DemoVolume v = makeDemo("cosmology", { 16, 16, 16 });
-  const Camera camera = orbitCamera(v.dims, v.spacing, 12, 12, 30, 20);
-  const CameraView cam = toView(camera);
+  const LitPathView view;
+  const CameraView& cam = view.cam;
   for (BlendMode mode : { BlendMode::Density, BlendMode::Max, BlendMode::Mix })
   {
     Scene scene;
-    configureDemo(scene, v, 4, 128, 0.5, mode);
+    view.configure(scene, mode);
     for (int config = 0; config < 2; ++config)
     {
-      LightingDesc ld;
-      ld.lights = { testSun(1.5) };
-      ld.albedo = { 0.9f, 0.6f, 0.8f, 0.3f };
-      ld.anisotropy = { 0.4f, -0.2f, 0.f, 0.7f };
+      LightingDesc ld = fourChannelLighting({ testSun(1.5) });
       if (config == 1)
       {
         ld.lights.push_back(testLamp(300));
@@ -1185,7 +1201,7 @@ TEST(Lighting, DeferredShadowRaysAreTheTracedOnes)
       scene.setLighting(ld);
       SceneView s = scene.view();
       s.sigmaLimit = extinctionLimit(cam);
-      setLightingFrame(s, camera);
+      setLightingFrame(s, view.camera);
       ASSERT_TRUE(deferrableShadows(s, Sampler::Sobol));
       for (Estimator e : { Estimator::Collision, Estimator::ExpectedValue })
       {
@@ -1241,7 +1257,7 @@ TEST(Lighting, DeferredShadowRaysAreTheTracedOnes)
   }
   // Where a path's shadow rays cannot wait.
   Scene scene;
-  configureDemo(scene, v, 4, 128, 0.5, BlendMode::Density);
+  view.configure(scene, BlendMode::Density);
   LightingDesc ld;
   ld.lights = { testSun(1.5) };
   scene.setLighting(ld);
