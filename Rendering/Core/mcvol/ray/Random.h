@@ -28,7 +28,8 @@ MCVOL_FUNC uint64_t splitmix64(uint64_t x)
 class Rng
 {
 public:
-  /// A placeholder stream, for a copy to be assigned (DeferredShadows).
+  /// The stream of state 0 (increment 1); DeferredShadows holds one until
+  /// a path's stream is copied in.
   MCVOL_FUNC Rng()
     : State(0)
     , Inc(1)
