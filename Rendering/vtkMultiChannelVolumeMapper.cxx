@@ -107,6 +107,12 @@ struct vtkMultiChannelVolumeMapper::vtkInternals
   // Lighting across processes: the stand-in of the whole volume, and the
   // processes it is gathered from (null: the global controller).
   mcvol::adapter::StandIn StandIn;
+  /// This render traces the exact stand-in for its share of the image
+  /// (SplitImageWithExactStandIn): this process's index among SplitRanks.
+  bool SplitImage = false;
+  int SplitRank = 0;
+  int SplitRanks = 1;
+  std::string StandInReport;
   vtkSmartPointer<vtkMultiProcessController> Controller;
   std::vector<float> Depth; // this render's depth buffer (reused storage)
 
@@ -925,6 +931,12 @@ double* vtkMultiChannelVolumeMapper::GetBounds()
     vtkMath::UninitializeBounds(this->Bounds);
     return this->Bounds;
   }
+  if (this->SplitImageWithExactStandIn && this->Internals->StandIn.IsExact())
+  {
+    // A split image covers the whole volume's screen area on every process
+    // (the compositor reads back only the area of these bounds).
+    std::copy_n(this->Internals->StandIn.WholeExtent(), 6, extent);
+  }
   // Index box of the voxels; a single-voxel axis is one spacing thick (the
   // renderer does the same, so a slice or a lone voxel stays visible).
   double lo[3], hi[3];
@@ -1216,69 +1228,7 @@ bool vtkMultiChannelVolumeMapper::UpdateScene(RenderPass& pass)
         LevelKey(pass.Channels, pass.Classified, in.Tables.Version(), this->LevelOfDetailFilter, pass.SumChannels,
           pass.HalfLevels));
     }
-    mcvol::Scene& scene = *pass.Scene;
-    const int sceneChannels = scene.numChannels();
-
-    // The Scene's setters are cheap and rebuild nothing unless a value
-    // changed (a new macrocell size marks the grids for update()).
-    scene.setMacrocellSize(this->MacrocellSize);
-    scene.setBlendMode(static_cast<mcvol::BlendMode>(this->ChannelBlendMode));
-    // The mapper's interpolation type, else vtkVolumeProperty's, as VTK's own
-    // mappers use it (a change resets the accumulation through the mapper's
-    // or the property's MTime).
-    const int interpolation =
-      this->InterpolationType >= 0 ? this->InterpolationType : pass.Property->GetInterpolationType();
-    scene.setInterpolation(interpolation == VTK_NEAREST_INTERPOLATION ? mcvol::Interpolation::Nearest
-        : interpolation == VTK_CUBIC_INTERPOLATION                       ? mcvol::Interpolation::Cubic
-                                                                         : mcvol::Interpolation::Linear);
-    std::array<float, kMaxChannels> weights{};
-    for (int c = 0; c < sceneChannels; ++c)
-    {
-      weights[c] = static_cast<float>(in.MixWeights[c]);
-    }
-    scene.setMixWeights(weights.data(), sceneChannels);
-    scene.setMixAverage(this->MixColorMode == MIX_AVERAGE);
-    // Lighting: only with ShadeOn (the lights' state joins the reset key).
-    // Summed channels are summed only when their albedos and anisotropies
-    // agree (SumsChannelsAtLevels), so channel 0's stand for all.
-    mcvol::adapter::LightingSettings lighting;
-    lighting.AmbientRadiance = this->AmbientRadiance;
-    lighting.Albedo = in.Albedo.data();
-    lighting.Anisotropy = in.Anisotropy.data();
-    lighting.Shadows = this->ShadowMode != NO_SHADOWS;
-    lighting.DeltaShadows = this->ShadowMode == DELTA_TRACKING_SHADOWS;
-    lighting.MaxScatteringDepth = this->MaxScatteringDepth;
-    lighting.GradientShading = this->GradientShading;
-    lighting.Shininess = this->Shininess;
-    mcvol::LightingDesc lights =
-      mcvol::adapter::CollectLighting(pass.Renderer, pass.Property, lighting, sceneChannels, pass.LightsMTime);
-    // Where the renderer's lights enter the physics: their scale (ParaView's
-    // lights are meant for surface shading) and how many a scattering event
-    // samples. The ray marcher sums every light whatever LightSampling says.
-    for (mcvol::LightDesc& light : lights.lights)
-    {
-      light.intensity *= this->LightIntensityScale;
-    }
-    lights.sampleOneLight = this->LightSampling == ONE_LIGHT;
-    scene.setLighting(lights);
-    mcvol::ImportanceDesc importance;
-    // A pre-classified channel (dependent components, or any level above 0)
-    // has no scalar to look importance up by.
-    importance.enabled = this->VisibilityOptimization && pass.Level == 0;
-    if (importance.enabled && !pass.Classified)
-    {
-      importance.tables = in.Tables.ImportanceTables();
-    }
-    importance.p = this->DeviationWeight;
-    importance.q = this->OcclusionWeight;
-    importance.r = this->ClutterWeight;
-    importance.lambda = this->ImportanceEmphasis;
-    importance.mergeDistance = this->ImportanceMergeDistance;
-    importance.samplesPerPass = this->ImportanceSamples;
-    importance.lightRays = this->OptimizeLightRays;
-    importance.lightRaySamples = this->LightRayImportanceSamples;
-    scene.setImportance(importance);
-    scene.update();
+    this->ApplySceneSettings(pass, *pass.Scene);
   }
   catch (const std::exception& e)
   {
@@ -1293,12 +1243,81 @@ bool vtkMultiChannelVolumeMapper::UpdateScene(RenderPass& pass)
 }
 
 //------------------------------------------------------------------------------
+void vtkMultiChannelVolumeMapper::ApplySceneSettings(RenderPass& pass, mcvol::Scene& scene)
+{
+  vtkInternals& in = *this->Internals;
+  const int sceneChannels = scene.numChannels();
+
+  // The Scene's setters are cheap and rebuild nothing unless a value
+  // changed (a new macrocell size marks the grids for update()).
+  scene.setMacrocellSize(this->MacrocellSize);
+  scene.setBlendMode(static_cast<mcvol::BlendMode>(this->ChannelBlendMode));
+  // The mapper's interpolation type, else vtkVolumeProperty's, as VTK's own
+  // mappers use it (a change resets the accumulation through the mapper's
+  // or the property's MTime).
+  const int interpolation =
+    this->InterpolationType >= 0 ? this->InterpolationType : pass.Property->GetInterpolationType();
+  scene.setInterpolation(interpolation == VTK_NEAREST_INTERPOLATION ? mcvol::Interpolation::Nearest
+      : interpolation == VTK_CUBIC_INTERPOLATION                       ? mcvol::Interpolation::Cubic
+                                                                       : mcvol::Interpolation::Linear);
+  std::array<float, kMaxChannels> weights{};
+  for (int c = 0; c < sceneChannels; ++c)
+  {
+    weights[c] = static_cast<float>(in.MixWeights[c]);
+  }
+  scene.setMixWeights(weights.data(), sceneChannels);
+  scene.setMixAverage(this->MixColorMode == MIX_AVERAGE);
+  // Lighting: only with ShadeOn (the lights' state joins the reset key).
+  // Summed channels are summed only when their albedos and anisotropies
+  // agree (SumsChannelsAtLevels), so channel 0's stand for all.
+  mcvol::adapter::LightingSettings lighting;
+  lighting.AmbientRadiance = this->AmbientRadiance;
+  lighting.Albedo = in.Albedo.data();
+  lighting.Anisotropy = in.Anisotropy.data();
+  lighting.Shadows = this->ShadowMode != NO_SHADOWS;
+  lighting.DeltaShadows = this->ShadowMode == DELTA_TRACKING_SHADOWS;
+  lighting.MaxScatteringDepth = this->MaxScatteringDepth;
+  lighting.GradientShading = this->GradientShading;
+  lighting.Shininess = this->Shininess;
+  mcvol::LightingDesc lights =
+    mcvol::adapter::CollectLighting(pass.Renderer, pass.Property, lighting, sceneChannels, pass.LightsMTime);
+  // Where the renderer's lights enter the physics: their scale (ParaView's
+  // lights are meant for surface shading) and how many a scattering event
+  // samples. The ray marcher sums every light whatever LightSampling says.
+  for (mcvol::LightDesc& light : lights.lights)
+  {
+    light.intensity *= this->LightIntensityScale;
+  }
+  lights.sampleOneLight = this->LightSampling == ONE_LIGHT;
+  scene.setLighting(lights);
+  mcvol::ImportanceDesc importance;
+  // A pre-classified channel (dependent components, or any level above 0)
+  // has no scalar to look importance up by.
+  importance.enabled = this->VisibilityOptimization && pass.Level == 0;
+  if (importance.enabled && !pass.Classified)
+  {
+    importance.tables = in.Tables.ImportanceTables();
+  }
+  importance.p = this->DeviationWeight;
+  importance.q = this->OcclusionWeight;
+  importance.r = this->ClutterWeight;
+  importance.lambda = this->ImportanceEmphasis;
+  importance.mergeDistance = this->ImportanceMergeDistance;
+  importance.samplesPerPass = this->ImportanceSamples;
+  importance.lightRays = this->OptimizeLightRays;
+  importance.lightRaySamples = this->LightRayImportanceSamples;
+  scene.setImportance(importance);
+  scene.update();
+}
+
+//------------------------------------------------------------------------------
 bool vtkMultiChannelVolumeMapper::UpdateStandIn(RenderPass& pass, StandInStep step)
 {
   vtkInternals& in = *this->Internals;
   if (step != STAND_IN_GATHER)
   {
     in.Scene.setOutside(nullptr);
+    in.SplitImage = false;
   }
   vtkMultiProcessController* controller =
     in.Controller ? in.Controller.Get() : vtkMultiProcessController::GetGlobalController();
@@ -1332,11 +1351,14 @@ bool vtkMultiChannelVolumeMapper::UpdateStandIn(RenderPass& pass, StandInStep st
   input.MemoryLimit = this->LightingStandInMemoryLimit;
   input.MacrocellSize = this->MacrocellSize;
   input.Interp = in.Scene.interpolation();
+  // A split image renders the exact stand-in as its Scene: a backend that
+  // builds its grids on the device needs no host copy of them.
+  input.HostAcceleration = in.Scene.hostAcceleration() || !this->SplitImageWithExactStandIn;
   try
   {
     bool changed = false;
     double scale[3], offset[3];
-    const mcvol::Scene* standIn = nullptr;
+    mcvol::Scene* standIn = nullptr;
     switch (step)
     {
       case STAND_IN_GATHER:
@@ -1354,7 +1376,17 @@ bool vtkMultiChannelVolumeMapper::UpdateStandIn(RenderPass& pass, StandInStep st
       in.Accumulation.RequestReset();
     }
     // Levels of detail above 0 render the piece alone.
-    if (standIn && pass.Level == 0)
+    if (standIn && pass.Level == 0 && in.StandIn.IsExact() && this->SplitImageWithExactStandIn)
+    {
+      // Every process holds the whole volume: each traces it, with this
+      // mapper's settings, for its stripes of the image.
+      this->ApplySceneSettings(pass, *standIn);
+      pass.Scene = standIn;
+      in.SplitImage = true;
+      in.SplitRank = controller->GetLocalProcessId();
+      in.SplitRanks = controller->GetNumberOfProcesses();
+    }
+    else if (standIn && pass.Level == 0)
     {
       in.Scene.setOutside(standIn, scale, offset, in.StandIn.IsExact());
     }
@@ -1435,7 +1467,20 @@ int vtkMultiChannelVolumeMapper::GetNumberOfLightingStandInGathers()
 //------------------------------------------------------------------------------
 const char* vtkMultiChannelVolumeMapper::GetLightingStandInReport()
 {
-  return this->Internals->StandIn.Report().c_str();
+  vtkInternals& in = *this->Internals;
+  in.StandInReport = in.StandIn.Report();
+  if (in.SplitImage)
+  {
+    in.StandInReport += "; the processes split the image (" + std::to_string(in.SplitRanks) + " processes, stripes of " +
+      std::to_string(kSplitImageStripeRows) + " rows)";
+  }
+  return in.StandInReport.c_str();
+}
+
+//------------------------------------------------------------------------------
+bool vtkMultiChannelVolumeMapper::GetLastRenderSplitImage()
+{
+  return this->Internals->SplitImage;
 }
 
 //------------------------------------------------------------------------------
@@ -1616,8 +1661,11 @@ bool vtkMultiChannelVolumeMapper::SetUpView(RenderPass& pass)
     return false;
   }
   std::string error;
-  if (!mcvol::adapter::ComputeCamera(
-        pass.Renderer, pass.Volume, pass.Image, pass.Channels.Extent, pass.Viewport, pass.Camera, error))
+  vtkInternals& in = *this->Internals;
+  // A split image traces the whole volume (the pieces share origin and
+  // spacing: the stand-in's gather checks it).
+  if (!mcvol::adapter::ComputeCamera(pass.Renderer, pass.Volume, pass.Image,
+        in.SplitImage ? in.StandIn.WholeExtent() : pass.Channels.Extent, pass.Viewport, pass.Camera, error))
   {
     vtkErrorMacro(<< error);
     return false;
@@ -1628,7 +1676,7 @@ bool vtkMultiChannelVolumeMapper::SetUpView(RenderPass& pass)
     // level 0's.
     mcvol::adapter::ApplyToCamera(pass.LevelData->Channels[0], pass.Camera);
   }
-  std::vector<float>& depth = this->Internals->Depth;
+  std::vector<float>& depth = in.Depth;
   if (!mcvol::adapter::HasOpaqueGeometry(pass.Renderer))
   {
     // Nothing but volumes: the depth buffer is all "far". No buffer at all
@@ -1636,11 +1684,26 @@ bool vtkMultiChannelVolumeMapper::SetUpView(RenderPass& pass)
     // far plane) skips the read-back, the per-frame fill and comparison of
     // a full-window buffer, and a device backend's depth copy.
     depth.clear();
-    return true;
   }
-  if (!mcvol::adapter::ReadDepth(pass.Window, pass.Viewport, depth))
+  else if (!mcvol::adapter::ReadDepth(pass.Window, pass.Viewport, depth))
   {
     vtkWarningMacro("Could not read the depth buffer; geometry will not occlude the volume.");
+  }
+  if (in.SplitImage)
+  {
+    // The other processes' stripes: depth 0, geometry at the near plane,
+    // so that their camera rays end before they start and the pixels stay
+    // transparent.
+    const size_t width = static_cast<size_t>(pass.Viewport.Width);
+    const int height = pass.Viewport.Height;
+    depth.resize(width * static_cast<size_t>(height), 1.0f);
+    for (int y = 0; y < height; ++y)
+    {
+      if ((y / kSplitImageStripeRows) % in.SplitRanks != in.SplitRank)
+      {
+        std::fill_n(depth.begin() + static_cast<std::ptrdiff_t>(width * static_cast<size_t>(y)), width, 0.0f);
+      }
+    }
   }
   return true;
 }
@@ -1944,6 +2007,7 @@ void vtkMultiChannelVolumeMapper::PrintSelf(ostream& os, vtkIndent indent)
      << "\n";
   os << indent << "LightingStandInMemoryLimit: " << this->LightingStandInMemoryLimit << "\n";
   os << indent << "LightingStandInSynchronizedByCaller: " << this->LightingStandInSynchronizedByCaller << "\n";
+  os << indent << "SplitImageWithExactStandIn: " << (this->SplitImageWithExactStandIn ? "On" : "Off") << "\n";
   os << indent << "LevelOfDetailHalfPrecision: " << (this->LevelOfDetailHalfPrecision ? "On" : "Off") << "\n";
   os << indent << "MemoryBudget: " << this->MemoryBudget << " bytes" << (this->MemoryBudget > 0.0 ? "" : " (no cap)")
      << "\n";

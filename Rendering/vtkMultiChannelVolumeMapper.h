@@ -997,6 +997,37 @@ public:
 
   ///@{
   /**
+   * With the exact stand-in (every process then holds the whole volume),
+   * split the image instead of the volume (default on). Each process
+   * renders the whole volume, its settings its own, for its share of the
+   * image: rows in stripes of kSplitImageStripeRows, dealt to the
+   * processes in turn, its other pixels left transparent, so that the
+   * composite (in any order) holds every pixel once. Camera rays, shadow
+   * rays and scattered rays all cross the whole volume, as in a
+   * single-process render: each process traces about 1/N of the paths,
+   * the paths a single process would trace, and the image equals the
+   * single-process one within the Monte Carlo error. GetBounds() reports
+   * the whole volume while it is on, so that a compositor that reads
+   * back only the screen area of a process's bounds (IceT) takes every
+   * stripe. Off: each process traces camera rays through its own piece
+   * (sort-last), and their light paths continue in the stand-in; the
+   * processes whose pieces are in front trace paths that the composite
+   * hides. Coarse stand-ins always render sort-last.
+   */
+  vtkSetMacro(SplitImageWithExactStandIn, bool);
+  vtkGetMacro(SplitImageWithExactStandIn, bool);
+  vtkBooleanMacro(SplitImageWithExactStandIn, bool);
+  /// Whether the last lit render split the image (SplitImageWithExactStandIn).
+  bool GetLastRenderSplitImage();
+  ///@}
+
+  /// Rows per stripe of a split image: a multiple of the CUDA backend's
+  /// block height, so that a block lies wholly inside or outside a
+  /// process's share and the threads of the others end at once.
+  static constexpr int kSplitImageStripeRows = 16;
+
+  ///@{
+  /**
    * Bytes the automatic stand-in may hold on each process (default 2^31, 2
    * GiB; its macrocells and majorants and, on the CUDA backend, its device
    * copy come on top). Clamped to [0, VTK_DOUBLE_MAX]; NaN is an error (the
@@ -1257,6 +1288,7 @@ protected:
   int LastLevelOfDetailChannels = 0;
   int LightingStandInLevel = STAND_IN_OFF;
   bool LightingStandInSynchronizedByCaller = false;
+  bool SplitImageWithExactStandIn = true;
   double LightingStandInMemoryLimit = 2147483648.0;
 
 private:
@@ -1292,6 +1324,9 @@ private:
     STAND_IN_USE
   };
   bool UpdateStandIn(RenderPass& pass, StandInStep step);
+  /// The mapper's settings (blend, interpolation, lighting, importance) on
+  /// the Scene a render traces, and its update().
+  void ApplySceneSettings(RenderPass& pass, mcvol::Scene& scene);
   bool SetUpView(RenderPass& pass);
   void UpdateAccumulation(RenderPass& pass);
   /// AUTOMATIC_ESTIMATOR: the pilots, when the data, tables or settings the

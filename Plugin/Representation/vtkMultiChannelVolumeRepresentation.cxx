@@ -482,6 +482,12 @@ void vtkMultiChannelVolumeRepresentation::SetLightingStandInMemoryLimit(double m
 }
 
 //------------------------------------------------------------------------------
+void vtkMultiChannelVolumeRepresentation::SetSplitImageWithExactStandIn(bool on)
+{
+  this->GetMultiChannelMapper()->SetSplitImageWithExactStandIn(on);
+}
+
+//------------------------------------------------------------------------------
 int vtkMultiChannelVolumeRepresentation::RequestData(
   vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {

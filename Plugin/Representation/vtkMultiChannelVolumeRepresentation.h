@@ -133,6 +133,8 @@ public:
   /// vtkMultiChannelVolumeMapper::SetLightingStandInMemoryLimit, in MiB
   /// (the automatic level's limit per rank).
   void SetLightingStandInMemoryLimit(double mib);
+  /// vtkMultiChannelVolumeMapper::SetSplitImageWithExactStandIn (default on).
+  void SetSplitImageWithExactStandIn(bool on);
   double GetLightingStandInMemory();
   double GetLastLightingStandInGatherTime();
   const char* GetLightingStandInReport();

@@ -169,6 +169,8 @@ void StandIn::Release()
   this->Have = false;
   this->Split = false;
   this->Whole = Scene();
+  std::fill(this->WholeExtentGathered, this->WholeExtentGathered + 6, 0);
+  this->WholeExtentGathered[1] = this->WholeExtentGathered[3] = this->WholeExtentGathered[5] = -1;
   this->Exact.clear();
   this->Exact.shrink_to_fit();
   this->Coarse.clear();
@@ -212,12 +214,12 @@ StandIn::Key StandIn::KeyOf(const Input& in) const
   return key;
 }
 
-const Scene* StandIn::Update(
+Scene* StandIn::Update(
   vtkMultiProcessController* controller, const Input& in, bool& changed, double scale[3], double offset[3])
 {
   this->Synchronize(controller, in, changed);
   bool tables = false;
-  const Scene* standIn = this->Use(in, tables, scale, offset);
+  Scene* standIn = this->Use(in, tables, scale, offset);
   changed = changed || tables;
   return standIn;
 }
@@ -274,7 +276,7 @@ void StandIn::Synchronize(vtkMultiProcessController* controller, const Input& in
   changed = true;
 }
 
-const Scene* StandIn::Use(const Input& in, bool& changed, double scale[3], double offset[3])
+Scene* StandIn::Use(const Input& in, bool& changed, double scale[3], double offset[3])
 {
   changed = false;
   if (!this->Have || !this->Split || !in.Piece)
@@ -311,6 +313,8 @@ const Scene* StandIn::Use(const Input& in, bool& changed, double scale[3], doubl
   this->Whole.setMacrocellSize(in.MacrocellSize);
   this->Whole.setBlendMode(in.Piece->blendMode());
   this->Whole.setInterpolation(in.Interp);
+  // A coarse stand-in only ever serves light paths (Scene::setOutside).
+  this->Whole.setHostAcceleration(in.HostAcceleration || this->Resolved != 0);
   this->Whole.update();
   std::copy(this->Scale, this->Scale + 3, scale);
   std::copy(this->Offset, this->Offset + 3, offset);
@@ -358,6 +362,7 @@ void StandIn::Build(vtkMultiProcessController* controller, const Input& in, cons
   this->Coarse.clear();
   this->Whole = Scene();
   this->Split = split;
+  std::copy(whole, whole + 6, this->WholeExtentGathered);
   if (!split)
   {
     this->ReportText = "no stand-in: every process holds the whole volume";

@@ -63,6 +63,11 @@ public:
     double MemoryLimit = 0.0;                           ///< kAutomatic: bytes the stand-in may take
     int MacrocellSize = 8;
     Interpolation Interp = Interpolation::Linear;
+    /// Whether the exact stand-in builds host macrocells and majorants (a
+    /// stand-in for light paths must: Scene::setOutside reads them). A
+    /// caller that renders it as its own Scene on a backend that builds
+    /// them on the device turns it off. A coarse stand-in always builds them.
+    bool HostAcceleration = true;
   };
 
   /**
@@ -75,7 +80,7 @@ public:
    * pieces do not fit together: different channels, types, spacing or
    * origin.
    */
-  const Scene* Update(vtkMultiProcessController* controller, const Input& in, bool& changed, double scale[3],
+  Scene* Update(vtkMultiProcessController* controller, const Input& in, bool& changed, double scale[3],
     double offset[3]);
 
   /**
@@ -87,7 +92,7 @@ public:
    * Synchronize() (the report says so), with its tables brought up to date.
    */
   void Synchronize(vtkMultiProcessController* controller, const Input& in, bool& changed);
-  const Scene* Use(const Input& in, bool& changed, double scale[3], double offset[3]);
+  Scene* Use(const Input& in, bool& changed, double scale[3], double offset[3]);
 
   /// Frees the stand-in (Update() builds it again when asked).
   void Release();
@@ -95,6 +100,9 @@ public:
   size_t Bytes() const;
   /// Whether the stand-in built is level 0 (Scene::setOutside's `exact`).
   bool IsExact() const { return this->Have && this->Split && this->Resolved == 0; }
+  /// The whole volume's extent (the union of the pieces' extents) of the
+  /// last gather; empty (min > max) before one.
+  const int* WholeExtent() const { return this->WholeExtentGathered; }
   double LastGatherSeconds() const { return this->GatherSeconds; }
   int Builds() const { return this->BuildCount; }
   const std::string& Report() const;
@@ -126,6 +134,7 @@ private:
   Scene Whole;
   std::vector<std::vector<unsigned char>> Exact; ///< per channel, level 0
   std::vector<std::vector<float>> Coarse;        ///< per channel, 4 floats a coarse voxel
+  int WholeExtentGathered[6] = { 0, -1, 0, -1, 0, -1 };
   double Scale[3] = { 1, 1, 1 };
   double Offset[3] = { 0, 0, 0 };
   unsigned long long TablesApplied = 0;

@@ -6,7 +6,8 @@ premultiplied float images front to back and saves the result (.npy).
 Usage: pvbatch --symmetric ParallelLitMapper.py OUT.npy MAPPER SEED LEVEL SPP DEPTH AMBIENT [FRAMES [SCALE]]
   MAPPER  mc (vtkMultiChannelVolumeMapper) or march (vtkMultiChannelRayMarchMapper)
   LEVEL   the mapper's LightingStandInLevel: -1 off, 0 exact, k > 0 coarse;
-          auto:BYTES the automatic level within BYTES (LightingStandInMemoryLimit)
+          auto:BYTES the automatic level within BYTES (LightingStandInMemoryLimit);
+          a suffix ":sort-last" turns SplitImageWithExactStandIn off
   SPP     samples per pixel (mc; march: ignored)
   DEPTH   MaxScatteringDepth; AMBIENT the ambient radiance (grey)
   FRAMES  renders to time after the first (default 0), each a new image of
@@ -67,6 +68,9 @@ m.SetSeed(seed)
 m.SetSamplesPerPixel(spp)
 m.SetMaxScatteringDepth(depth)
 m.SetAmbientRadiance(ambient, ambient, ambient)
+if level.endswith(":sort-last"):
+    m.SplitImageWithExactStandInOff()
+    level = level[: -len(":sort-last")]
 if level.startswith("auto:"):
     m.SetLightingStandInLevelToAutomatic()
     m.SetLightingStandInMemoryLimit(float(level[5:]))

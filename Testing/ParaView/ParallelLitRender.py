@@ -3,7 +3,7 @@
 representation, Shade on, one directional scene light from +z, ambient
 light and two scattering events, and saves the composited image (rank 0).
 
-Usage: [mpiexec -n N] pvbatch ParallelLitRender.py SCENE.vti OUTPUT.png SEED LEVEL SAMPLES [VIEW]
+Usage: [mpiexec -n N] pvbatch ParallelLitRender.py SCENE.vti OUTPUT.png SEED LEVEL SAMPLES [VIEW [SPLIT]]
   LEVEL    the representation's LightingStandInLevel (-1 off, 0 exact, k coarse;
            "default": left as the representation sets it; "auto:MIB": automatic
            within LightingStandInMemoryLimit MIB)
@@ -11,6 +11,8 @@ Usage: [mpiexec -n N] pvbatch ParallelLitRender.py SCENE.vti OUTPUT.png SEED LEV
   VIEW     "scene" (default): the scene's camera; "inside-lower": the camera
            inside the lower piece, looking down, away from the upper piece
            (IceT then renders only the lower piece's rank)
+  SPLIT    "split" (default): the representation's SplitImageWithExactStandIn
+           on; "sort-last": off
 It prints the number of pieces the data is split into (from a ProcessIds
 array) and rank 0's stand-in report and memory.
 """
@@ -23,6 +25,7 @@ import mcvolParaViewTesting as T
 
 scene, out, seed, level, samples = sys.argv[1], sys.argv[2], int(sys.argv[3]), sys.argv[4], int(sys.argv[5])
 camera = sys.argv[6] if len(sys.argv) > 6 else "scene"
+split = (sys.argv[7] if len(sys.argv) > 7 else "split") == "split"
 T.load_plugin()
 
 reader = simple.XMLImageDataReader(FileName=[scene])
@@ -68,6 +71,7 @@ if level.startswith("auto:"):
     rep.LightingStandInMemoryLimit = float(level[5:])
 elif level != "default":
     rep.LightingStandInLevel = int(level)
+rep.SplitImageWithExactStandIn = 1 if split else 0
 rep.Seed = seed
 rep.SamplesPerRender = min(64, samples)
 rep.MaximumTotalSamples = samples

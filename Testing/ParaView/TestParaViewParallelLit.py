@@ -3,7 +3,9 @@ piece shadows the lower one (mcvolLitSplitScene: an occluder above the split
 at z = 32, a slab below it, the light straight down), composited by ParaView
 (IceT) in visibility order, equals the single-rank render within the Monte
 Carlo error with the default stand-in for lighting across ranks (automatic,
-LightingStandInLevel -2: the exact one for this small volume). With the camera
+LightingStandInLevel -2: the exact one for this small volume), with which
+the ranks split the image (SplitImageWithExactStandIn, default on), and
+with the image split off (sort-last: each rank's camera rays in its piece). With the camera
 inside the lower piece looking away from the upper one, which IceT then does
 not render, the render still finishes (the stand-in is gathered in the pass
 every rank runs). Shade on, one directional scene light, ambient
@@ -53,9 +55,9 @@ def main():
 
     reports = {}
 
-    def run(name, seed, level="default", ranks=1, samples=SAMPLES, camera="scene", timeout=300):
+    def run(name, seed, level="default", ranks=1, samples=SAMPLES, camera="scene", split="split", timeout=300):
         out = os.path.join(tmp, name + ".png")
-        cmd = [args.pvbatch, script, scene, out, str(seed), str(level), str(samples), camera]
+        cmd = [args.pvbatch, script, scene, out, str(seed), str(level), str(samples), camera, split]
         if ranks > 1:
             cmd = [args.mpiexec, "--oversubscribe", "-n", str(ranks)] + cmd
         print("$ " + " ".join(cmd), flush=True)
@@ -82,6 +84,7 @@ def main():
     # level 2 25,600, so the automatic level must be 2.
     run("parallel-auto-small", 9, level="auto:0.1", ranks=args.ranks, samples=16)
     parallel, pieces = run("parallel", 9, ranks=args.ranks)
+    sort_last, _ = run("parallel-sort-last", 9, ranks=args.ranks, split="sort-last")
     off, _ = run("parallel-off", 9, level=-1, ranks=args.ranks)
     serial, serial_pieces = run("serial", 7)
     serial2, _ = run("serial2", 8)
@@ -97,6 +100,9 @@ def main():
           "with one rank's piece out of view the render finishes with all its samples")
     check(any("automatic" in l and "exact stand-in" in l for l in reports["parallel"]),
           "by default the stand-in is the automatic one, exact for this volume")
+    check(any("split the image" in l for l in reports["parallel"]) and
+          not any("split the image" in l for l in reports["parallel-sort-last"]),
+          "with the exact stand-in the ranks split the image by default, and not with it turned off")
     check(any("automatic" in l and "level 2" in l for l in reports["parallel-auto-small"]),
           "within Lighting Across Ranks Memory 0.1 MiB the automatic stand-in is level 2")
     check(pieces == args.ranks and serial_pieces == 1,
@@ -104,10 +110,12 @@ def main():
     drawn = (serial.sum(axis=2) > 30).mean()
     check(drawn > 0.05, "the serial image shows the volume (%.1f%% of pixels)" % (100 * drawn))
     ratio, se = S.msd_ratio(parallel, serial2, serial)
+    sort_ratio, sort_se = S.msd_ratio(sort_last, serial2, serial)
     off_ratio, off_se = S.msd_ratio(off, serial2, serial)
-    print("mean squared difference to serial(7) over serial(8)'s: exact stand-in %.3f +- %.3f, "
-          "off %.3f +- %.3f (1 standard error)" % (ratio, se, off_ratio, off_se))
+    print("mean squared difference to serial(7) over serial(8)'s: exact stand-in %.3f +- %.3f (sort-last "
+          "%.3f +- %.3f), off %.3f +- %.3f (1 standard error)" % (ratio, se, sort_ratio, sort_se, off_ratio, off_se))
     check(ratio < 1.2, "lit parallel equals serial within the Monte Carlo error (ratio %.3f < 1.2)" % ratio)
+    check(sort_ratio < 1.2, "so does sort-last with the exact stand-in (ratio %.3f < 1.2)" % sort_ratio)
     check(off_ratio > 1.5, "without the stand-in the shadows across pieces are missing (ratio %.3f > 1.5)" % off_ratio)
     mean_diff = abs(parallel.mean() - serial.mean())
     check(mean_diff < 0.5, "the whole image's mean agrees within 0.5/255 (%.3f)" % mean_diff)
