@@ -1,5 +1,6 @@
 """What lighting across ranks costs: memory per rank, gather time and time
-per frame of each stand-in variant (off, exact, coarse levels), with
+per frame of each stand-in variant (off, exact with the image split or
+sort-last, coarse levels), with
 `mpiexec -n RANKS pvbatch --symmetric`, the Monte Carlo mapper on the CPU,
 the lit split scene of the parallel tests (Testing/ParaView/
 mcvolLitSplitScene.py) with every axis SCALE times finer; and each
@@ -60,7 +61,9 @@ def main():
         print("$ " + " ".join(cmd) + "\n" + "\n".join(l for l in res.stdout.splitlines() if l.startswith("rank")))
         return rows, np.load(out)
 
-    variants = [("off", -1), ("exact", 0), ("level 1", 1), ("level 2", 2)]
+    # The exact stand-in splits the image by default; ":sort-last" turns that off.
+    variants = [("off", -1), ("exact, image split", 0), ("exact, sort-last", "0:sort-last"), ("level 1", 1),
+                ("level 2", 2)]
     with open(os.path.join(args.out, "ranks.csv"), "w", newline="") as f:
         w = csv.writer(f)
         w.writerow(["variant", "ranks", "scale", "rank", "extent", "stand-in", "stand-in bytes", "gather s",
