@@ -1,7 +1,7 @@
 """The performance page's scaling tables from the RESULT lines of
 mpi_gpus.py (scaling.sh collects them in results.jsonl):
 
-    python3 Benchmarks/gpu/scaling_table.py Benchmarks/results/mpi-scaling-gpu/strong-nyx-2xh200.jsonl
+    python3 Benchmarks/gpu/scaling_table.py Benchmarks/results/mpi-scaling-gpu/strong-nyx-4xh200.jsonl
 """
 import json
 import sys
