@@ -39,6 +39,9 @@
 //              density blending (PSNR, mean absolute difference)
 //   raymarch   the paper's Fig. 10: the ray marcher (mix) at 1-16x the
 //              Nyquist step against 1-DDA MDWT (mix) at 1-16 spp: ms, PSNR
+//   split      one of N processes' rows of a split image (the exact stand-in
+//              across MPI ranks): render time of k spp against the whole
+//              image's, deferred and inline shadow rays on CUDA
 //
 // The image quality of the levels is mcvol-pyramid's (mcvol_pyramid.cxx);
 // the accuracy-versus-time images are mcvol-accuracy's (mcvol_accuracy.cxx).
@@ -90,6 +93,7 @@ const Section sections[] = {
   { "pilots", runPilots },
   { "blends", runBlends },
   { "raymarch", runRaymarch },
+  { "split", runSplit },
 };
 } // namespace
 

@@ -25,4 +25,5 @@ void runPyramid(Bench& bench);
 void runPilots(Bench& bench);
 void runBlends(Bench& bench);
 void runRaymarch(Bench& bench);
+void runSplit(Bench& bench);
 } // namespace mcvolbench
