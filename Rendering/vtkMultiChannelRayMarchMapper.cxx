@@ -50,7 +50,7 @@ bool vtkMultiChannelRayMarchMapper::TraceImage(const mcvol::Scene& scene, const 
   mcvol::MarchSettings ms;
   ms.step = this->StepSize;
   ms.jitter = this->Jitter;
-  ms.seed = this->Seed;
+  ms.seed = this->EffectiveSeed();
   ms.terminateTransmittance = static_cast<float>(this->TerminationTransmittance);
   ms.skipEmpty = this->EmptySpaceSkipping;
   ms.compositing =

@@ -373,7 +373,7 @@ mcvol::RenderSettings vtkMultiChannelVolumeMapper::MakeRenderSettings(const mcvo
 {
   mcvol::RenderSettings settings;
   settings.samplesPerPixel = this->Internals->BatchSamples > 0 ? this->Internals->BatchSamples : this->SamplesPerPixel;
-  settings.seed = this->Seed;
+  settings.seed = this->EffectiveSeed();
   settings.tracker = this->TrackingMethod == N_DDA ? mcvol::Tracker::NDDA : mcvol::Tracker::OneDDA;
   settings.jitterPixels = this->PixelJitter;
   settings.readBackEven = false; // GetEstimatedError() reads it back when asked
@@ -1484,6 +1484,12 @@ bool vtkMultiChannelVolumeMapper::GetLastRenderSplitImage()
 }
 
 //------------------------------------------------------------------------------
+unsigned int vtkMultiChannelVolumeMapper::EffectiveSeed()
+{
+  return this->Seed + (this->Internals->SplitImage ? 0u : this->ProcessSeedOffset);
+}
+
+//------------------------------------------------------------------------------
 bool vtkMultiChannelVolumeMapper::SumsChannelsAtLevels(RenderPass& pass)
 {
   if (pass.Classified || pass.Channels.Count < 2 || this->ChannelBlendMode != MC_DENSITY_BLEND)
@@ -1766,7 +1772,7 @@ bool vtkMultiChannelVolumeMapper::ChooseEstimator(RenderPass& pass)
   key.Blend = static_cast<int>(scene.blendMode());
   key.Lit = scene.lit();
   key.Optimized = scene.optimized();
-  key.Seed = this->Seed;
+  key.Seed = this->EffectiveSeed();
   key.MinimumSamplesPerVoxel = this->MinimumSamplesPerVoxel;
   key.TargetError = this->TargetError;
   key.PixelJitter = this->PixelJitter;
@@ -1981,6 +1987,7 @@ void vtkMultiChannelVolumeMapper::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "MaximumTotalSamples: " << this->MaximumTotalSamples << "\n";
   os << indent << "TargetError: " << this->TargetError << "\n";
   os << indent << "Seed: " << this->Seed << "\n";
+  os << indent << "ProcessSeedOffset: " << this->ProcessSeedOffset << "\n";
   os << indent << "PixelJitter: " << this->PixelJitter << "\n";
   os << indent << "MacrocellSize: " << this->MacrocellSize << "\n";
   os << indent << "Backend: " << this->GetBackendAsString() << "\n";

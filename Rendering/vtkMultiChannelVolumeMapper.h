@@ -513,6 +513,20 @@ public:
 
   ///@{
   /**
+   * Added to Seed when this process renders its own piece of a volume split
+   * over processes (sort-last; default 0), so that the processes' estimates
+   * of one pixel are independent: "front over back" is unbiased only for
+   * independent estimates (E[(1 - a1) c2] = (1 - E[a1]) E[c2]). Not added
+   * while the processes split the image (SplitImageWithExactStandIn), whose
+   * pixels they do not share: the composite is then the single-process
+   * image of Seed. ParaView's representation sets it per rank.
+   */
+  vtkSetMacro(ProcessSeedOffset, unsigned int);
+  vtkGetMacro(ProcessSeedOffset, unsigned int);
+  ///@}
+
+  ///@{
+  /**
    * Spread each pixel's Monte Carlo samples over the pixel's area
    * (anti-aliasing; default on). Off, every sample goes through the pixel
    * centre, as vtkMultiChannelRayMarchMapper's rays do: use it to compare the
@@ -1019,6 +1033,9 @@ public:
   vtkBooleanMacro(SplitImageWithExactStandIn, bool);
   /// Whether the last lit render split the image (SplitImageWithExactStandIn).
   bool GetLastRenderSplitImage();
+  /// The seed the render traces with: Seed, plus ProcessSeedOffset unless
+  /// the processes split the image.
+  unsigned int EffectiveSeed();
   ///@}
 
   /// Rows per stripe of a split image: a multiple of the CUDA backend's
@@ -1252,6 +1269,7 @@ protected:
   double InteractiveFrameTime = 0.0;
   int LastSamplesPerRender = 0;
   unsigned int Seed = 0;
+  unsigned int ProcessSeedOffset = 0;
   bool PixelJitter = true;
   double AmbientRadiance[3] = { 0.2, 0.2, 0.2 };
   int ShadowMode = RATIO_TRACKING_SHADOWS;

@@ -821,10 +821,12 @@ void vtkMultiChannelVolumeRepresentation::UpdateMapperParameters()
   // every rank, a pixel's paths through the front and the back piece would
   // use the same numbers: the front's opacity and the back's colour would be
   // correlated, and "front over back" is unbiased only for independent
-  // estimates (E[(1 - a1) c2] = (1 - E[a1]) E[c2]).
+  // estimates (E[(1 - a1) c2] = (1 - E[a1]) E[c2]). The mapper leaves the
+  // offset out while the ranks split the image, which share no pixel.
   vtkMultiProcessController* controller = vtkMultiProcessController::GetGlobalController();
   const unsigned int rank = controller ? static_cast<unsigned int>(controller->GetLocalProcessId()) : 0u;
-  mapper->SetSeed(this->Seed + 0x9E3779B9u * rank);
+  mapper->SetSeed(this->Seed);
+  mapper->SetProcessSeedOffset(0x9E3779B9u * rank);
 
   // ---- Level of detail: coarser while ParaView renders with its LOD ------------
   // The mapper restarts the image only when the level really changes, so

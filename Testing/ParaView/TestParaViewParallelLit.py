@@ -23,7 +23,10 @@ ratio is near 1. The test requires a ratio below 1.2. Significance: the
 ratio's standard error (delta method over the pixels, printed) is about
 0.03 here, so 1.2 lies more than 6 standard errors above 1 and a correct
 image fails with probability below 1e-9 (one-sided, normal approximation).
-Power: the same parallel render with the stand-in off (light paths end at
+With the image split the ranks leave their seed offsets out, so the
+parallel render of seed 7 must be the serial image of seed 7: its mean
+squared difference to it must be below 1% of serial(8) - serial(7)'s
+(measured: 0, bit for bit). Power: the same parallel render with the stand-in off (light paths end at
 the piece, so the occluder casts no shadow onto the slab) must give a ratio
 above 1.5; this also proves that the scene's shadows cross the pieces. (The
 coarse stand-ins' error is reported by TestParallelLitRayMarch, noise-free,
@@ -86,6 +89,9 @@ def main():
     parallel, pieces = run("parallel", 9, ranks=args.ranks)
     sort_last, _ = run("parallel-sort-last", 9, ranks=args.ranks, split="sort-last")
     off, _ = run("parallel-off", 9, level=-1, ranks=args.ranks)
+    # The split image with the serial render's seed: the ranks leave their
+    # seed offsets out (they share no pixel), so this is the serial image.
+    parallel7, _ = run("parallel-seed7", 7, ranks=args.ranks)
     serial, serial_pieces = run("serial", 7)
     serial2, _ = run("serial2", 8)
 
@@ -116,6 +122,11 @@ def main():
           "%.3f +- %.3f), off %.3f +- %.3f (1 standard error)" % (ratio, se, sort_ratio, sort_se, off_ratio, off_se))
     check(ratio < 1.2, "lit parallel equals serial within the Monte Carlo error (ratio %.3f < 1.2)" % ratio)
     check(sort_ratio < 1.2, "so does sort-last with the exact stand-in (ratio %.3f < 1.2)" % sort_ratio)
+    same_msd = float(((parallel7 - serial) ** 2).mean())
+    noise_msd = float(((serial2 - serial) ** 2).mean())
+    check(same_msd < 0.01 * noise_msd,
+          "the split image with seed 7 is the serial image of seed 7 (mean squared difference %.4g, under 1%% "
+          "of two seeds' %.4g)" % (same_msd, noise_msd))
     check(off_ratio > 1.5, "without the stand-in the shadows across pieces are missing (ratio %.3f > 1.5)" % off_ratio)
     mean_diff = abs(parallel.mean() - serial.mean())
     check(mean_diff < 0.5, "the whole image's mean agrees within 0.5/255 (%.3f)" % mean_diff)
