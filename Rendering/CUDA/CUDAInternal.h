@@ -89,6 +89,11 @@ void withFlag(bool flag, F&& f)
 
 /// Blocks of `block` threads covering an image of width x height pixels,
 /// one thread per pixel.
+/// Most samples per pixel one pair of deferred launches traces
+/// (RenderLaunch::deferredBatch): 8 restores a whole image's paths per
+/// launch to one of 8 processes' rows of a split image.
+constexpr size_t kMaxDeferredBatch = 8;
+
 inline dim3 imageGrid(dim3 block, int width, int height)
 {
   return dim3((unsigned(width) + block.x - 1) / block.x, (unsigned(height) + block.y - 1) / block.y);
@@ -300,6 +305,9 @@ struct CUDARenderer::Internal
   /// per pixel, and its count.
   DeviceBuffer<DeferredShadows> Deferred;
   DeviceBuffer<unsigned> DeferredCount;
+  /// Batches of deferred samples (RenderLaunch::deferredSlots): up to
+  /// kMaxDeferredBatch images, kept at the largest batch rendered.
+  DeviceBuffer<float4> DeferredSlots;
   /// displayImage(): the 8-bit image on the device and its page-locked host copy.
   DeviceBuffer<uchar4> Display;
   uint8_t* DisplayHost = nullptr;

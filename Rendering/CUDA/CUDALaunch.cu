@@ -479,6 +479,25 @@ void CUDARenderer::render(const Scene& scene, const Camera& camera, const Render
       in.DeferredCount.resize(1);
       k.deferred = in.Deferred.ptr;
       k.deferredCount = in.DeferredCount.ptr;
+      // Few pixels that can have rays (depth 0 ends a ray before it starts:
+      // the other processes' rows of a split image): several samples per
+      // launch, as many paths as the whole image's, so that the queue still
+      // holds them all.
+      if (depth && settings.samplesPerPixel > 1)
+      {
+        const size_t open = size_t(std::count_if(depth, depth + P, [](float z) { return z > 0.f; }));
+        const size_t batch = std::min<size_t>(
+          { kMaxDeferredBatch, size_t(settings.samplesPerPixel), P / std::max<size_t>(open, 1) });
+        if (batch > 1)
+        {
+          if (in.DeferredSlots.count < batch * P)
+          {
+            in.DeferredSlots.resize(batch * P);
+          }
+          k.deferredBatch = unsigned(batch);
+          k.deferredSlots = in.DeferredSlots.ptr;
+        }
+      }
     }
     launchRender(s.blend.mode, count, lit, in.PlainKernels && plainScene(s, *k.light), s, cam, fp, k);
   }

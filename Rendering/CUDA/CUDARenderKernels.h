@@ -19,6 +19,8 @@
 
 #include "CUDAInternal.h"
 
+#include <algorithm>
+
 #include "mcvol/RenderSetup.h"
 
 namespace mcvol
@@ -45,6 +47,14 @@ struct RenderLaunch
   /// DeferredShadows per pixel, and the count queued. Null otherwise.
   DeferredShadows* deferred = nullptr;
   unsigned* deferredCount = nullptr;
+  /// Samples per pixel that one pair of deferred launches traces (1: one
+  /// at a time, folded as they finish). More when few pixels can have rays
+  /// (a depth mask: one process's rows of a split image), so that a launch
+  /// holds as many paths as a whole image's: a launch lasts as long as its
+  /// longest paths, however few it holds. Each batch's samples wait in
+  /// `deferredSlots` (deferredBatch images) and are folded in order.
+  unsigned deferredBatch = 1;
+  float4* deferredSlots = nullptr;
 };
 
 namespace
@@ -187,7 +197,7 @@ template <BlendMode Mode, int Unlit>
 __global__ void litDeferKernel(const __grid_constant__ SceneView s, const __grid_constant__ CameraView cam,
   const __grid_constant__ FrameParams fp, const float* __restrict__ depth, float4* __restrict__ accum,
   double* __restrict__ sums, float4* __restrict__ even, double* __restrict__ evenSums, uint32_t previous,
-  DeferredShadows* __restrict__ queue, unsigned* __restrict__ queued)
+  DeferredShadows* __restrict__ queue, unsigned* __restrict__ queued, float4* __restrict__ slots)
 {
   const int x = int(blockIdx.x * blockDim.x + threadIdx.x);
   const int y = int(blockIdx.y * blockDim.y + threadIdx.y);
@@ -196,16 +206,24 @@ __global__ void litDeferKernel(const __grid_constant__ SceneView s, const __grid
   if (x < cam.width && y < cam.height)
   {
     const size_t p = size_t(y) * size_t(cam.width) + size_t(x);
+    // A batch (RenderLaunch::deferredBatch): sample fp.firstSample + z,
+    // kept in image z of the slots until foldSlotsKernel().
+    const size_t slot = size_t(blockIdx.z) * size_t(cam.width) * size_t(cam.height) + p;
     RayCounters c;
     ShadowCounters sc;
     Vec4f v;
     const bool sampled = renderSample<Mode, true, false, Unlit + kDeferredShadows>(
-      s, s, cam, fp, x, y, depth ? depth[p] : 1.f, fp.firstSample, c, sc, nullptr, v, &d);
+      s, s, cam, fp, x, y, depth ? depth[p] : 1.f, fp.firstSample + blockIdx.z, c, sc, nullptr, v, &d);
     if (sampled && d.count > 0)
     {
       d.sample = v;
-      d.pixel = uint32_t(p);
+      d.pixel = uint32_t(slots ? slot : p);
       deferred = true;
+    }
+    else if (slots)
+    {
+      // A missed ray adds nothing: zero, as foldOneSample() adds none.
+      slots[slot] = sampled ? make_float4(v.r, v.g, v.b, v.a) : make_float4(0.f, 0.f, 0.f, 0.f);
     }
     else
     {
@@ -241,7 +259,7 @@ __global__ void litDeferKernel(const __grid_constant__ SceneView s, const __grid
 template <BlendMode Mode>
 __global__ void deferredShadowKernel(const __grid_constant__ SceneView s, uint32_t index, float4* __restrict__ accum,
   double* __restrict__ sums, float4* __restrict__ even, double* __restrict__ evenSums, uint32_t previous,
-  const DeferredShadows* __restrict__ queue, const unsigned* __restrict__ queued)
+  const DeferredShadows* __restrict__ queue, const unsigned* __restrict__ queued, float4* __restrict__ slots)
 {
   const unsigned i = blockIdx.x * blockDim.x + threadIdx.x;
   if (i >= *queued)
@@ -250,7 +268,35 @@ __global__ void deferredShadowKernel(const __grid_constant__ SceneView s, uint32
   }
   DeferredShadows d = queue[i];
   const Vec4f v = finishDeferredSample<Mode>(s, d);
+  if (slots)
+  {
+    slots[d.pixel] = make_float4(v.r, v.g, v.b, v.a);
+    return;
+  }
   foldOneSample(&v, index, d.pixel, accum, sums, even, evenSums, previous);
+}
+
+/// A batch of `batch` samples from their slots into the image, in sample
+/// order (indices index, index + 1, ...), as one at a time would add them.
+__global__ void foldSlotsKernel(size_t pixels, unsigned batch, uint32_t index, float4* __restrict__ accum,
+  double* __restrict__ sums, float4* __restrict__ even, double* __restrict__ evenSums, uint32_t previous,
+  const float4* __restrict__ slots)
+{
+  const size_t p = size_t(blockIdx.x) * blockDim.x + threadIdx.x;
+  if (p >= pixels)
+  {
+    return;
+  }
+  for (unsigned b = 0; b < batch; ++b)
+  {
+    const float4 f = slots[size_t(b) * pixels + p];
+    Vec4f v;
+    v.r = f.x;
+    v.g = f.y;
+    v.b = f.z;
+    v.a = f.w;
+    foldOneSample(&v, index + b, p, accum, sums, even, evenSums, previous + b);
+  }
 }
 
 /// Threads per block of deferredShadowKernel().
@@ -268,15 +314,23 @@ void launchDeferred(const SceneView& s, const CameraView& cam, const FrameParams
   const unsigned blocks = unsigned((P + kDeferredBlock - 1) / kDeferredBlock);
   FrameParams one = fp;
   one.samplesPerPixel = 1;
-  for (int j = 0; j < fp.samplesPerPixel; ++j)
+  const int batch = k.deferredSlots ? int(k.deferredBatch) : 1;
+  for (int j = 0; j < fp.samplesPerPixel; j += batch)
   {
+    const unsigned n = unsigned(std::min(batch, fp.samplesPerPixel - j));
     one.firstSample = fp.firstSample + uint32_t(j);
     const uint32_t previous = k.previous + uint32_t(j);
+    float4* slots = n > 1 ? k.deferredSlots : nullptr;
     MCVOL_CUDA(cudaMemsetAsync(k.deferredCount, 0, sizeof(unsigned), k.stream));
-    litDeferKernel<Mode, Unlit><<<k.grid, k.block, 0, k.stream>>>(
-      s, cam, one, k.depth, k.accum, k.sums, k.even, k.evenSums, previous, k.deferred, k.deferredCount);
+    litDeferKernel<Mode, Unlit><<<dim3(k.grid.x, k.grid.y, n), k.block, 0, k.stream>>>(
+      s, cam, one, k.depth, k.accum, k.sums, k.even, k.evenSums, previous, k.deferred, k.deferredCount, slots);
     deferredShadowKernel<Mode><<<blocks, kDeferredBlock, 0, k.stream>>>(
-      s, one.firstSample, k.accum, k.sums, k.even, k.evenSums, previous, k.deferred, k.deferredCount);
+      s, one.firstSample, k.accum, k.sums, k.even, k.evenSums, previous, k.deferred, k.deferredCount, slots);
+    if (slots)
+    {
+      foldSlotsKernel<<<unsigned((P + 255) / 256), 256, 0, k.stream>>>(
+        P, n, one.firstSample, k.accum, k.sums, k.even, k.evenSums, previous, slots);
+    }
   }
 }
 

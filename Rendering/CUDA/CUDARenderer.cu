@@ -271,7 +271,7 @@ CudaMemoryStats CUDARenderer::memory() const
   m.majorantBytes = this->In->Majorants.bytes();
   m.imageBytes = this->In->Accum.bytes() + this->In->Even.bytes() + this->In->AccumSums.bytes() +
     this->In->EvenSums.bytes() + this->In->Depth.bytes() + this->In->Display.bytes() + this->In->Deferred.bytes() +
-    this->In->DeferredCount.bytes();
+    this->In->DeferredCount.bytes() + this->In->DeferredSlots.bytes();
   for (const auto& li : this->In->LevelInputs)
   {
     m.levelInputBytes += li->data.bytes();

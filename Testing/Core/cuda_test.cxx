@@ -1008,6 +1008,71 @@ TEST(CudaRender, DeferredShadowsEqualTraced)
   }
 }
 
+// With few pixels open to rays (a depth mask: one process's rows of a split
+// image), one pair of deferred launches traces several samples per pixel
+// (RenderLaunch::deferredBatch) and folds them in sample order: the image,
+// even half included, is the one of the same samples rendered one per
+// render (no batch), bit for bit, with and without ambient light, for a mask
+// that leaves 1/2 and 1/8 of the rows (batches of 2 and 8 with a remainder).
+// The batch's slots count in imageBytes.
+TEST(CudaRender, DeferredBatchesEqualOneSampleAtATime)
+{
+  const TypedVolume v(ScalarType::UInt16, 3, 30, 28, 26);
+  const Camera cam = orbitCamera(v.dims, std::array<double, 3>{ 1, 1, 1 }.data(), 24, 64, 30, 20);
+  const size_t P = size_t(cam.width) * size_t(cam.height);
+  for (int ranks : { 2, 8 })
+  {
+    // Process 0's stripes of 4 rows open, the others' at depth 0.
+    std::vector<float> depth(P, 1.f);
+    for (int y = 0; y < cam.height; ++y)
+    {
+      if ((y / 4) % ranks != 0)
+      {
+        std::fill_n(depth.begin() + std::ptrdiff_t(size_t(y) * size_t(cam.width)), cam.width, 0.f);
+      }
+    }
+    for (double ambient : { 0.0, 0.2 })
+    {
+      Scene scene;
+      v.configure(scene, BlendMode::Density);
+      scene.setLighting(sunAndSky(1, ambient));
+      scene.update();
+      std::vector<float> image[2];
+      size_t bytes[2] = { 0, 0 };
+      for (int batched = 0; batched < 2; ++batched)
+      {
+        CUDARenderer g;
+        Accumulator acc;
+        RenderSettings rs;
+        rs.seed = 5;
+        if (batched == 1)
+        {
+          rs.samplesPerPixel = 11;
+          g.render(scene, cam, rs, depth.data(), acc);
+        }
+        else
+        {
+          for (int k = 0; k < 11; ++k)
+          {
+            g.render(scene, cam, rs, depth.data(), acc);
+          }
+        }
+        ASSERT_EQ(acc.samples(), 11u);
+        image[batched].assign(acc.rgba(), acc.rgba() + P * 4);
+        ASSERT_NE(acc.evenRGBA(), nullptr);
+        image[batched].insert(image[batched].end(), acc.evenRGBA(), acc.evenRGBA() + P * 4);
+        bytes[batched] = g.memory().imageBytes;
+      }
+      const std::string what = std::to_string(ranks) + " ranks, ambient " + std::to_string(ambient);
+      const auto [worst, sum] = worstAndSum(image[0], image[1]);
+      EXPECT_GT(sum, 1.0) << what;
+      EXPECT_EQ(worst, 0.0) << what;
+      EXPECT_EQ(image[0], image[1]) << what;
+      EXPECT_GE(bytes[1], bytes[0] + size_t(ranks) * P * sizeof(float) * 4) << what;
+    }
+  }
+}
+
 // The estimator choice's pilots rendered at once (CUDARenderer::renderPilots:
 // each replicate's samples as one-sample renders of their own, folded on the
 // host) equal the renders one after the other (Renderer::renderPilots, the
