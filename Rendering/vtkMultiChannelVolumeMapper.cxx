@@ -50,6 +50,8 @@ namespace
 {
 constexpr int kMaxChannels = vtkMultiChannelVolumeMapper::MAX_CHANNELS;
 static_assert(kMaxChannels == mcvol::kMaxChannels, "channel limits of mapper and core differ");
+static_assert(vtkMultiChannelVolumeMapper::kSplitImageStripeRows == mcvol::kSplitImageStripeRows,
+  "split-image stripes of mapper and core differ");
 
 /// What a render's levels of detail depend on: the channels (their data and
 /// values), the transfer-function tables (scalar channels), the filter and
@@ -1697,19 +1699,8 @@ bool vtkMultiChannelVolumeMapper::SetUpView(RenderPass& pass)
   }
   if (in.SplitImage)
   {
-    // The other processes' stripes: depth 0, geometry at the near plane,
-    // so that their camera rays end before they start and the pixels stay
-    // transparent.
-    const size_t width = static_cast<size_t>(pass.Viewport.Width);
-    const int height = pass.Viewport.Height;
-    depth.resize(width * static_cast<size_t>(height), 1.0f);
-    for (int y = 0; y < height; ++y)
-    {
-      if ((y / kSplitImageStripeRows) % in.SplitRanks != in.SplitRank)
-      {
-        std::fill_n(depth.begin() + static_cast<std::ptrdiff_t>(width * static_cast<size_t>(y)), width, 0.0f);
-      }
-    }
+    // The other processes' stripes: depth 0, geometry at the near plane.
+    mcvol::maskSplitImageRows(depth, pass.Viewport.Width, pass.Viewport.Height, in.SplitRanks, in.SplitRank);
   }
   return true;
 }

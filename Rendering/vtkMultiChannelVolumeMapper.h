@@ -1038,9 +1038,7 @@ public:
   unsigned int EffectiveSeed();
   ///@}
 
-  /// Rows per stripe of a split image: a multiple of the CUDA backend's
-  /// block height, so that a block lies wholly inside or outside a
-  /// process's share and the threads of the others end at once.
+  /// Rows per stripe of a split image (mcvol::kSplitImageStripeRows).
   static constexpr int kSplitImageStripeRows = 16;
 
   ///@{

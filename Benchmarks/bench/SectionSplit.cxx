@@ -23,27 +23,6 @@
 
 namespace mcvolbench
 {
-namespace
-{
-/// Rows per stripe of a split image (vtkMultiChannelVolumeMapper::kSplitImageStripeRows).
-constexpr int kStripeRows = 16;
-
-/// The depth mask of process `rank` of `ranks`: 1 (nothing drawn) on its
-/// stripes, 0 on the others'.
-std::vector<float> splitMask(int width, int height, int ranks, int rank)
-{
-  std::vector<float> depth(size_t(width) * size_t(height), 1.0f);
-  for (int y = 0; y < height; ++y)
-  {
-    if ((y / kStripeRows) % ranks != rank)
-    {
-      std::fill_n(depth.begin() + std::ptrdiff_t(size_t(width) * size_t(y)), width, 0.0f);
-    }
-  }
-  return depth;
-}
-} // namespace
-
 void runSplit(Bench& bench)
 {
   const Options& o = bench.o;
@@ -67,7 +46,7 @@ void runSplit(Bench& bench)
               "whole image's time over the slowest process's (N is perfect).\n\n"
               "| shadow rays | k spp | N | slowest ms | mean ms | scaling | ideal ms | slowest beyond ideal (ms) "
               "|\n|---|---|---|---|---|---|---|---|\n",
-    ds.c_str(), o.width, o.height, kStripeRows, o.frames);
+    ds.c_str(), o.width, o.height, mcvol::kSplitImageStripeRows, o.frames);
   for (const bool defer : deferModes)
   {
 #ifdef MCVOL_WITH_CUDA
@@ -85,7 +64,8 @@ void runSplit(Bench& bench)
         double slowest = 0.0, mean = 0.0;
         for (int rank = 0; rank < ranks; ++rank)
         {
-          const std::vector<float> mask = splitMask(o.width, o.height, ranks, rank);
+          std::vector<float> mask;
+          mcvol::maskSplitImageRows(mask, o.width, o.height, ranks, rank);
           mcvol::RenderSettings rs;
           rs.samplesPerPixel = k;
           rs.readBack = false;

@@ -6,6 +6,8 @@
 #include "mcvol/Scene.h"
 #include "mcvol/ray/Types.h"
 
+#include <algorithm>
+#include <cstddef>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -317,6 +319,32 @@ struct PilotJob
 };
 
 class DeviceRenderer; // DeviceRenderer.h
+
+/// Rows per stripe of a split image (processes that each hold the whole
+/// volume render stripes of rows dealt to them in turn): a multiple of the
+/// CUDA backend's block height, so that a block lies wholly inside or
+/// outside a process's share and the threads of the others end at once.
+constexpr int kSplitImageStripeRows = 16;
+
+/**
+ * The depth mask of process `rank` of `ranks` splitting a width x height
+ * image: `depth` (resized to width x height, new values 1: nothing drawn)
+ * gets 0 on the rows of the other processes' stripes, so that their camera
+ * rays end before they start and those pixels stay transparent; this
+ * process's rows keep their values (the depth of opaque geometry).
+ */
+inline void maskSplitImageRows(std::vector<float>& depth, int width, int height, int ranks, int rank)
+{
+  const size_t w = width > 0 ? size_t(width) : 0;
+  depth.resize(w * size_t(height > 0 ? height : 0), 1.0f);
+  for (int y = 0; y < height; ++y)
+  {
+    if ((y / kSplitImageStripeRows) % ranks != rank)
+    {
+      std::fill_n(depth.begin() + std::ptrdiff_t(w * size_t(y)), w, 0.0f);
+    }
+  }
+}
 
 /**
  * A backend: renders a Scene into an Accumulator, frame by frame. This is
