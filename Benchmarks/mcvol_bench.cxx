@@ -129,9 +129,13 @@ int main(int argc, char** argv)
     g->setBlockSize(o.blockX, o.blockY);
     g->setPlainKernels(!o.generalKernels);
     g->setDeferredShadows(!o.inlineShadows);
+    if (o.deferredBatch > 0)
+    {
+      g->setDeferredBatch(o.deferredBatch);
+    }
     device = g->deviceDescription() + "; sampling " + o.sampling + "; block " + std::to_string(o.blockX) + "x" +
       std::to_string(o.blockY) + (o.generalKernels ? "; general kernels" : "") +
-      (o.inlineShadows ? "; inline shadow rays" : "");
+      (o.inlineShadows ? "; inline shadow rays" : "") + "; deferred batch " + std::to_string(g->deferredBatch());
   }
 #endif
   const bool hostAccel = !(r->device() && r->device()->buildsAccelerationOnDevice());

@@ -72,6 +72,16 @@ ArgParser makeParser(Options& o)
     .add("--inline-shadows", 0, "",
       "CUDA: trace shadow rays in the camera rays' kernel, not deferred to a kernel of their own (for comparisons)",
       [&](const Args&) { o.inlineShadows = true; })
+    .add("--deferred-batch", 1, "N",
+      "CUDA: samples per pixel one pair of deferred-shadow launches traces in renders of several (default 4)",
+      [&](const Args& v)
+      {
+        o.deferredBatch = std::stoi(v[0]);
+        if (o.deferredBatch < 1 || o.deferredBatch > 8)
+        {
+          throw std::invalid_argument("--deferred-batch takes 1 to 8");
+        }
+      })
     .add("--block", 2, "X Y", "CUDA: render-kernel block size (default 8 8)",
       [&](const Args& v)
       {

@@ -87,13 +87,16 @@ void withFlag(bool flag, F&& f)
   }
 }
 
-/// Blocks of `block` threads covering an image of width x height pixels,
-/// one thread per pixel.
 /// Most samples per pixel one pair of deferred launches traces
 /// (RenderLaunch::deferredBatch): 8 restores a whole image's paths per
 /// launch to one of 8 processes' rows of a split image.
 constexpr size_t kMaxDeferredBatch = 8;
+/// Paths one pair of deferred launches is given where the batch allows
+/// (those of a 1024^2 image, which fill the GPUs measured).
+constexpr size_t kFullLaunchPaths = size_t(1) << 20;
 
+/// Blocks of `block` threads covering an image of width x height pixels,
+/// one thread per pixel.
 inline dim3 imageGrid(dim3 block, int width, int height)
 {
   return dim3((unsigned(width) + block.x - 1) / block.x, (unsigned(height) + block.y - 1) / block.y);
@@ -300,9 +303,10 @@ struct CUDARenderer::Internal
   bool SkipEvenReadBack = false; ///< set by render() for RenderSettings::readBackEven off
   bool PlainKernels = true;      ///< setPlainKernels()
   bool DeferShadows = true;      ///< setDeferredShadows()
+  unsigned DeferredBatch = 4;    ///< setDeferredBatch()
   bool DeviceLevels = true;      ///< setDeviceLevels()
   /// The deferred shadow rays' queue (RenderLaunch::deferred), one entry
-  /// per pixel, and its count.
+  /// per path of a launch (kept at the most rendered), and its count.
   DeviceBuffer<DeferredShadows> Deferred;
   DeviceBuffer<unsigned> DeferredCount;
   /// Batches of deferred samples (RenderLaunch::deferredSlots): up to

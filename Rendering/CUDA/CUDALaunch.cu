@@ -471,32 +471,50 @@ void CUDARenderer::render(const Scene& scene, const Camera& camera, const Render
   {
     if (lit && !count && in.DeferShadows && deferrableShadows(s, fp.sampler))
     {
-      // One queue entry per pixel, kept at the largest image rendered.
-      if (in.Deferred.count < P)
+      // Several samples per launch pair when the render asks for several:
+      // setDeferredBatch()'s count, and more where few pixels can have rays
+      // (a small image, or a depth mask whose 0 ends a ray before it starts:
+      // the other processes' rows of a split image), up to the paths of a
+      // whole 1024^2 image, since a launch lasts as long as its longest
+      // paths however few it holds.
+      size_t batch = 1;
+      size_t open = P;
+      if (settings.samplesPerPixel > 1)
       {
-        in.Deferred.resize(P);
+        if (depth)
+        {
+          open = size_t(std::count_if(depth, depth + P, [](float z) { return z > 0.f; }));
+        }
+        const size_t fill = std::max<size_t>(P, kFullLaunchPaths) / std::max<size_t>(open, 1);
+        batch = std::min<size_t>(
+          { kMaxDeferredBatch, size_t(settings.samplesPerPixel), std::max<size_t>(in.DeferredBatch, fill) });
+        // The batch's queue within 1/16 of the device's memory (or one
+        // entry per pixel, as one sample at a time takes).
+        const size_t budget =
+          std::max<size_t>(in.Props.totalGlobalMem / 16, P * sizeof(DeferredShadows));
+        while (batch > 1 && batch * open * sizeof(DeferredShadows) > budget)
+        {
+          --batch;
+        }
+      }
+      // One queue entry per path of a launch, kept at the most rendered.
+      const size_t entries = std::max(P, batch * open);
+      if (in.Deferred.count < entries)
+      {
+        in.Deferred.resize(entries);
       }
       in.DeferredCount.resize(1);
       k.deferred = in.Deferred.ptr;
       k.deferredCount = in.DeferredCount.ptr;
-      // Few pixels that can have rays (depth 0 ends a ray before it starts:
-      // the other processes' rows of a split image): several samples per
-      // launch, as many paths as the whole image's, so that the queue still
-      // holds them all.
-      if (depth && settings.samplesPerPixel > 1)
+      k.deferredRoom = in.Deferred.count;
+      if (batch > 1)
       {
-        const size_t open = size_t(std::count_if(depth, depth + P, [](float z) { return z > 0.f; }));
-        const size_t batch = std::min<size_t>(
-          { kMaxDeferredBatch, size_t(settings.samplesPerPixel), P / std::max<size_t>(open, 1) });
-        if (batch > 1)
+        if (in.DeferredSlots.count < batch * P)
         {
-          if (in.DeferredSlots.count < batch * P)
-          {
-            in.DeferredSlots.resize(batch * P);
-          }
-          k.deferredBatch = unsigned(batch);
-          k.deferredSlots = in.DeferredSlots.ptr;
+          in.DeferredSlots.resize(batch * P);
         }
+        k.deferredBatch = unsigned(batch);
+        k.deferredSlots = in.DeferredSlots.ptr;
       }
     }
     launchRender(s.blend.mode, count, lit, in.PlainKernels && plainScene(s, *k.light), s, cam, fp, k);

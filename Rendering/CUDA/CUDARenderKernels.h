@@ -43,16 +43,20 @@ struct RenderLaunch
   /// stand-in's view with its device pointers, or the render's own view).
   const SceneView* light = nullptr;
   /// Lit renders whose shadow rays wait for a kernel of their own
-  /// (deferrableShadows(), CUDARenderer::setDeferredShadows): room for one
-  /// DeferredShadows per pixel, and the count queued. Null otherwise.
+  /// (deferrableShadows(), CUDARenderer::setDeferredShadows): room for
+  /// `deferredRoom` DeferredShadows (every path of a launch pair), and the
+  /// count queued. Null otherwise.
   DeferredShadows* deferred = nullptr;
   unsigned* deferredCount = nullptr;
+  size_t deferredRoom = 0;
   /// Samples per pixel that one pair of deferred launches traces (1: one
-  /// at a time, folded as they finish). More when few pixels can have rays
-  /// (a depth mask: one process's rows of a split image), so that a launch
-  /// holds as many paths as a whole image's: a launch lasts as long as its
-  /// longest paths, however few it holds. Each batch's samples wait in
-  /// `deferredSlots` (deferredBatch images) and are folded in order.
+  /// at a time, folded as they finish): CUDARenderer::setDeferredBatch()'s
+  /// count when a render asks for several, and more when few pixels can
+  /// have rays (a small image, or a depth mask: one process's rows of a
+  /// split image), so that a launch holds as many paths as a 1024^2 image's
+  /// (kFullLaunchPaths). A launch lasts as long
+  /// as its longest paths, however few it holds. Each batch's samples wait
+  /// in `deferredSlots` (deferredBatch images) and are folded in order.
   unsigned deferredBatch = 1;
   float4* deferredSlots = nullptr;
 };
@@ -311,7 +315,6 @@ template <BlendMode Mode, int Unlit>
 void launchDeferred(const SceneView& s, const CameraView& cam, const FrameParams& fp, const RenderLaunch& k)
 {
   const size_t P = size_t(cam.width) * size_t(cam.height);
-  const unsigned blocks = unsigned((P + kDeferredBlock - 1) / kDeferredBlock);
   FrameParams one = fp;
   one.samplesPerPixel = 1;
   const int batch = k.deferredSlots ? int(k.deferredBatch) : 1;
@@ -321,6 +324,10 @@ void launchDeferred(const SceneView& s, const CameraView& cam, const FrameParams
     one.firstSample = fp.firstSample + uint32_t(j);
     const uint32_t previous = k.previous + uint32_t(j);
     float4* slots = n > 1 ? k.deferredSlots : nullptr;
+    // Threads for every path the camera kernel may queue; those beyond the
+    // count return at once.
+    const size_t paths = std::min(k.deferredRoom, size_t(n) * P);
+    const unsigned blocks = unsigned((paths + kDeferredBlock - 1) / kDeferredBlock);
     MCVOL_CUDA(cudaMemsetAsync(k.deferredCount, 0, sizeof(unsigned), k.stream));
     litDeferKernel<Mode, Unlit><<<dim3(k.grid.x, k.grid.y, n), k.block, 0, k.stream>>>(
       s, cam, one, k.depth, k.accum, k.sums, k.even, k.evenSums, previous, k.deferred, k.deferredCount, slots);

@@ -223,6 +223,21 @@ bool CUDARenderer::deferredShadows() const
   return this->In->DeferShadows;
 }
 
+void CUDARenderer::setDeferredBatch(int samples)
+{
+  if (samples < 1 || size_t(samples) > kMaxDeferredBatch)
+  {
+    throw std::invalid_argument("CUDARenderer::setDeferredBatch: samples must be 1 to " +
+      std::to_string(kMaxDeferredBatch) + ", not " + std::to_string(samples));
+  }
+  this->In->DeferredBatch = unsigned(samples);
+}
+
+int CUDARenderer::deferredBatch() const
+{
+  return int(this->In->DeferredBatch);
+}
+
 bool CUDARenderer::buildsLevelsOnDevice() const
 {
   return this->In->DeviceLevels;

@@ -1008,29 +1008,44 @@ TEST(CudaRender, DeferredShadowsEqualTraced)
   }
 }
 
-// With few pixels open to rays (a depth mask: one process's rows of a split
-// image), one pair of deferred launches traces several samples per pixel
-// (RenderLaunch::deferredBatch) and folds them in sample order: the image,
-// even half included, is the one of the same samples rendered one per
-// render (no batch), bit for bit, with and without ambient light, for a mask
-// that leaves 1/2 and 1/8 of the rows (batches of 2 and 8 with a remainder).
-// The batch's slots count in imageBytes.
+// A render of several samples traces a batch of them per pair of deferred
+// launches (RenderLaunch::deferredBatch: CUDARenderer::setDeferredBatch()'s
+// count, more where few pixels can have rays: a small image, or a depth mask
+// that leaves one process's rows of a split image) and folds them in sample
+// order: the image, even half included, is the one of the same samples
+// rendered one per render, bit for bit, with and without ambient light.
+// Cases: 1024^2 with batches of 3 and of the default 4; a 24x64 image
+// (batch 8); 1024^2 masks that leave 1/2 and 1/8 of the rows (batches of 4
+// and 8). 11 samples leave a remainder. The batch's slots and its longer
+// queue count in imageBytes.
 TEST(CudaRender, DeferredBatchesEqualOneSampleAtATime)
 {
+  EXPECT_EQ(CUDARenderer().deferredBatch(), 4); // the default
+  EXPECT_THROW(CUDARenderer().setDeferredBatch(0), std::invalid_argument);
+  EXPECT_THROW(CUDARenderer().setDeferredBatch(9), std::invalid_argument);
   const TypedVolume v(ScalarType::UInt16, 3, 30, 28, 26);
-  const Camera cam = orbitCamera(v.dims, std::array<double, 3>{ 1, 1, 1 }.data(), 24, 64, 30, 20);
-  const size_t P = size_t(cam.width) * size_t(cam.height);
-  for (int ranks : { 2, 8 })
+  struct Case
   {
+    int width, height;
+    int ranks;    ///< 1: no mask
+    int batchSet; ///< setDeferredBatch(), 0 for the default
+    size_t batch; ///< the batch expected
+  };
+  for (const Case& c : { Case{ 1024, 1024, 1, 3, 3 }, Case{ 1024, 1024, 1, 0, 4 }, Case{ 24, 64, 1, 0, 8 },
+         Case{ 1024, 1024, 2, 0, 4 }, Case{ 1024, 1024, 8, 0, 8 } })
+  {
+    const Camera cam = orbitCamera(v.dims, std::array<double, 3>{ 1, 1, 1 }.data(), c.width, c.height, 30, 20);
+    const size_t P = size_t(cam.width) * size_t(cam.height);
     // Process 0's stripes of 4 rows open, the others' at depth 0.
     std::vector<float> depth(P, 1.f);
     for (int y = 0; y < cam.height; ++y)
     {
-      if ((y / 4) % ranks != 0)
+      if ((y / 4) % c.ranks != 0)
       {
         std::fill_n(depth.begin() + std::ptrdiff_t(size_t(y) * size_t(cam.width)), cam.width, 0.f);
       }
     }
+    const float* mask = c.ranks > 1 ? depth.data() : nullptr;
     for (double ambient : { 0.0, 0.2 })
     {
       Scene scene;
@@ -1042,19 +1057,23 @@ TEST(CudaRender, DeferredBatchesEqualOneSampleAtATime)
       for (int batched = 0; batched < 2; ++batched)
       {
         CUDARenderer g;
+        if (c.batchSet > 0)
+        {
+          g.setDeferredBatch(c.batchSet);
+        }
         Accumulator acc;
         RenderSettings rs;
         rs.seed = 5;
         if (batched == 1)
         {
           rs.samplesPerPixel = 11;
-          g.render(scene, cam, rs, depth.data(), acc);
+          g.render(scene, cam, rs, mask, acc);
         }
         else
         {
           for (int k = 0; k < 11; ++k)
           {
-            g.render(scene, cam, rs, depth.data(), acc);
+            g.render(scene, cam, rs, mask, acc);
           }
         }
         ASSERT_EQ(acc.samples(), 11u);
@@ -1063,12 +1082,17 @@ TEST(CudaRender, DeferredBatchesEqualOneSampleAtATime)
         image[batched].insert(image[batched].end(), acc.evenRGBA(), acc.evenRGBA() + P * 4);
         bytes[batched] = g.memory().imageBytes;
       }
-      const std::string what = std::to_string(ranks) + " ranks, ambient " + std::to_string(ambient);
+      const std::string what = std::to_string(c.width) + "x" + std::to_string(c.height) + ", " +
+        std::to_string(c.ranks) + " ranks, batch " + std::to_string(c.batch) + ", ambient " + std::to_string(ambient);
       const auto [worst, sum] = worstAndSum(image[0], image[1]);
       EXPECT_GT(sum, 1.0) << what;
       EXPECT_EQ(worst, 0.0) << what;
-      EXPECT_EQ(image[0], image[1]) << what;
-      EXPECT_GE(bytes[1], bytes[0] + size_t(ranks) * P * sizeof(float) * 4) << what;
+      EXPECT_TRUE(image[0] == image[1]) << what;
+      // The slots, and a queue entry per path beyond one per pixel.
+      const size_t open = P / size_t(c.ranks);
+      const size_t queue = c.batch * open > P ? (c.batch * open - P) * sizeof(DeferredShadows) : 0;
+      EXPECT_GE(bytes[1], bytes[0] + c.batch * P * sizeof(float) * 4 + queue) << what;
+      EXPECT_LT(bytes[1], bytes[0] + (c.batch + 1) * P * sizeof(float) * 4 + queue) << what;
     }
   }
 }

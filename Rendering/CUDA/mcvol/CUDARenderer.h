@@ -167,6 +167,18 @@ public:
    */
   void setDeferredShadows(bool on);
   bool deferredShadows() const;
+  /**
+   * Samples per pixel one pair of deferred launches traces when a render
+   * asks for several (default 4, at most 8): a launch lasts as long as its
+   * longest paths, so a fuller launch finishes more samples in the same
+   * time. The image is the one of a sample at a time
+   * (CudaRender.DeferredBatchesEqualOneSampleAtATime); the queue then takes
+   * that many entries per pixel, and the batch a float4 image per sample
+   * (CudaMemoryStats::imageBytes). 1 traces one sample per pair, except
+   * where a depth mask leaves few pixels open (a split image's rows).
+   */
+  void setDeferredBatch(int samples);
+  int deferredBatch() const;
   /// Threads per block (x, y) of the render kernel (default 8 x 8).
   void setBlockSize(int x, int y);
 
