@@ -54,9 +54,9 @@ struct RenderLaunch
   /// count when a render asks for several, and more when few pixels can
   /// have rays (a small image, or a depth mask: one process's rows of a
   /// split image), so that a launch holds as many paths as a 1024^2 image's
-  /// (kFullLaunchPaths). A launch lasts as long
-  /// as its longest paths, however few it holds. Each batch's samples wait
-  /// in `deferredSlots` (deferredBatch images) and are folded in order.
+  /// (kFullLaunchPaths). A launch lasts as long as its longest paths,
+  /// however few it holds. Each batch's samples wait in `deferredSlots`
+  /// (deferredBatch images) and are folded in order.
   unsigned deferredBatch = 1;
   float4* deferredSlots = nullptr;
 };

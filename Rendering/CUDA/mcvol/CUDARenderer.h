@@ -174,8 +174,10 @@ public:
    * time. The image is the one of a sample at a time
    * (CudaRender.DeferredBatchesEqualOneSampleAtATime); the queue then takes
    * that many entries per pixel, and the batch a float4 image per sample
-   * (CudaMemoryStats::imageBytes). 1 traces one sample per pair, except
-   * where a depth mask leaves few pixels open (a split image's rows).
+   * (CudaMemoryStats::imageBytes), the queue within 1/16 of the device's
+   * memory. Where few pixels can have rays (an image smaller than 1024^2,
+   * a depth mask that leaves a split image's rows) a batch takes more, up
+   * to a 1024^2 image's paths; 1 otherwise traces one sample per pair.
    */
   void setDeferredBatch(int samples);
   int deferredBatch() const;
