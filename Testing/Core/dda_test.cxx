@@ -399,6 +399,19 @@ TEST(DDA, DegenerateRays)
   }
   EXPECT_EQ(diagonal, 4);
   EXPECT_EQ(s.back().t1, 8.f);
+  // At a corner the crossings tie: x steps first, then y, then z (the first
+  // axis of equal crossings), one fixed order on every backend.
+  ASSERT_GE(s.size(), 4u);
+  const int corner[3][3] = { { 1, 0, 0 }, { 1, 1, 0 }, { 1, 1, 1 } };
+  for (int i = 0; i < 3; ++i)
+  {
+    for (int a = 0; a < 3; ++a)
+    {
+      EXPECT_EQ(s[size_t(i + 1)].cell[a], corner[i][a]) << "step " << i + 1 << ", axis " << a;
+    }
+  }
+  EXPECT_EQ(s[1].t0, 2.f);
+  EXPECT_EQ(s[1].t1, 2.f);
   // Negative direction along x only.
   s = walk(g, Vec3f(7.5f, 1.f, 1.f), Vec3f(-2.f, 0.f, 0.f), 0.f, 3.75f);
   ASSERT_EQ(s.size(), 4u);

@@ -77,33 +77,9 @@ struct DDA
     this->Dims[0] = g.dims[0];
     this->Dims[1] = g.dims[1];
     this->Dims[2] = g.dims[2];
-    for (int a = 0; a < 3; ++a)
-    {
-      const float x = (p[a] - g.lo[a]) * g.invCellSize[a];
-      // Compared before the conversion: a float beyond int's range (a ray
-      // starting far outside a fine grid) must not be converted.
-      int c = x >= 0.f ? (x < float(g.dims[a]) ? int(x) : g.dims[a] - 1) : -1;
-      c = clampi(c, 0, g.dims[a] - 1);
-      this->cell[a] = c;
-      this->Lo[a] = g.lo[a];
-      this->Cs[a] = g.cellSize[a];
-      if (d[a] > 0.f)
-      {
-        this->step[a] = 1;
-        this->InvD[a] = 1.f / d[a];
-      }
-      else if (d[a] < 0.f)
-      {
-        this->step[a] = -1;
-        this->InvD[a] = 1.f / d[a];
-      }
-      else
-      {
-        this->step[a] = 0;
-        this->InvD[a] = 0.f;
-      }
-      this->tNext[a] = this->crossing(a, tmin);
-    }
+    this->initAxis<0>(g, p, d, tmin);
+    this->initAxis<1>(g, p, d, tmin);
+    this->initAxis<2>(g, p, d, tmin);
     this->t1 = minf(minf(minf(this->tNext[0], this->tNext[1]), this->tNext[2]), this->tEnd);
   }
 
@@ -122,40 +98,77 @@ struct DDA
       this->done = true;
       return false;
     }
-    int a = 0;
-    if (this->tNext[1] < this->tNext[a])
+    // The axis of the nearest crossing, the first of equal ones.
+    const bool y = this->tNext[1] < this->tNext[0];
+    if (this->tNext[2] < (y ? this->tNext[1] : this->tNext[0]))
     {
-      a = 1;
+      return this->advance<2>();
     }
-    if (this->tNext[2] < this->tNext[a])
-    {
-      a = 2;
-    }
-    this->cell[a] += this->step[a];
-    if (this->cell[a] < 0 || this->cell[a] >= this->Dims[a])
-    {
-      this->done = true;
-      return false;
-    }
-    this->t0 = this->t1;
-    this->tNext[a] = this->crossing(a, this->t0);
-    this->t1 = minf(minf(minf(this->tNext[0], this->tNext[1]), this->tNext[2]), this->tEnd);
-    return true;
+    return y ? this->advance<1>() : this->advance<0>();
   }
 
   /// Stops the traversal (a collision was accepted).
   MCVOL_HOT void stop() { this->done = true; }
 
 private:
-  MCVOL_HOT float crossing(int a, float tmin) const
+  // Every member is indexed by a constant (the axis is a template argument):
+  // an index known only at run time keeps the whole traversal state in
+  // local memory on the GPU, a load per access in the tracking loop.
+  template <int A>
+  MCVOL_HOT void initAxis(const GridView& g, Vec3f p, Vec3f d, float tmin)
   {
-    const int beyond = this->cell[a] + this->step[a];
-    if (this->step[a] == 0 || beyond < 0 || beyond >= this->Dims[a])
+    const float x = (p[A] - g.lo[A]) * g.invCellSize[A];
+    // Compared before the conversion: a float beyond int's range (a ray
+    // starting far outside a fine grid) must not be converted.
+    int c = x >= 0.f ? (x < float(g.dims[A]) ? int(x) : g.dims[A] - 1) : -1;
+    c = clampi(c, 0, g.dims[A] - 1);
+    this->cell[A] = c;
+    this->Lo[A] = g.lo[A];
+    this->Cs[A] = g.cellSize[A];
+    if (d[A] > 0.f)
+    {
+      this->step[A] = 1;
+      this->InvD[A] = 1.f / d[A];
+    }
+    else if (d[A] < 0.f)
+    {
+      this->step[A] = -1;
+      this->InvD[A] = 1.f / d[A];
+    }
+    else
+    {
+      this->step[A] = 0;
+      this->InvD[A] = 0.f;
+    }
+    this->tNext[A] = this->crossing<A>(tmin);
+  }
+
+  /// One step along axis A (next()).
+  template <int A>
+  MCVOL_HOT bool advance()
+  {
+    this->cell[A] += this->step[A];
+    if (this->cell[A] < 0 || this->cell[A] >= this->Dims[A])
+    {
+      this->done = true;
+      return false;
+    }
+    this->t0 = this->t1;
+    this->tNext[A] = this->crossing<A>(this->t0);
+    this->t1 = minf(minf(minf(this->tNext[0], this->tNext[1]), this->tNext[2]), this->tEnd);
+    return true;
+  }
+
+  template <int A>
+  MCVOL_HOT float crossing(float tmin) const
+  {
+    const int beyond = this->cell[A] + this->step[A];
+    if (this->step[A] == 0 || beyond < 0 || beyond >= this->Dims[A])
     {
       return FLT_MAX; // no step along a, or a face of the grid: the cell reaches tEnd
     }
-    const int b = this->cell[a] + (this->step[a] > 0 ? 1 : 0);
-    const float t = (this->Lo[a] + float(b) * this->Cs[a] - this->O[a]) * this->InvD[a];
+    const int b = this->cell[A] + (this->step[A] > 0 ? 1 : 0);
+    const float t = (this->Lo[A] + float(b) * this->Cs[A] - this->O[A]) * this->InvD[A];
     return t > tmin ? t : tmin;
   }
 
