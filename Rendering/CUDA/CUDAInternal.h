@@ -319,6 +319,9 @@ struct CUDARenderer::Internal
   DeviceBuffer<float> Depth;
   std::vector<float> LastDepth;
   bool HaveDepth = false;
+  /// The depth image's pixels where a ray can start (depth above 0),
+  /// counted when it is uploaded (deviceDepth()).
+  size_t OpenDepthPixels = 0;
   DeviceBuffer<unsigned long long> Counters;
   // Visibility optimization: the importance tables and the per-pixel segment
   // lists of the Accumulator PoolId (restarted when another one renders).

@@ -301,6 +301,7 @@ const float* CUDARenderer::Internal::deviceDepth(const float* depth, size_t pixe
     MCVOL_CUDA(cudaMemcpy(this->Depth.ptr, depth, P * sizeof(float), cudaMemcpyHostToDevice));
     this->LastDepth.assign(depth, depth + P);
     this->HaveDepth = true;
+    this->OpenDepthPixels = size_t(std::count_if(depth, depth + P, [](float z) { return z > 0.f; }));
   }
   return this->Depth.ptr;
 }
@@ -483,7 +484,7 @@ void CUDARenderer::render(const Scene& scene, const Camera& camera, const Render
       {
         if (depth)
         {
-          open = size_t(std::count_if(depth, depth + P, [](float z) { return z > 0.f; }));
+          open = in.OpenDepthPixels;
         }
         const size_t fill = std::max<size_t>(P, kFullLaunchPaths) / std::max<size_t>(open, 1);
         batch = std::min<size_t>(
@@ -492,10 +493,7 @@ void CUDARenderer::render(const Scene& scene, const Camera& camera, const Render
         // entry per pixel, as one sample at a time takes).
         const size_t budget =
           std::max<size_t>(in.Props.totalGlobalMem / 16, P * sizeof(DeferredShadows));
-        while (batch > 1 && batch * open * sizeof(DeferredShadows) > budget)
-        {
-          --batch;
-        }
+        batch = std::max<size_t>(1, std::min(batch, budget / (std::max<size_t>(open, 1) * sizeof(DeferredShadows))));
       }
       // One queue entry per path of a launch, kept at the most rendered.
       const size_t entries = std::max(P, batch * open);
