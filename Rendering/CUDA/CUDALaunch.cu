@@ -493,7 +493,8 @@ void CUDARenderer::render(const Scene& scene, const Camera& camera, const Render
         // entry per pixel, as one sample at a time takes).
         const size_t budget =
           std::max<size_t>(in.Props.totalGlobalMem / 16, P * sizeof(DeferredShadows));
-        batch = std::max<size_t>(1, std::min(batch, budget / (std::max<size_t>(open, 1) * sizeof(DeferredShadows))));
+        const size_t fits = budget / (std::max<size_t>(open, 1) * sizeof(DeferredShadows));
+        batch = std::max<size_t>(1, std::min(batch, fits));
       }
       // One queue entry per path of a launch, kept at the most rendered.
       const size_t entries = std::max(P, batch * open);

@@ -342,11 +342,11 @@ void launchDeferred(const SceneView& s, const CameraView& cam, const FrameParams
 }
 
 /**
- * Registers per thread of the plain density-blending kernels without shadow
- * rays, 255 (none) elsewhere: the count each kernel needs for the warps per
- * SM (blocks of 8x8) it had before the DDA kept its state in registers
- * rather than local memory. Past it ptxas would take a step of occupancy
- * for a few registers; at it, it spills at most 40 bytes.
+ * Registers per thread of the plain density-blending kernels that trace no
+ * shadow rays, 255 (no cap) elsewhere. Each cap sits at a step of occupancy
+ * in blocks of 8x8 (80 registers: 24 warps per SM, 88: 22, 96: 20) where
+ * the kernel would otherwise take a few registers more and lose a step; at
+ * the cap ptxas spills at most 40 bytes (sm_90).
  */
 template <BlendMode Mode, bool Lit, int Unlit>
 constexpr int plainRegisterCap()
@@ -369,7 +369,8 @@ constexpr int plainRegisterCap()
 
 /// The unlit render kernel: renderKernelBody() on the kernel's parameters.
 template <BlendMode Mode, bool Count, int Unlit = 0>
-__global__ void __maxnreg__((plainRegisterCap<Mode, false, Unlit>())) renderKernel(const __grid_constant__ SceneView s, const __grid_constant__ CameraView cam,
+__global__ void __maxnreg__((plainRegisterCap<Mode, false, Unlit>()))
+  renderKernel(const __grid_constant__ SceneView s, const __grid_constant__ CameraView cam,
   const __grid_constant__ FrameParams fp, const float* __restrict__ depth, float4* __restrict__ accum,
   double* __restrict__ sums, float4* __restrict__ even, double* __restrict__ evenSums, uint32_t previous,
   unsigned long long* __restrict__ counters)
@@ -384,7 +385,8 @@ __global__ void __maxnreg__((plainRegisterCap<Mode, false, Unlit>())) renderKern
 /// per thread, ptxas --resource-usage, sm_90); as a parameter, its fields
 /// stay constant-bank operands, as s's do.
 template <BlendMode Mode, bool Count, int Unlit = 0>
-__global__ void __maxnreg__((plainRegisterCap<Mode, true, Unlit>())) litRenderKernel(const __grid_constant__ SceneView s, const __grid_constant__ SceneView light,
+__global__ void __maxnreg__((plainRegisterCap<Mode, true, Unlit>()))
+  litRenderKernel(const __grid_constant__ SceneView s, const __grid_constant__ SceneView light,
   const __grid_constant__ CameraView cam, const __grid_constant__ FrameParams fp, const float* __restrict__ depth,
   float4* __restrict__ accum, double* __restrict__ sums, float4* __restrict__ even, double* __restrict__ evenSums,
   uint32_t previous, unsigned long long* __restrict__ counters)
