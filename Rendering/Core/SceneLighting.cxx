@@ -47,6 +47,10 @@ void Scene::setLighting(const LightingDesc& d)
   {
     throw std::invalid_argument("mcvol: the shininess must be a finite number >= 0");
   }
+  if (!(d.scatterRoulette > 0.f && d.scatterRoulette <= 1.f))
+  {
+    throw std::invalid_argument("mcvol: the scattering vertex's roulette threshold must be in (0, 1]");
+  }
   for (int n = 0; n < kMaxChannels; ++n)
   {
     const float a = size_t(n) < d.albedo.size() ? d.albedo[size_t(n)] : 0.5f;
@@ -88,6 +92,7 @@ void Scene::setLighting(const LightingDesc& d)
   L.shadows = d.shadows;
   L.shadowEstimator = d.deltaShadows ? 1 : 0;
   L.maxDepth = d.maxDepth;
+  L.scatterRoulette = d.scatterRoulette;
   L.gradientShading = d.gradientShading;
   L.shininess = d.shininess;
   L.enabled = anyLight || d.ambient[0] > 0 || d.ambient[1] > 0 || d.ambient[2] > 0;

@@ -491,6 +491,13 @@ TEST(Lighting, BadInputIsAnError)
   ld.maxDepth = 0;
   EXPECT_THROW(scene.setLighting(ld), std::invalid_argument);
   ld.maxDepth = 1;
+  for (float roulette : { 0.f, -0.5f, 1.5f, std::nanf("") })
+  {
+    ld.scatterRoulette = roulette;
+    EXPECT_THROW(scene.setLighting(ld), std::invalid_argument) << "scatter roulette " << roulette;
+  }
+  ld.scatterRoulette = 1.f;
+  EXPECT_NO_THROW(scene.setLighting(ld));
   LightDesc bad;
   bad.vector[0] = bad.vector[1] = bad.vector[2] = 0;
   ld.lights.push_back(bad);
@@ -932,17 +939,18 @@ TEST(Lighting, StandInIsUnlitFreeAndChecked)
 }
 
 // The expected-value estimator of lit camera rays (traceLitExpected():
-// expected-value emission, the scattered part at one delta-tracked real
-// collision) has the collision estimator's expectation: density, max and
-// mix blending (per-channel albedo and anisotropy) under one sun and one
-// point light with ratio shadows, the same with delta shadows and ambient
-// 0.3, and multiple scattering (depth 8, ambient 0.2, gradient shading).
-// Each pair: 160 one-sample renders per estimator, independent seeds,
-// expectSameMean (image mean, 4 x 4 blocks, sparse blocks pooled; per
-// component): 9 pairs x 12 checks. And it spends the collision estimator's
-// shadow rays: in single scattering its scattering events (0 or 1 a
-// sample) in 16 samples per pixel equal the collision estimator's (z-test,
-// variance bounded by the counts, 6 checks).
+// expected-value emission, the scattered part at one tentative collision
+// picked by its weight, with roulette below LightingDesc::scatterRoulette)
+// has the collision estimator's expectation: density, max and mix blending
+// (per-channel albedo and anisotropy) under one sun and one point light
+// with ratio shadows, the same with delta shadows and ambient 0.3, and
+// multiple scattering (depth 8, ambient 0.2, gradient shading). Each pair:
+// 160 one-sample renders per estimator, independent seeds, expectSameMean
+// (image mean, 4 x 4 blocks, sparse blocks pooled; per component): 9 pairs
+// x 12 checks. And with scatterRoulette 1 it spends the collision
+// estimator's shadow rays: in single scattering its scattering events (0 or
+// 1 a sample) in 16 samples per pixel equal the collision estimator's
+// (z-test, variance bounded by the counts, 6 checks).
 TEST(Lighting, ExpectedValueEqualsTheCollisionEstimator)
 {
   const double alpha = kAlpha / (9 * 12 + 6);
@@ -983,6 +991,9 @@ TEST(Lighting, ExpectedValueEqualsTheCollisionEstimator)
       col.estimator = Estimator::Collision;
       if (config < 2)
       {
+        LightingDesc counted = ld;
+        counted.scatterRoulette = 1.f;
+        scene.setLighting(counted);
         RenderCounters cEV, cCol;
         RenderSettings many = ev;
         many.samplesPerPixel = 16;
@@ -996,6 +1007,7 @@ TEST(Lighting, ExpectedValueEqualsTheCollisionEstimator)
         EXPECT_GT(a, 0.0);
         EXPECT_GT(normalTwoSided((a - b) / std::sqrt(a + b)), alpha)
           << toString(mode) << ", " << name << ": scattering events " << a << " against " << b;
+        scene.setLighting(ld);
       }
       const Moments A = renderMoments(*rp, scene, cam, ev, 160, 1000);
       const Moments B = renderMoments(*rp, scene, cam, col, 160, 5000);

@@ -103,6 +103,12 @@ struct LightingDesc
   /// as sampling every light, for one shadow ray instead of one per light.
   /// False (default): every light, one shadow ray each.
   bool sampleOneLight = false;
+  /// The expected-value estimator's scattering vertex (traceLitExpected()):
+  /// a camera ray whose scattering weight W (the light it scatters, at most
+  /// 1) is below this keeps its vertex with probability W / this. Smaller
+  /// spends more shadow rays on thin rays for less noise; 1 about the
+  /// collision estimator's shadow rays. (0, 1].
+  float scatterRoulette = 0.5f;
 };
 
 /**

@@ -419,16 +419,20 @@ MCVOL_FUNC void recordShadowRay(
  * shadow rays, which would otherwise hold registers in every lit kernel.
  * Defer (for scenes where deferrableShadows() holds): the same path with its
  * shadow rays recorded into `defer` instead of traced, and their terms left
- * out of the radiance (finishDeferredShadows() adds them).
+ * out of the radiance (finishDeferredShadows() adds them). scatterWeight > 0:
+ * the first collision scatters (no albedo test) with that throughput, the
+ * expected-value estimator's vertex (traceLitExpected()).
  */
 template <BlendMode Mode, bool Optimized, bool Local = false, bool Defer = false>
 MCVOL_HOT Vec3f litPathFrom(const SceneView& s, const SceneView& light, Tracker tracker, Vec3f o, Vec3f d, Vec3f w,
-  Hit hit, bool emitFirst, Rng& rng, RayCounters& c, ShadowCounters& sc, DeferredShadows* defer = nullptr)
+  Hit hit, bool emitFirst, Rng& rng, RayCounters& c, ShadowCounters& sc, DeferredShadows* defer = nullptr,
+  float scatterWeight = 0.f)
 {
   const ShadowEstimator est =
     s.lighting.shadowEstimator == 1 ? ShadowEstimator::Delta : ShadowEstimator::Ratio;
   Vec3f radiance;
-  Vec3f throughput(1.f, 1.f, 1.f);
+  const float first = scatterWeight > 0.f ? scatterWeight : 1.f;
+  Vec3f throughput(first, first, first);
   // The view the path is in: this piece, or, once a scattered ray has left
   // the piece and collided beyond it, the stand-in of the whole volume
   // (SceneView::outside), whose own outside is null; with an exact
@@ -481,7 +485,7 @@ MCVOL_HOT Vec3f litPathFrom(const SceneView& s, const SceneView& light, Tracker 
     const Vec3f x = o + d * hit.t;
     // Scatter or absorb: a set of its own at the camera ray's collision
     // under Sampler::Sobol (next() otherwise, as before).
-    if (!(rng.sequence(kGroupScatter) < L.albedo[hit.channel]))
+    if ((depth > 0 || !(scatterWeight > 0.f)) && !(rng.sequence(kGroupScatter) < L.albedo[hit.channel]))
     {
       if (depth > 0 || emitFirst)
       {
@@ -721,27 +725,23 @@ MCVOL_HOT Vec4f traceLitSample(const SceneView& s, const SceneView& light, Track
 }
 
 /// A lit point's optics for the expected-value estimator: the blend's
-/// extinction, the colour its absorbed share emits, and the channel and
-/// colour of the real collision a uniform number selects (channel -1: none).
+/// extinction, its scattering coefficient, the colour its absorbed share
+/// emits, and (max and mix) the channel and colour of its real collision.
 struct LitPointOptics
 {
   float sigma = 0.f;
-  Vec3f absorbed; ///< sum_n sigma_n (1 - albedo_n) c_n / sigma (density); (1 - albedo) c of the blend (max, mix)
-  int channel = -1;
-  Vec3f rgb;
+  float scatter = 0.f; ///< sum_n sigma_n albedo_n (density); albedo times sigma of the blend's channel (max, mix)
+  Vec3f absorbed;      ///< sum_n sigma_n (1 - albedo_n) c_n / sigma (density); (1 - albedo) c of the blend (max, mix)
+  int channel = -1;    ///< max, mix: the channel of largest extinction where sigma > 0 (realCollision())
+  Vec3f rgb;           ///< max, mix: the blend's colour there
 };
 
 /**
  * litPointOptics: the blend at p as blendedOptics() (Blend.h) sees it, with
- * each channel's albedo. `select` (a uniform number times the majorant, or
- * negative for no selection) picks the real collision as delta tracking
- * would: none where select >= sigma, else, for density, the channel whose
- * share of the running sum of sigma_n holds `select` (probability sigma_n /
- * majorant, as the collision estimator's channel), for max and mix the
- * channel of largest extinction with the blend's colour (realCollision()).
+ * each channel's albedo, over the channels in `present`.
  */
 template <BlendMode Mode>
-MCVOL_HOT LitPointOptics litPointOptics(const SceneView& s, Vec3f p, uint32_t present, float select)
+MCVOL_HOT LitPointOptics litPointOptics(const SceneView& s, Vec3f p, uint32_t present)
 {
   const LightingView& L = s.lighting;
   LitPointOptics out;
@@ -762,12 +762,8 @@ MCVOL_HOT LitPointOptics litPointOptics(const SceneView& s, Vec3f p, uint32_t pr
     if (Mode == BlendMode::Density || Mode == BlendMode::Composite)
     {
       out.sigma += t.sigma;
+      out.scatter += t.sigma * L.albedo[n];
       absorbed += t.rgb * (t.sigma * (1.f - L.albedo[n]));
-      if (out.channel < 0 && select >= 0.f && select < out.sigma)
-      {
-        out.channel = n;
-        out.rgb = t.rgb;
-      }
       continue;
     }
     if (bestChannel < 0 || outranks(t.sigma, n, best, bestChannel))
@@ -792,13 +788,55 @@ MCVOL_HOT LitPointOptics litPointOptics(const SceneView& s, Vec3f p, uint32_t pr
   {
     const Vec3f colour = Mode == BlendMode::Max ? bestColour : mixColour(s.blend, weighted, weightedSigma, out.sigma);
     out.absorbed = colour * (1.f - L.albedo[bestChannel]);
-    if (select >= 0.f && select < out.sigma)
-    {
-      out.channel = bestChannel;
-      out.rgb = colour;
-    }
+    out.scatter = out.sigma * L.albedo[bestChannel];
+    out.channel = bestChannel;
+    out.rgb = colour;
   }
   return out;
+}
+
+/**
+ * The channel that scatters at p, chosen with uniform u: for density, channel
+ * n with probability sigma_n albedo_n / sum_m sigma_m albedo_m, one pass over
+ * the channels (u rescaled to the part of [0, 1) left after each decision);
+ * for max and mix the blend's real-collision channel. Channel -1 where
+ * nothing scatters.
+ */
+template <BlendMode Mode>
+MCVOL_HOT Hit scatteringChannelAt(const SceneView& s, Vec3f p, float u)
+{
+  Hit h;
+  if (Mode == BlendMode::Density || Mode == BlendMode::Composite)
+  {
+    float sum = 0.f;
+    for (int i = 0; i < s.numActive; ++i)
+    {
+      const int n = s.active[i];
+      const TFSample t = channelOptics(s, n, p);
+      const float wn = t.sigma * s.lighting.albedo[n];
+      if (!(wn > 0.f))
+      {
+        continue;
+      }
+      sum += wn;
+      const float share = wn / sum;
+      if (u < share)
+      {
+        h.channel = n;
+        h.rgb = t.rgb;
+        u = u / share;
+      }
+      else
+      {
+        u = (u - share) / (1.f - share);
+      }
+    }
+    return h;
+  }
+  const LitPointOptics po = litPointOptics<Mode>(s, p, ~0u);
+  h.channel = po.channel;
+  h.rgb = po.rgb;
+  return h;
 }
 
 /**
@@ -809,18 +847,25 @@ MCVOL_HOT LitPointOptics litPointOptics(const SceneView& s, Vec3f p, uint32_t pr
  * (ratio tracking, Russian roulette below kRouletteThreshold), the
  * absorbed share of the emission is scored with the expected-value weight
  * w = sigma / M: L += T w c_abs, c_abs = sum_n sigma_n (1 - albedo_n) c_n /
- * sigma, so the emission needs no random absorb-or-scatter decision. The
- * scattered share needs shadow rays; it is scored at one real collision
- * per path, the first one delta tracking finds over the same tentative
- * collisions (real where the collision's own uniform number u has u M <
- * sigma; channel n with probability sigma_n / M): there the path scatters
- * with probability albedo_n (litPathFrom(), its emission not scored again),
- * exactly as the collision estimator's path does from its real collision.
- * That collision has the density sigma(t) T(t), so the scattered part is
- * unbiased and costs the shadow rays of the collision estimator; the
- * emission is the expected-value estimator's, so is alpha (1 - T). The
- * scattering vertex is handled after the traversal, so the camera ray's
- * loop carries no lighting code.
+ * sigma, so the emission needs no random absorb-or-scatter decision.
+ *
+ * The scattered share, sum_i T_i sigma_s(x_i) / M L_in(x_i) over the
+ * tentative collisions, needs shadow rays for its L_in; it is scored at
+ * one of them. Weighted reservoir sampling over the traversal (one
+ * candidate, the collision's own uniform number) picks collision i with
+ * probability w_i / W, w_i = T_i sigma_s(x_i) / M, W = sum_i w_i (the
+ * expected-value estimate of the light the ray scatters, at most 1), and
+ * the path scatters there with throughput W, in channel n with probability
+ * sigma_n albedo_n / sigma_s: W L_in(x_I) has the sum's expectation, with
+ * neither the collision estimator's decision whether the ray collides nor
+ * the albedo's whether it scatters. Where W is below
+ * LightingView::scatterRoulette (theta), Russian roulette keeps the vertex
+ * with probability W / theta at throughput theta, so that a thin ray does
+ * not cost a whole vertex's shadow rays: theta 1 spends about the collision
+ * estimator's vertices (W is about the probability that it scatters).
+ * Only the position of the pick is carried through the traversal, so the
+ * camera ray's loop carries no lighting code; the vertex is handled after
+ * it (litPathFrom()).
  */
 template <BlendMode Mode, bool Local = false, bool Defer = false>
 MCVOL_HOT Vec4f traceLitExpected(const SceneView& s, const SceneView& light, Tracker tracker, Vec3f o, Vec3f d, Vec3f w,
@@ -832,7 +877,8 @@ MCVOL_HOT Vec4f traceLitExpected(const SceneView& s, const SceneView& light, Tra
   }
   Vec3f L;
   float T = 1.f;
-  Hit hit;
+  float W = 0.f;     // sum of the scattering weights w_i
+  float tPick = 0.f; // the reservoir's collision
   float tau = opticalDepthOf(rng.sequence(kGroupFlight));
   DDA dda;
   dda.init(s.grid, o, d, 0.f, tmax);
@@ -855,17 +901,20 @@ MCVOL_HOT Vec4f traceLitExpected(const SceneView& s, const SceneView& light, Tra
         break;
       }
       t = advance(t, tau / M);
-      float uFlight, uAccept;
-      rng.collision(uFlight, uAccept);
+      float uFlight, uPick;
+      rng.collision(uFlight, uPick);
       tau = opticalDepthOf(uFlight);
       ++c.tentative;
-      const LitPointOptics po = litPointOptics<Mode>(s, o + d * t, present.mask, hit.found() ? -1.f : uAccept * M);
+      const LitPointOptics po = litPointOptics<Mode>(s, o + d * t, present.mask);
       c.samples += uint32_t(present.count);
-      if (po.channel >= 0)
+      const float ws = T * minf(po.scatter / M, 1.f);
+      if (ws > 0.f)
       {
-        hit.t = t;
-        hit.channel = po.channel;
-        hit.rgb = po.rgb;
+        W += ws;
+        if (uPick * W < ws)
+        {
+          tPick = t;
+        }
       }
       const float wt = minf(po.sigma / M, 1.f);
       L += po.absorbed * (T * wt);
@@ -882,10 +931,21 @@ MCVOL_HOT Vec4f traceLitExpected(const SceneView& s, const SceneView& light, Tra
     }
     dda.next();
   }
-  if (hit.found())
+  if (W > 0.f)
   {
-    ++c.real;
-    L += litPathFrom<Mode, false, Local, Defer>(s, light, tracker, o, d, w, hit, false, rng, c, sc, defer);
+    // The roulette's number: the set the collision estimator's scatter test takes.
+    const float theta = s.lighting.scatterRoulette;
+    const float q = W < theta ? W / theta : 1.f;
+    if (rng.sequence(kGroupScatter) < q)
+    {
+      Hit hit = scatteringChannelAt<Mode>(s, o + d * tPick, rng.next());
+      if (hit.found())
+      {
+        hit.t = tPick;
+        ++c.real;
+        L += litPathFrom<Mode, false, Local, Defer>(s, light, tracker, o, d, w, hit, false, rng, c, sc, defer, W / q);
+      }
+    }
   }
   foldShadowCounters(c, sc);
   return premultipliedRGBA(L, T);

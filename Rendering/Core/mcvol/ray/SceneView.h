@@ -118,6 +118,7 @@ struct LightingView
   bool shadows = true;             ///< trace shadow rays (else transmittance 1)
   int shadowEstimator = 0;         ///< ShadowEstimator: 0 ratio, 1 delta
   int maxDepth = 1;                ///< scattering events per path (1: single scattering)
+  float scatterRoulette = 0.5f;    ///< LightingDesc::scatterRoulette
   bool gradientShading = false;    ///< Blinn-Phong on the extinction gradient (Lerzer and Dachsbacher)
   float shininess = 32.f;
   /// Set per render by the backend from the camera: world-to-index linear
