@@ -82,6 +82,16 @@ ArgParser makeParser(Options& o)
           throw std::invalid_argument("--deferred-batch takes 1 to 8");
         }
       })
+    .add("--scatter-roulette", 1, "F",
+      "lit, expected value: below this scattering weight a camera ray keeps its vertex with probability weight / F (default 0.5)",
+      [&](const Args& v)
+      {
+        o.scatterRoulette = std::stof(v[0]);
+        if (!(o.scatterRoulette > 0.f && o.scatterRoulette <= 1.f))
+        {
+          throw std::invalid_argument("--scatter-roulette takes a number in (0, 1]");
+        }
+      })
     .add("--block", 2, "X Y", "CUDA: render-kernel block size (default 8 8)",
       [&](const Args& v)
       {
@@ -232,7 +242,7 @@ void Setup::configure(const Options& o, int channels, int macrocell, bool hostAc
     this->scene.setTransferFunction(
       n, demoTransferFunction(this->volume, n, this->ranges[size_t(n)], o.tableSize, o.density));
   }
-  this->scene.setLighting(lightingPreset(o.lighting, channels));
+  this->scene.setLighting(lightingPreset(o.lighting, channels, o.scatterRoulette));
   this->scene.update();
 }
 

@@ -42,6 +42,7 @@ struct Options
   bool generalKernels = false; ///< CUDA: the general kernels for plain scenes too
   bool inlineShadows = false;  ///< CUDA: shadow rays traced in the camera rays' kernel (no deferral)
   int deferredBatch = 0;       ///< CUDA: setDeferredBatch() (0: the renderer's default)
+  float scatterRoulette = 0.f; ///< LightingDesc::scatterRoulette of the lit scenes (0: its default)
   int blockX = 8;
   int blockY = 8;
   double psnr = 35.0;

@@ -54,13 +54,17 @@ mcvol::TransferFunctionDesc demoTransferFunction(
     v.transferFunctions[size_t(n)], range[0], range[1], tableSize, v.spacing[0] / density);
 }
 
-mcvol::LightingDesc lightingPreset(const std::string& name, int channels)
+mcvol::LightingDesc lightingPreset(const std::string& name, int channels, float scatterRoulette)
 {
   if (name != "none" && name != "shadows" && name != "ambient" && name != "multiple")
   {
     throw std::invalid_argument(std::string("--lighting takes ") + kLightingPresets + ", not " + name);
   }
   mcvol::LightingDesc d;
+  if (scatterRoulette > 0.f)
+  {
+    d.scatterRoulette = scatterRoulette;
+  }
   if (name == "none")
   {
     return d;

@@ -53,8 +53,9 @@ mcvol::TransferFunctionDesc demoTransferFunction(
 ///             ratio-tracking shadows; albedo 0.8, anisotropy 0.3
 ///   ambient   shadows plus ambient radiance 0.2
 ///   multiple  ambient plus multiple scattering (up to 8 events per path)
+/// scatterRoulette > 0 sets LightingDesc::scatterRoulette.
 /// Throws std::invalid_argument on another name.
-mcvol::LightingDesc lightingPreset(const std::string& name, int channels);
+mcvol::LightingDesc lightingPreset(const std::string& name, int channels, float scatterRoulette = 0.f);
 /// The names lightingPreset() takes, for help texts.
 constexpr const char* kLightingPresets = "none|shadows|ambient|multiple";
 

@@ -30,7 +30,7 @@ void runEffects(Bench& bench)
     std::string name;
     mcvol::LightingDesc desc;
   };
-  auto base = [&]() { return lightingPreset("shadows", nch); };
+  auto base = [&]() { return lightingPreset("shadows", nch, o.scatterRoulette); };
   std::vector<Effect> effects;
   effects.push_back({ "emission-absorption (no light)", mcvol::LightingDesc() });
   {
