@@ -103,7 +103,7 @@ enum class Sampler : int
  *   and dense (microscopy), more work where the majorants are sparse.
  * Lit camera rays take ExpectedValue too (traceLitExpected() in
  * Lighting.h: the emission with the expected-value weights, the scattered
- * light at one delta-tracked real collision) or Collision; UnbiasedMarch
+ * light at one tentative collision picked by weight) or Collision; UnbiasedMarch
  * lights nothing and runs Collision there. Post-render compositing and the
  * visibility optimization keep the collision estimator whatever is asked
  * (their own estimators apply).
