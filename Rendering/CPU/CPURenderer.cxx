@@ -45,7 +45,7 @@ void renderRows(const SceneView& s, const CameraView& cam, const FrameParams& fp
   Accumulator::ImportancePool* pool = Optimized ? imp.pool : nullptr;
   const int pass = pool ? pool->passes : 0;
   const int unlit =
-    unlitEstimator(fp.estimator, Mode, Lit, Optimized, s.marchControlVariates, localLighting(s.lighting));
+    unlitEstimator(fp.estimator, Mode, Lit, Optimized, s.marchControlVariates, localKernels(s, Mode, fp.estimator));
   const uint32_t total = previous + uint32_t(fp.samplesPerPixel);
   // The even half is neither read nor written by a render that adds no
   // sample of even index (as on the device).

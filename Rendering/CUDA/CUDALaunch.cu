@@ -121,7 +121,7 @@ void launchRender(BlendMode mode, bool count, bool lit, bool plain, const SceneV
   const FrameParams& fp, const RenderLaunch& k)
 {
   const int unlit =
-    unlitEstimator(fp.estimator, mode, lit, false, s.marchControlVariates, localLighting(s.lighting));
+    unlitEstimator(fp.estimator, mode, lit, false, s.marchControlVariates, localKernels(s, mode, fp.estimator));
   if (plain)
   {
     launchPlain(mode, lit, unlit, count, s, cam, fp, k);

@@ -454,12 +454,24 @@ TEST(Lighting, EffectsThatAreOffCostNothing)
   ld.albedo.assign(4, 0.8f);
   ld.shadows = false;
   scene.setLighting(ld);
-  RenderCounters c2;
   Accumulator acc;
-  r.render(scene, cam, rs, nullptr, acc, &c2);
-  EXPECT_GT(c2.scatteringEvents, 0u);
-  EXPECT_EQ(c2.shadowRays, 0u) << "shadows off";
-  EXPECT_EQ(c2.gradientEvaluations, 0u) << "gradient shading off";
+  // The collision estimator scatters at its real collisions; the default
+  // (expected value) scores that light in closed form, without a vertex.
+  RenderSettings collision = rs;
+  collision.estimator = Estimator::Collision;
+  for (const RenderSettings& settings : { collision, rs })
+  {
+    RenderCounters c2;
+    acc.reset();
+    r.render(scene, cam, settings, nullptr, acc, &c2);
+    EXPECT_NE(0, std::memcmp(a.rgba(), acc.rgba(), sizeof(float) * 4 * 24 * 24)) << "the light changes nothing";
+    if (settings.estimator == Estimator::Collision)
+    {
+      EXPECT_GT(c2.scatteringEvents, 0u);
+    }
+    EXPECT_EQ(c2.shadowRays, 0u) << "shadows off";
+    EXPECT_EQ(c2.gradientEvaluations, 0u) << "gradient shading off";
+  }
   ld.albedo.assign(4, 0.f);
   ld.shadows = true;
   scene.setLighting(ld);
@@ -943,17 +955,21 @@ TEST(Lighting, StandInIsUnlitFreeAndChecked)
 // picked by its weight, with roulette below LightingDesc::scatterRoulette)
 // has the collision estimator's expectation: density, max and mix blending
 // (per-channel albedo and anisotropy) under one sun and one point light
-// with ratio shadows, the same with delta shadows and ambient 0.3, and
-// multiple scattering (depth 8, ambient 0.2, gradient shading). Each pair:
-// 160 one-sample renders per estimator, independent seeds, expectSameMean
-// (image mean, 4 x 4 blocks, sparse blocks pooled; per component): 9 pairs
-// x 12 checks. And with scatterRoulette 1 it spends the collision
-// estimator's shadow rays: in single scattering its scattering events (0 or
-// 1 a sample) in 16 samples per pixel equal the collision estimator's
-// (z-test, variance bounded by the counts, 6 checks).
+// with ratio shadows, the same with delta shadows and ambient 0.3,
+// multiple scattering (depth 8, ambient 0.2, gradient shading), and without
+// shadows, where the scattered light is scored in closed form
+// (closedFormScattering(): max and mix with per-channel anisotropy, all
+// three with one anisotropy, under both lights with one chosen per vertex
+// and ambient 0.3, and under the sun alone). Each pair: 160 one-sample
+// renders per estimator, independent seeds, expectSameMean (image mean,
+// 4 x 4 blocks, sparse blocks pooled; per component): 18 pairs x 12
+// checks. And with scatterRoulette 1 it spends the collision estimator's
+// shadow rays: in single scattering its scattering events (0 or 1 a
+// sample) in 16 samples per pixel equal the collision estimator's (z-test,
+// variance bounded by the counts, 6 checks).
 TEST(Lighting, ExpectedValueEqualsTheCollisionEstimator)
 {
-  const double alpha = kAlpha / (9 * 12 + 6);
+  const double alpha = kAlpha / (18 * 12 + 6);
   const DemoVolume v = makeDemo("cosmology", { 16, 16, 16 });
   const Camera cam = orbitCamera(v.dims, v.spacing, 12, 12, 30, 20);
   const LightDesc sun = testSun(1.5);
@@ -963,13 +979,32 @@ TEST(Lighting, ExpectedValueEqualsTheCollisionEstimator)
   {
     Scene scene;
     configureDemo(scene, v, 4, 128, 0.5, mode);
-    for (int config = 0; config < 3; ++config)
+    for (int config = 0; config < 6; ++config)
     {
       LightingDesc ld;
       ld.lights = { sun, lamp };
       ld.albedo = { 0.9f, 0.6f, 0.8f, 0.3f };
       ld.anisotropy = { 0.4f, -0.2f, 0.f, 0.7f };
       const char* name = "shadows";
+      if (config >= 3)
+      {
+        ld.shadows = false;
+        ld.ambient[0] = ld.ambient[1] = ld.ambient[2] = 0.3;
+        name = "no shadows";
+      }
+      if (config == 4)
+      {
+        name = "no shadows, one anisotropy, one light a vertex";
+        ld.anisotropy.assign(4, 0.5f);
+        ld.sampleOneLight = true;
+      }
+      else if (config == 5)
+      {
+        name = "no shadows, one anisotropy, the sun alone";
+        ld.lights = { sun };
+        ld.anisotropy.assign(4, -0.3f);
+        ld.ambient[0] = ld.ambient[1] = ld.ambient[2] = 0.0;
+      }
       if (config == 1)
       {
         name = "delta shadows, ambient";
@@ -1016,6 +1051,62 @@ TEST(Lighting, ExpectedValueEqualsTheCollisionEstimator)
   }
 }
 
+// A light without shadows costs the expected-value estimator the unlit
+// traversal: with one anisotropy and no gradient shading the scattered light
+// is scored in closed form at every tentative collision
+// (closedFormScattering()), so the lit render draws the unlit render's
+// random numbers and visits its cells and collisions, count for count, with
+// no scattering vertex and no shadow ray. With gradient shading it scatters
+// at picked vertices, as before.
+TEST(Lighting, LightWithoutShadowsCostsTheUnlitTraversal)
+{
+  const DemoVolume v = makeDemo("cosmology", { 16, 16, 16 });
+  const Camera cam = orbitCamera(v.dims, v.spacing, 12, 12, 30, 20);
+  const std::unique_ptr<Renderer> rp = testRenderer();
+  RenderSettings rs;
+  rs.estimator = Estimator::ExpectedValue;
+  rs.samplesPerPixel = 4;
+  for (BlendMode mode : { BlendMode::Density, BlendMode::Max, BlendMode::Mix })
+  {
+    Scene scene;
+    configureDemo(scene, v, 4, 128, 0.5, mode);
+    Accumulator acc;
+    RenderCounters unlit, lit, shaded;
+    rp->render(scene, cam, rs, nullptr, acc, &unlit);
+    LightingDesc ld;
+    ld.lights = { testSun(1.5), testLamp(300) };
+    ld.albedo = { 0.9f, 0.6f, 0.8f, 0.3f };
+    ld.anisotropy.assign(4, 0.4f);
+    ld.shadows = false;
+    ld.ambient[0] = ld.ambient[1] = ld.ambient[2] = 0.3;
+    scene.setLighting(ld);
+    ASSERT_TRUE(scene.lit());
+    acc.reset();
+    rp->render(scene, cam, rs, nullptr, acc, &lit);
+    double total = 0;
+    for (int i = 0; i < 12 * 12 * 4; ++i)
+    {
+      total += acc.sums()[i];
+    }
+    EXPECT_TRUE(std::isfinite(total) && total > 0) << toString(mode) << ": " << total;
+    ld.gradientShading = true;
+    scene.setLighting(ld);
+    acc.reset();
+    rp->render(scene, cam, rs, nullptr, acc, &shaded);
+    const char* m = toString(mode);
+    EXPECT_GT(unlit.tentativeCollisions, 0u) << m;
+    EXPECT_EQ(lit.ddaSteps, unlit.ddaSteps) << m;
+    EXPECT_EQ(lit.tentativeCollisions, unlit.tentativeCollisions) << m;
+    EXPECT_EQ(lit.channelSamples, unlit.channelSamples) << m;
+    EXPECT_EQ(lit.realCollisions, 0u) << m;
+    EXPECT_EQ(lit.scatteringEvents, 0u) << m;
+    EXPECT_EQ(lit.shadowRays, 0u) << m;
+    EXPECT_EQ(lit.gradientEvaluations, 0u) << m;
+    EXPECT_GT(shaded.scatteringEvents, 0u) << m;
+    EXPECT_GT(shaded.gradientEvaluations, 0u) << m;
+  }
+}
+
 namespace
 {
 /// The scene and view of the lit path tests: the four-channel 16^3 cosmology
@@ -1042,10 +1133,14 @@ LightingDesc fourChannelLighting(std::vector<LightDesc> lights)
 
 // Where no ray follows the camera ray's collision (no shadows, one
 // scattering vertex), the lit kernels compile the light path without the
-// code of those rays (litPathFrom()'s Local). It must be the same path: on
-// every pixel, both estimators, three blends, two lights (both, or one
-// chosen), ambient light and gradient shading, the Local code gives the
-// pixel's sum bit for bit.
+// code of those rays (litPathFrom()'s Local), and the expected-value
+// estimator's kernels its closed form alone (localKernels()). It must be
+// the same path: on every pixel, both estimators, three blends, two lights
+// (both, or one chosen), ambient light, per-channel or one anisotropy and
+// gradient shading, the Local code gives the pixel's sum bit for bit
+// wherever localKernels() picks it; where it does not (the expected-value
+// estimator with gradient shading, or density blending with per-channel
+// anisotropy), the render runs the full kernel.
 namespace
 {
 /// Pixel (x, y) lit by the full light path and by its Local code, with the
@@ -1075,13 +1170,17 @@ TEST(Lighting, LocalLightPathIsTheFullPath)
   {
     Scene scene;
     view.configure(scene, mode);
-    for (int config = 0; config < 2; ++config)
+    for (int config = 0; config < 3; ++config)
     {
       LightingDesc ld = fourChannelLighting({ testSun(1.5), testLamp(300) });
       ld.shadows = false;
       ld.ambient[0] = ld.ambient[1] = ld.ambient[2] = 0.3;
       ld.gradientShading = config == 1;
-      ld.sampleOneLight = config == 1;
+      ld.sampleOneLight = config >= 1;
+      if (config == 2)
+      {
+        ld.anisotropy.assign(4, 0.4f);
+      }
       scene.setLighting(ld);
       ASSERT_TRUE(scene.lit());
       SceneView s = scene.view();
@@ -1095,6 +1194,13 @@ TEST(Lighting, LocalLightPathIsTheFullPath)
         rs.samplesPerPixel = 8;
         const FrameParams fp = frameParams(rs, 0);
         const int code = unlitEstimator(e, mode, true, false);
+        const bool closedForm = e == Estimator::ExpectedValue && closedFormScattering(s, mode);
+        const bool expectLocal = e == Estimator::Collision || (config != 1 && (config == 2 || mode != BlendMode::Density));
+        EXPECT_EQ(localKernels(s, mode, e), expectLocal) << toString(mode) << ", config " << config;
+        if (!localKernels(s, mode, e))
+        {
+          continue;
+        }
         ASSERT_EQ(unlitEstimator(e, mode, true, false, false, true), code + kLocalLight);
         double total = 0;
         uint64_t differ = 0;
@@ -1120,11 +1226,18 @@ TEST(Lighting, LocalLightPathIsTheFullPath)
             total += full.r + full.g + full.b;
           }
         }
-        const std::string what = std::string(toString(mode)) + (config ? ", one light, gradients" : ", two lights") +
-          (code ? ", expected value" : ", collision");
+        const char* lights[3] = { ", two lights", ", one light, gradients", ", one light, one anisotropy" };
+        const std::string what = std::string(toString(mode)) + lights[config] + (code ? ", expected value" : ", collision");
         EXPECT_EQ(differ, 0u) << what;
         EXPECT_GT(total, 0.0) << what;
-        EXPECT_GT(cFull.scattering, 0u) << what;
+        if (closedForm)
+        {
+          EXPECT_EQ(cFull.scattering, 0u) << what;
+        }
+        else
+        {
+          EXPECT_GT(cFull.scattering, 0u) << what;
+        }
         EXPECT_EQ(cFull.scattering, cLocal.scattering) << what;
         EXPECT_EQ(cLocal.shadowRays, 0u) << what;
       }

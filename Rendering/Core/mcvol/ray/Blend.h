@@ -83,11 +83,21 @@ struct PointOptics
   Vec3f emission;
 };
 
+/// The colours of blendedOptics() as the transfer functions give them.
+struct TableColour
+{
+  MCVOL_FUNC Vec3f operator()(int, Vec3f rgb) const { return rgb; }
+};
+
 /// `present`: bit n set for each listed channel n to evaluate; the others
 /// are taken as sigma 0 (the unlit estimators pass the channels present in
-/// the macrocell, blendMajorant()).
-template <BlendMode Mode>
-MCVOL_HOT PointOptics blendedOptics(const SceneView& s, const int* channels, int count, Vec3f p, uint32_t present = ~0u)
+/// the macrocell, blendMajorant()). `colour(n, c)`: the radiance a unit of
+/// channel n's extinction of colour c sends, for density of each channel,
+/// for max and mix of the blend's colour with its channel (the lit closed
+/// form, UnshadowedOptics in Lighting.h; unlit: c).
+template <BlendMode Mode, typename Colour = TableColour>
+MCVOL_HOT PointOptics blendedOptics(const SceneView& s, const int* channels, int count, Vec3f p, uint32_t present = ~0u,
+  const Colour& colour = Colour())
 {
   PointOptics out;
   Vec3f weighted;           // sum of (weight) sigma_n c_n
@@ -106,7 +116,7 @@ MCVOL_HOT PointOptics blendedOptics(const SceneView& s, const int* channels, int
     if (Mode == BlendMode::Density || Mode == BlendMode::Composite)
     {
       out.sigma += t.sigma;
-      weighted += t.rgb * t.sigma;
+      weighted += colour(n, t.rgb) * t.sigma;
       continue;
     }
     if (bestChannel < 0 || outranks(t.sigma, n, best, bestChannel))
@@ -129,7 +139,8 @@ MCVOL_HOT PointOptics blendedOptics(const SceneView& s, const int* channels, int
   out.sigma = best > 0.f ? best : 0.f;
   if (out.sigma > 0.f)
   {
-    out.emission = Mode == BlendMode::Max ? bestColour : mixColour(s.blend, weighted, weightedSigma, out.sigma);
+    out.emission =
+      colour(bestChannel, Mode == BlendMode::Max ? bestColour : mixColour(s.blend, weighted, weightedSigma, out.sigma));
   }
   return out;
 }

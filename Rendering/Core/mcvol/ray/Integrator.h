@@ -9,7 +9,7 @@
 
 namespace mcvol
 {
-/// Added to a lit estimator code (0 or 1) where localLighting() holds: the
+/// Added to a lit estimator code (0 or 1) where localKernels() holds: the
 /// kernels then compile litPathFrom()'s Local path.
 constexpr int kLocalLight = 4;
 /// Added to a lit estimator code (0 or 1) where the shadow rays are
@@ -24,7 +24,7 @@ constexpr int kDeferredShadows = 8;
 /// marchControlVariates()). The last three only when asked for, not
 /// optimized and not post-render compositing, and the marches only unlit
 /// (the others keep the collision estimator, Estimator's documentation says
-/// why). Lit with `local` (localLighting()), not optimized and not
+/// why). Lit with `local` (localKernels()), not optimized and not
 /// post-render compositing: the lit code plus kLocalLight.
 MCVOL_FUNC int unlitEstimator(
   Estimator e, BlendMode mode, bool lit, bool optimized, bool controlVariates = false, bool local = false)

@@ -300,6 +300,38 @@ MCVOL_HOT float scatterFunction(
   return f;
 }
 
+/// The way from index point x to a light (towardsLight()).
+struct LightDirection
+{
+  Vec3f wl;              ///< unit world direction towards the light
+  Vec3f dl;              ///< its index-space image, per unit of world length
+  float dist = 3.4e38f;  ///< world distance to a point light (3.4e38 for a directional one)
+  float falloff = 1.f;   ///< 1 / dist^2 for a point light
+};
+
+/// The way from index point x to light l of L. False where x is at a point
+/// light (no direction: the light adds nothing there).
+MCVOL_HOT bool towardsLight(const LightingView& L, int l, Vec3f x, LightDirection& out)
+{
+  if (L.lightType[l] == 0)
+  {
+    out.wl = L.lightVector[l];
+    out.dl = mul3(L.toIndex, out.wl);
+    return true;
+  }
+  const Vec3f toLight = mul3(L.toIndex, L.lightVector[l]) + L.indexOffset - x; // index space
+  const Vec3f worldVec = mul3(L.toWorld, toLight);
+  out.dist = length(worldVec);
+  if (!(out.dist > 0.f))
+  {
+    return false;
+  }
+  out.wl = worldVec * (1.f / out.dist);
+  out.dl = toLight * (1.f / out.dist);
+  out.falloff = 1.f / (out.dist * out.dist);
+  return true;
+}
+
 /**
  * Whether every light path of `L` ends at the camera ray's collision: no
  * shadow rays and one scattering vertex. Its radiance is then a function of
@@ -522,28 +554,15 @@ MCVOL_HOT Vec3f litPathFrom(const SceneView& s, const SceneView& light, Tracker 
     }
     for (int l = lightBegin; l < lightEnd; ++l)
     {
-      Vec3f wl, dl;
-      float dist = 3.4e38f;
-      float falloff = 1.f;
-      if (L.lightType[l] == 0)
+      LightDirection ld;
+      if (!towardsLight(L, l, x, ld))
       {
-        wl = L.lightVector[l];
-        dl = mul3(L.toIndex, wl);
+        continue;
       }
-      else
-      {
-        const Vec3f toLight = mul3(L.toIndex, L.lightVector[l]) + L.indexOffset - x; // index space
-        const Vec3f worldVec = mul3(L.toWorld, toLight);
-        dist = length(worldVec);
-        if (!(dist > 0.f))
-        {
-          continue;
-        }
-        wl = worldVec * (1.f / dist);
-        dl = toLight * (1.f / dist);
-        falloff = 1.f / (dist * dist);
-      }
-      const float f = scatterFunction(L, g, w, wl, L.gradientShading, grad, gradLen);
+      const Vec3f dl = ld.dl;
+      const float dist = ld.dist;
+      const float falloff = ld.falloff;
+      const float f = scatterFunction(L, g, w, ld.wl, L.gradientShading, grad, gradLen);
       if (!(f > 0.f))
       {
         continue;
@@ -840,6 +859,129 @@ MCVOL_HOT Hit scatteringChannelAt(const SceneView& s, Vec3f p, float u)
 }
 
 /**
+ * The light arriving at index point x and scattered towards the camera
+ * (world direction w: -w towards the eye) by a Henyey-Greenstein phase of
+ * anisotropy g, without shadows: every light's radiance times its phase
+ * value and falloff, plus the ambient light (its phase integral is 1). The
+ * expected value over litPathFrom()'s choice of one light
+ * (LightingDesc::sampleOneLight) is this sum.
+ */
+MCVOL_HOT Vec3f unshadowedRadiance(const LightingView& L, float g, Vec3f w, Vec3f x)
+{
+  Vec3f r = L.ambient;
+  for (int l = 0; l < L.numLights; ++l)
+  {
+    LightDirection ld;
+    if (towardsLight(L, l, x, ld))
+    {
+      r += L.lightRadiance[l] * (hgPhase(dot(w, ld.wl), g) * ld.falloff);
+    }
+  }
+  return r;
+}
+
+/**
+ * Where the expected-value estimator of lit camera rays scores the light a
+ * point scatters in closed form (traceLitExpected()): under localLighting()
+ * (no shadows, one scattering vertex), without gradient shading (whose
+ * gradient would cost six lookups of every channel a collision), and for
+ * density blending with one anisotropy over the active channels (the
+ * scattered light is then sum_n sigma_n albedo_n c_n times one radiance).
+ * Sets `g` to that anisotropy (density) and `uniform` to whether every
+ * active channel has it.
+ */
+MCVOL_HOT bool closedFormScattering(const SceneView& s, BlendMode mode, float& g, bool& uniform)
+{
+  const LightingView& L = s.lighting;
+  if (!localLighting(L) || L.gradientShading || s.numActive == 0)
+  {
+    return false;
+  }
+  g = L.anisotropy[s.active[0]];
+  uniform = true;
+  for (int i = 1; i < s.numActive; ++i)
+  {
+    uniform = uniform && L.anisotropy[s.active[i]] == g;
+  }
+  return uniform || (mode != BlendMode::Density && mode != BlendMode::Composite);
+}
+
+/// closedFormScattering() without its anisotropy.
+MCVOL_HOT bool closedFormScattering(const SceneView& s, BlendMode mode)
+{
+  float g = 0.f;
+  bool uniform = false;
+  return closedFormScattering(s, mode, g, uniform);
+}
+
+/**
+ * Whether the lit kernels compiled for localLighting() (kLocalLight,
+ * litPathFrom()'s and traceLitExpected()'s Local) render view `s` with
+ * estimator `e`: the collision estimator's always, the expected-value
+ * estimator's where it scores the scattered light in closed form
+ * (closedFormScattering()), the only code its Local kernels carry, so that
+ * they hold the registers of the unlit traversal. A local scene the closed
+ * form does not cover (gradient shading, density with per-channel
+ * anisotropy) runs the full lit kernels with the expected-value estimator.
+ */
+MCVOL_HOT bool localKernels(const SceneView& s, BlendMode mode, Estimator e)
+{
+  return localLighting(s.lighting) && (e != Estimator::ExpectedValue || closedFormScattering(s, mode));
+}
+
+/**
+ * The radiance a unit of extinction of channel n and colour c sends to the
+ * camera without shadows (blendedOptics()'s colour): the absorbed share's
+ * emission plus the scattered share's light, c ((1 - albedo_n) +
+ * albedo_n L_in), L_in = unshadowedRadiance(): `in`, or where `perChannel`
+ * (max and mix with point lights or per-channel anisotropy: one call a
+ * point) that of channel n's anisotropy at p.
+ */
+struct UnshadowedColour
+{
+  const LightingView& L;
+  Vec3f in;
+  Vec3f w;
+  Vec3f p;
+  bool perChannel;
+  MCVOL_HOT Vec3f operator()(int n, Vec3f c) const
+  {
+    const Vec3f lin = perChannel ? unshadowedRadiance(L, L.anisotropy[n], w, p) : in;
+    const float a = L.albedo[n];
+    return c * (lin * a + Vec3f(1.f - a, 1.f - a, 1.f - a));
+  }
+};
+
+/**
+ * The optics of a lit point under closedFormScattering(), as
+ * trackExpectedOf() takes them: the blend's extinction and, as emission,
+ * each colour's absorbed share plus its scattered share times the light it
+ * scatters towards the camera (UnshadowedColour). With directional lights
+ * only and one anisotropy that light is the same along the ray
+ * (`perRay`); with point lights it is a function of the point (`perPoint`),
+ * for density computed once a point with the one anisotropy `g`.
+ */
+template <BlendMode Mode>
+struct UnshadowedOptics
+{
+  const SceneView& s;
+  Vec3f w;
+  float g;
+  bool perPoint;
+  Vec3f perRay;
+  MCVOL_HOT PointOptics operator()(Vec3f p, uint32_t present) const
+  {
+    constexpr bool density = Mode == BlendMode::Density || Mode == BlendMode::Composite;
+    UnshadowedColour colour{ s.lighting, perRay, w, p, !density && perPoint };
+    if (density && perPoint)
+    {
+      colour.in = unshadowedRadiance(s.lighting, g, w, p);
+    }
+    return blendedOptics<Mode>(s, s.active, s.numActive, p, present, colour);
+  }
+};
+
+/**
  * One lit sample with the expected-value estimator (Estimator::
  * ExpectedValue with lighting): next-event estimation on the camera ray of
  * trackExpected(). The camera ray's tentative collisions follow the blend's
@@ -865,7 +1007,12 @@ MCVOL_HOT Hit scatteringChannelAt(const SceneView& s, Vec3f p, float u)
  * estimator's vertices (W is about the probability that it scatters).
  * Only the position of the pick is carried through the traversal, so the
  * camera ray's loop carries no lighting code; the vertex is handled after
- * it (litPathFrom()).
+ * it (litPathFrom()). Where closedFormScattering() holds (no shadows, one
+ * vertex, no gradient shading), L_in needs no ray and the scattered share
+ * is scored at every tentative collision as the absorbed share is
+ * (UnshadowedOptics through trackExpectedOf(), the unlit traversal): no
+ * vertex at all. Local: the kernels localKernels() picks for such scenes,
+ * which carry that closed form alone.
  */
 template <BlendMode Mode, bool Local = false, bool Defer = false>
 MCVOL_HOT Vec4f traceLitExpected(const SceneView& s, const SceneView& light, Tracker tracker, Vec3f o, Vec3f d, Vec3f w,
@@ -874,6 +1021,22 @@ MCVOL_HOT Vec4f traceLitExpected(const SceneView& s, const SceneView& light, Tra
   if (s.numActive == 0)
   {
     return Vec4f();
+  }
+  float g = 0.f;
+  bool uniform = false;
+  // Local: localKernels() runs these kernels only where the closed form
+  // holds, and they carry nothing else.
+  if (closedFormScattering(s, Mode, g, uniform) || Local)
+  {
+    const LightingView& lv = s.lighting;
+    bool pointLights = false;
+    for (int l = 0; l < lv.numLights; ++l)
+    {
+      pointLights = pointLights || lv.lightType[l] != 0;
+    }
+    const bool perPoint = pointLights || !uniform;
+    const Vec3f perRay = perPoint ? Vec3f() : unshadowedRadiance(lv, g, w, o);
+    return trackExpectedOf<Mode>(s, o, d, 0.f, tmax, rng, c, UnshadowedOptics<Mode>{ s, w, g, perPoint, perRay });
   }
   Vec3f L;
   float T = 1.f;

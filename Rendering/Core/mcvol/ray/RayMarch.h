@@ -463,22 +463,17 @@ MCVOL_HOT void gatherLights(const SceneView& s, const LitRay& r, const LitSample
   const LightingView& L = s.lighting;
   for (int l = 0; l < L.numLights; ++l)
   {
-    Vec3f dl;
-    float dist = 3.4e38f, falloff = 1.f;
-    if (L.lightType[l] == 0)
+    LightDirection way;
+    const bool reached = towardsLight(L, l, ls.x, way);
+    ls.wl[l] = way.wl;
+    if (!reached)
     {
-      ls.wl[l] = L.lightVector[l];
-      dl = mul3(L.toIndex, ls.wl[l]);
+      ls.arriving[l] = Vec3f(); // the sample is at a point light
+      continue;
     }
-    else
-    {
-      const Vec3f toLight = mul3(L.toIndex, L.lightVector[l]) + L.indexOffset - ls.x;
-      const Vec3f worldVec = mul3(L.toWorld, toLight);
-      dist = length(worldVec);
-      ls.wl[l] = worldVec * (1.f / dist);
-      dl = toLight * (1.f / dist);
-      falloff = 1.f / (dist * dist);
-    }
+    const Vec3f dl = way.dl;
+    const float dist = way.dist;
+    const float falloff = way.falloff;
     const float tPiece = boxExit(s.volume, ls.x, dl);
     const float tl = minf(tPiece, dist);
     float Tl = 1.f;

@@ -345,20 +345,22 @@ MCVOL_HOT float blendMajorant(const SceneView& s, int64_t cell, CellChannels& pr
 constexpr float kRouletteThreshold = 0.05f;
 
 /**
- * The expected-value estimator (Estimator::ExpectedValue) of one camera ray
- * over [tmin, tmax], unlit: premultiplied RGB and alpha = 1 - T. One DDA over
- * the macrocells; in each cell the tentative collisions follow the sum of
- * the active channels' majorants M (density) or their maximum (max and mix,
- * whose extinction is the largest channel's), with the optical depth carried
- * across cells. At a collision at p with running transmittance T, with the
- * blend's extinction sigma(p) and emission c(p) (blendedOptics(), the ray
- * marcher's model): w = sigma / M, L += T w c, T *= 1 - w (ratio tracking).
- * Given the collisions so far, E[T w c] is T c sigma / M and E[1 - w] is
- * 1 - sigma / M, so L estimates the emission integral without bias, and the
- * roulette keeps it so.
+ * The expected-value estimator's traversal of one camera ray over [tmin,
+ * tmax], with `optics(p, present)` the blend's extinction sigma(p) and the
+ * radiance c(p) a unit of it sends to the camera (a PointOptics: sigma and
+ * emission): premultiplied RGB and alpha = 1 - T. One DDA over the
+ * macrocells; in each cell the tentative collisions follow the sum of the
+ * active channels' majorants M (density) or their maximum (max and mix,
+ * whose extinction is the largest channel's), with the optical depth
+ * carried across cells. At a collision at p with running transmittance T:
+ * w = sigma / M, L += T w c, T *= 1 - w (ratio tracking). Given the
+ * collisions so far, E[T w c] is T c sigma / M and E[1 - w] is
+ * 1 - sigma / M, so L estimates the integral of T sigma c without bias, and
+ * the roulette keeps it so.
  */
-template <BlendMode Mode>
-MCVOL_HOT Vec4f trackExpected(const SceneView& s, Vec3f o, Vec3f d, float tmin, float tmax, Rng& rng, RayCounters& c)
+template <BlendMode Mode, typename Optics>
+MCVOL_HOT Vec4f trackExpectedOf(
+  const SceneView& s, Vec3f o, Vec3f d, float tmin, float tmax, Rng& rng, RayCounters& c, const Optics& optics)
 {
   Vec4f out;
   if (s.numActive == 0)
@@ -393,16 +395,14 @@ MCVOL_HOT Vec4f trackExpected(const SceneView& s, Vec3f o, Vec3f d, float tmin, 
       rng.collision(uFlight, uUnused);
       tau = opticalDepthOf(uFlight);
       ++c.tentative;
-      const Vec3f p = o + d * t;
       // Every channel present in the cell is sampled: the blend's extinction
       // and emission at p (choosing one channel per collision with
       // probability m_n / M instead cost 2-3x more time to the same error on
       // the CPU).
-      const PointOptics po = blendedOptics<Mode>(s, s.active, s.numActive, p, present.mask);
+      const PointOptics po = optics(o + d * t, present.mask);
       c.samples += uint32_t(present.count);
       const float w = minf(po.sigma / M, 1.f);
-      const Vec3f colour = po.emission;
-      L += colour * (T * w);
+      L += po.emission * (T * w);
       T *= 1.f - w;
       if (T < kRouletteThreshold)
       {
@@ -417,6 +417,30 @@ MCVOL_HOT Vec4f trackExpected(const SceneView& s, Vec3f o, Vec3f d, float tmin, 
     dda.next();
   }
   return premultipliedRGBA(L, T);
+}
+
+/// The blend's emission-absorption optics at a point (blendedOptics()), as
+/// trackExpectedOf() takes them.
+template <BlendMode Mode>
+struct EmissionOptics
+{
+  const SceneView& s;
+  MCVOL_HOT PointOptics operator()(Vec3f p, uint32_t present) const
+  {
+    return blendedOptics<Mode>(s, s.active, s.numActive, p, present);
+  }
+};
+
+/**
+ * The expected-value estimator (Estimator::ExpectedValue) of one camera ray
+ * over [tmin, tmax], unlit: trackExpectedOf() with the blend's emission
+ * (blendedOptics(), the ray marcher's model), so that L estimates the
+ * emission integral.
+ */
+template <BlendMode Mode>
+MCVOL_HOT Vec4f trackExpected(const SceneView& s, Vec3f o, Vec3f d, float tmin, float tmax, Rng& rng, RayCounters& c)
+{
+  return trackExpectedOf<Mode>(s, o, d, tmin, tmax, rng, c, EmissionOptics<Mode>{ s });
 }
 
 /// Highest order of the unbiased march's power series (Estimator::UnbiasedMarch).
