@@ -190,6 +190,47 @@ __device__ MCVOL_FORCE_INLINE void foldOneSample(const Vec4f* v, uint32_t index,
 }
 
 /**
+ * Registers per thread of the plain density-blending kernels, 255 (no cap)
+ * elsewhere: the kernels that trace no shadow rays, the camera kernels whose
+ * shadow rays are deferred (litDeferKernel()) and the deferred shadow rays'
+ * kernel (deferredShadowKernel(), Unlit -1). Each cap sits at a step of
+ * occupancy (blocks of 8x8: 80 registers give 24 warps per SM, 88 22, 96
+ * 20; blocks of 128 threads: 64 give 32) where the kernel would otherwise
+ * take more registers and lose a step. The camera and shadow kernels are
+ * latency-bound, so a step of warps outweighs the spills at these caps
+ * (ptxas, sm_90: at most 40 bytes for the kernels without shadow rays, 148
+ * for the expected-value camera kernel with deferred shadow rays, 80 for
+ * the shadow rays' kernel); a step lower (88) the camera kernels spill
+ * into their loops and are slower again (mcvol-bench --sections effects).
+ */
+template <BlendMode Mode, bool Lit, int Unlit>
+constexpr int plainRegisterCap()
+{
+#if defined(MCVOL_DEVICE_PLAIN_CHANNELS)
+  if constexpr (Mode == BlendMode::Density)
+  {
+    if constexpr (!Lit)
+    {
+      return Unlit <= 1 ? 80 : (Unlit == 2 ? 88 : 96);
+    }
+    else if constexpr (Unlit < 0)
+    {
+      return 64;
+    }
+    else if constexpr ((Unlit & kLocalLight) != 0)
+    {
+      return (Unlit & 1) != 0 ? 96 : 88;
+    }
+    else if constexpr ((Unlit & kDeferredShadows) != 0)
+    {
+      return 96;
+    }
+  }
+#endif
+  return 255;
+}
+
+/**
  * The camera rays of a lit render with deferred shadow rays, one sample per
  * pixel (fp.samplesPerPixel 1): a pixel whose path records shadow rays
  * (DeferredShadows) is queued, with its sample so far, for
@@ -198,7 +239,8 @@ __device__ MCVOL_FORCE_INLINE void foldOneSample(const Vec4f* v, uint32_t index,
  * finishes its own pixel. One atomic per warp.
  */
 template <BlendMode Mode, int Unlit>
-__global__ void litDeferKernel(const __grid_constant__ SceneView s, const __grid_constant__ CameraView cam,
+__global__ void __maxnreg__((plainRegisterCap<Mode, true, Unlit + kDeferredShadows>()))
+  litDeferKernel(const __grid_constant__ SceneView s, const __grid_constant__ CameraView cam,
   const __grid_constant__ FrameParams fp, const float* __restrict__ depth, float4* __restrict__ accum,
   double* __restrict__ sums, float4* __restrict__ even, double* __restrict__ evenSums, uint32_t previous,
   DeferredShadows* __restrict__ queue, unsigned* __restrict__ queued, float4* __restrict__ slots)
@@ -261,7 +303,8 @@ __global__ void litDeferKernel(const __grid_constant__ SceneView s, const __grid
 /// warps: each sample finished (finishDeferredSample()) and folded into its
 /// pixel.
 template <BlendMode Mode>
-__global__ void deferredShadowKernel(const __grid_constant__ SceneView s, uint32_t index, float4* __restrict__ accum,
+__global__ void __maxnreg__((plainRegisterCap<Mode, true, -1>()))
+  deferredShadowKernel(const __grid_constant__ SceneView s, uint32_t index, float4* __restrict__ accum,
   double* __restrict__ sums, float4* __restrict__ even, double* __restrict__ evenSums, uint32_t previous,
   const DeferredShadows* __restrict__ queue, const unsigned* __restrict__ queued, float4* __restrict__ slots)
 {
@@ -339,32 +382,6 @@ void launchDeferred(const SceneView& s, const CameraView& cam, const FrameParams
         P, n, one.firstSample, k.accum, k.sums, k.even, k.evenSums, previous, slots);
     }
   }
-}
-
-/**
- * Registers per thread of the plain density-blending kernels that trace no
- * shadow rays, 255 (no cap) elsewhere. Each cap sits at a step of occupancy
- * in blocks of 8x8 (80 registers: 24 warps per SM, 88: 22, 96: 20) where
- * the kernel would otherwise take a few registers more and lose a step; at
- * the cap ptxas spills at most 40 bytes (sm_90).
- */
-template <BlendMode Mode, bool Lit, int Unlit>
-constexpr int plainRegisterCap()
-{
-#if defined(MCVOL_DEVICE_PLAIN_CHANNELS)
-  if constexpr (Mode == BlendMode::Density)
-  {
-    if constexpr (!Lit)
-    {
-      return Unlit <= 1 ? 80 : (Unlit == 2 ? 88 : 96);
-    }
-    else if constexpr ((Unlit & kLocalLight) != 0)
-    {
-      return (Unlit & 1) != 0 ? 96 : 88;
-    }
-  }
-#endif
-  return 255;
 }
 
 /// The unlit render kernel: renderKernelBody() on the kernel's parameters.
