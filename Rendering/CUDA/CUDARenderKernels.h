@@ -193,7 +193,7 @@ __device__ MCVOL_FORCE_INLINE void foldOneSample(const Vec4f* v, uint32_t index,
  * Registers per thread of the plain density-blending kernels, 255 (no cap)
  * elsewhere: the kernels that trace no shadow rays, the camera kernels whose
  * shadow rays are deferred (litDeferKernel()) and the deferred shadow rays'
- * kernel (deferredShadowKernel(), Unlit -1). Each cap sits at a step of
+ * kernel (plainShadowRegisterCap()). Each cap sits at a step of
  * occupancy (blocks of 8x8: 80 registers give 24 warps per SM, 88 22, 96
  * 20; blocks of 128 threads: 64 give 32) where the kernel would otherwise
  * take more registers and lose a step. The camera and shadow kernels are
@@ -213,10 +213,6 @@ constexpr int plainRegisterCap()
     {
       return Unlit <= 1 ? 80 : (Unlit == 2 ? 88 : 96);
     }
-    else if constexpr (Unlit < 0)
-    {
-      return 64;
-    }
     else if constexpr ((Unlit & kLocalLight) != 0)
     {
       return (Unlit & 1) != 0 ? 96 : 88;
@@ -225,6 +221,19 @@ constexpr int plainRegisterCap()
     {
       return 96;
     }
+  }
+#endif
+  return 255;
+}
+
+/// Registers per thread of deferredShadowKernel() (plainRegisterCap()).
+template <BlendMode Mode>
+constexpr int plainShadowRegisterCap()
+{
+#if defined(MCVOL_DEVICE_PLAIN_CHANNELS)
+  if constexpr (Mode == BlendMode::Density)
+  {
+    return 64;
   }
 #endif
   return 255;
@@ -303,7 +312,7 @@ __global__ void __maxnreg__((plainRegisterCap<Mode, true, Unlit + kDeferredShado
 /// warps: each sample finished (finishDeferredSample()) and folded into its
 /// pixel.
 template <BlendMode Mode>
-__global__ void __maxnreg__((plainRegisterCap<Mode, true, -1>()))
+__global__ void __maxnreg__((plainShadowRegisterCap<Mode>()))
   deferredShadowKernel(const __grid_constant__ SceneView s, uint32_t index, float4* __restrict__ accum,
   double* __restrict__ sums, float4* __restrict__ even, double* __restrict__ evenSums, uint32_t previous,
   const DeferredShadows* __restrict__ queue, const unsigned* __restrict__ queued, float4* __restrict__ slots)
