@@ -312,6 +312,14 @@ void vtkMultiChannelVolumeMapper::ReportIgnoredSettings(vtkVolume* volume)
     ignored.emplace_back(
       "vtkVolumeMapper::SetBlendMode (the channels combine by SetChannelBlendMode: density, max, mix or composite)");
   }
+  if (this->ShadowMode == CACHED_SHADOWS && this->ChannelBlendMode == MC_COMPOSITE_BLEND)
+  {
+    ignored.emplace_back("cached shadows under post-render composite blending (its shadow rays are tracked)");
+  }
+  if (this->ShadowMode == CACHED_SHADOWS && this->VisibilityOptimization && this->OptimizeLightRays)
+  {
+    ignored.emplace_back("cached shadows with the visibility optimization of light rays (its light rays are tracked)");
+  }
   vtkVolumeProperty* property = volume ? volume->GetProperty() : nullptr;
   if (property && property->GetTransferFunctionMode() == vtkVolumeProperty::TF_2D)
   {
@@ -1278,6 +1286,8 @@ void vtkMultiChannelVolumeMapper::ApplySceneSettings(RenderPass& pass, mcvol::Sc
   lighting.Anisotropy = in.Anisotropy.data();
   lighting.Shadows = this->ShadowMode != NO_SHADOWS;
   lighting.DeltaShadows = this->ShadowMode == DELTA_TRACKING_SHADOWS;
+  lighting.CacheShadows = this->ShadowMode == CACHED_SHADOWS;
+  lighting.CacheSpacing = this->ShadowCacheSpacing;
   lighting.MaxScatteringDepth = this->MaxScatteringDepth;
   lighting.GradientShading = this->GradientShading;
   lighting.Shininess = this->Shininess;

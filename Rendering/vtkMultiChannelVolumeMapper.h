@@ -617,14 +617,34 @@ public:
   virtual void SetAmbientRadiance(double r, double g, double b);
   virtual void SetAmbientRadiance(const double rgb[3]) { this->SetAmbientRadiance(rgb[0], rgb[1], rgb[2]); }
   vtkGetVector3Macro(AmbientRadiance, double);
+  /**
+   * CACHED_SHADOWS: each directional light's transmittance is computed once
+   * on a grid of nodes ShadowCacheSpacing voxels apart and interpolated,
+   * instead of a shadow ray per scattering event: a shadowed frame costs
+   * about what a frame without shadows costs, for a bias (shadow edges
+   * finer than the spacing blur) that Documentation/performance.md
+   * measures. The grid is rebuilt when the data, a transfer function, the
+   * blend or a light's direction changes (a light that follows the camera:
+   * every camera move). Point lights and the ambient light keep ratio
+   * tracking, as do post-render composite blending, light rays under the
+   * visibility optimization and a piece rendered sort-last across
+   * processes (GetIgnoredSettings names the first two). The ray-marching
+   * mapper looks up the same grid.
+   */
   enum ShadowModes
   {
     NO_SHADOWS = 0,
     RATIO_TRACKING_SHADOWS = 1, ///< smooth transmittance (default)
-    DELTA_TRACKING_SHADOWS = 2  ///< binary, as Sahistan et al.'s viewer
+    DELTA_TRACKING_SHADOWS = 2, ///< binary, as Sahistan et al.'s viewer
+    CACHED_SHADOWS = 3          ///< a grid of transmittance per light (biased, fast)
   };
-  vtkSetClampMacro(ShadowMode, int, NO_SHADOWS, DELTA_TRACKING_SHADOWS);
+  vtkSetClampMacro(ShadowMode, int, NO_SHADOWS, CACHED_SHADOWS);
   vtkGetMacro(ShadowMode, int);
+  /// Node spacing of the CACHED_SHADOWS grid, voxels: clamped to [0.5, 64],
+  /// default 2. Smaller is sharper and costs more memory (4 bytes a node,
+  /// per directional light) and time per rebuild.
+  vtkSetClampMacro(ShadowCacheSpacing, double, 0.5, 64.0);
+  vtkGetMacro(ShadowCacheSpacing, double);
   /// Scattering events per path: 1 is single scattering (default).
   vtkSetClampMacro(MaxScatteringDepth, int, 1, 1024);
   vtkGetMacro(MaxScatteringDepth, int);
@@ -1271,6 +1291,7 @@ protected:
   bool PixelJitter = true;
   double AmbientRadiance[3] = { 0.2, 0.2, 0.2 };
   int ShadowMode = RATIO_TRACKING_SHADOWS;
+  double ShadowCacheSpacing = 2.0;
   int MaxScatteringDepth = 1;
   bool GradientShading = false;
   double Shininess = 32.0;

@@ -459,6 +459,11 @@ void vtkMultiChannelVolumeRepresentation::SetShadowMode(int mode)
   this->GetMultiChannelMapper()->SetShadowMode(mode);
 }
 
+void vtkMultiChannelVolumeRepresentation::SetShadowCacheSpacing(double voxels)
+{
+  this->GetMultiChannelMapper()->SetShadowCacheSpacing(voxels);
+}
+
 void vtkMultiChannelVolumeRepresentation::SetAmbientRadiance(double r, double g, double b)
 {
   this->GetMultiChannelMapper()->SetAmbientRadiance(r, g, b);

@@ -122,6 +122,7 @@ public:
   void SetSeed(int seed);
   void SetPixelJitter(bool on);
   void SetShadowMode(int mode);
+  void SetShadowCacheSpacing(double voxels);
   void SetAmbientRadiance(double r, double g, double b);
   void SetMaxScatteringDepth(int depth);
   /// vtkMultiChannelVolumeMapper::SetLightingStandInLevel (lighting across

@@ -201,6 +201,7 @@ void CPURenderer::render(const Scene& scene, const Camera& camera, const RenderS
     {
       s.outside = &outside;
     }
+    this->Cache.prepare(scene, s, this->Threads);
   }
   ImportanceFrame imp;
   if (s.importance.enabled)

@@ -82,6 +82,10 @@ void RayMarcher::render(const Scene& scene, const Camera& camera, const MarchSet
   {
     s.outside = &outside;
   }
+  if (s.lighting.enabled)
+  {
+    (this->SharedCache ? *this->SharedCache : this->Cache).prepare(scene, s, this->Threads);
+  }
   const CameraView cam = toView(camera);
   out.resize(camera.width, camera.height);
   out.reset();
@@ -110,6 +114,7 @@ void CPURenderer::march(const Scene& scene, const Camera& camera, const MarchSet
 {
   RayMarcher marcher;
   marcher.setThreads(this->Threads);
+  marcher.setShadowCache(&this->Cache);
   marcher.render(scene, camera, settings, depth, accum, counters);
 }
 } // namespace mcvol

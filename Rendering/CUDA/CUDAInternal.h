@@ -6,6 +6,7 @@
 #pragma once
 
 #include "mcvol/CUDARenderer.h"
+#include "mcvol/HostShadowCache.h"
 
 #include "mcvol/ray/Lighting.h"
 #include "mcvol/ray/SceneView.h"
@@ -353,6 +354,11 @@ struct CUDARenderer::Internal
   /// classifyLevel()'s kept inputs (CUDAPyramid.cu).
   std::vector<std::unique_ptr<LevelInput>> LevelInputs;
   OutsideCopy Outside;
+  /// Cached shadows (LightingDesc::cacheShadows): each light's grid and the
+  /// key it was filled for (CUDAShadowCache.cu).
+  DeviceBuffer<float> ShadowGrids[kMaxLights];
+  ShadowCacheKey ShadowKeys[kMaxLights];
+  bool ShadowValid[kMaxLights] = {};
 
   CudaUpdateCounters Updates;
 
@@ -418,6 +424,11 @@ struct CUDARenderer::Internal
   /// per-render view (prepareOutside(), as on the CPU); s.outside null
   /// without one. Call after the lighting frame of `s` is set.
   void linkOutside(const Scene& scene, const Camera& camera, SceneView& s);
+  /// CUDAShadowCache.cu: the cached shadows `s` asks for (cachesShadow()),
+  /// filled when their key changed, and s's lighting pointing at them.
+  /// Call after linkOutside().
+  void linkShadowCaches(const Scene& scene, SceneView& s);
+  size_t shadowCacheBytes() const;
   /// The Scene's importance tables on the device (uploaded when they changed).
   const float* deviceImportanceTables(const Scene& scene);
   /// render(): makes Accum and AccumSums (and Even and EvenSums, when

@@ -441,6 +441,7 @@ void CUDARenderer::render(const Scene& scene, const Camera& camera, const Render
     setLightingFrame(s, camera);
     // Lit, one piece of a split volume: the stand-in of the other pieces.
     in.linkOutside(scene, camera, s);
+    in.linkShadowCaches(scene, s);
   }
 
   const size_t P = size_t(camera.width) * size_t(camera.height);

@@ -104,6 +104,10 @@ void CUDARenderer::march(const Scene& scene, const Camera& camera, const MarchSe
   }
   // Lit, one piece of a split volume: the stand-in of the other pieces.
   in.linkOutside(scene, camera, s);
+  if (s.lighting.enabled)
+  {
+    in.linkShadowCaches(scene, s);
+  }
   const CameraView cam = toView(camera);
 
   // The image goes to the device accumulation buffer, which then holds this

@@ -301,7 +301,7 @@ size_t CUDARenderer::deviceBytes() const
   return m.dataBytes + m.textureBytes + m.macrocellBytes + m.majorantBytes + m.imageBytes + m.levelInputBytes +
     in.Tables.bytes() + in.Sparse.bytes() + in.ChannelMax.bytes() + in.NaNFlags.bytes() + in.Counters.bytes() +
     in.ImportanceTables.bytes() + in.Segments.bytes() + in.SegmentCounts.bytes() + in.SegmentTotals.bytes() +
-    in.Outside.bytes();
+    in.Outside.bytes() + in.shadowCacheBytes();
 }
 
 std::vector<float> CUDARenderer::downloadMajorants(int channel) const

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Scene: checking the lights and scattering parameters into the LightingView.
 #include "mcvol/Scene.h"
+#include "mcvol/ray/ShadowCache.h"
 
 #include <cmath>
 #include <stdexcept>
@@ -47,6 +48,10 @@ void Scene::setLighting(const LightingDesc& d)
   {
     throw std::invalid_argument("mcvol: the shininess must be a finite number >= 0");
   }
+  if (!(d.cacheSpacing >= kShadowCacheMinSpacing && d.cacheSpacing <= kShadowCacheMaxSpacing))
+  {
+    throw std::invalid_argument("mcvol: the shadow cache's node spacing must be in [0.5, 64] voxels");
+  }
   if (!(d.scatterRoulette > 0.f && d.scatterRoulette <= 1.f))
   {
     throw std::invalid_argument("mcvol: the scattering vertex's roulette threshold must be in (0, 1]");
@@ -91,6 +96,8 @@ void Scene::setLighting(const LightingDesc& d)
   L.ambient = Vec3f(float(d.ambient[0]), float(d.ambient[1]), float(d.ambient[2]));
   L.shadows = d.shadows;
   L.shadowEstimator = d.deltaShadows ? 1 : 0;
+  L.cacheShadows = d.cacheShadows;
+  L.cacheSpacing = d.cacheSpacing;
   L.maxDepth = d.maxDepth;
   L.scatterRoulette = d.scatterRoulette;
   L.gradientShading = d.gradientShading;

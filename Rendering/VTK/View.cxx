@@ -216,6 +216,8 @@ LightingDesc CollectLighting(vtkRenderer* ren, vtkVolumeProperty* property, cons
   }
   lighting.shadows = settings.Shadows;
   lighting.deltaShadows = settings.DeltaShadows;
+  lighting.cacheShadows = settings.CacheShadows;
+  lighting.cacheSpacing = static_cast<float>(settings.CacheSpacing);
   lighting.maxDepth = settings.MaxScatteringDepth;
   lighting.gradientShading = settings.GradientShading;
   lighting.shininess = static_cast<float>(settings.Shininess);

@@ -76,6 +76,8 @@ struct LightingSettings
   const double* Anisotropy = nullptr;      ///< per channel
   bool Shadows = true;
   bool DeltaShadows = false;
+  bool CacheShadows = false;
+  double CacheSpacing = 2.0;
   int MaxScatteringDepth = 1;
   bool GradientShading = false;
   double Shininess = 32.0;

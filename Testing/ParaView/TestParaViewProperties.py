@@ -168,16 +168,23 @@ checks.check(rep.LookupTable == simple.GetColorTransferFunction("green")
              "ActiveChannel 1 puts the green channel's functions in LookupTable/ScalarOpacityFunction")
 
 # Lighting: with Shade off nothing of it is simulated, so nothing changes.
-for name, value in [("ShadowMode", "Delta Tracking"), ("AmbientRadiance", [1.0, 0.0, 0.0]),
+for name, value in [("ShadowMode", "Delta Tracking"), ("ShadowMode", "Cached"), ("ShadowCacheSpacing", 4.0),
+                    ("AmbientRadiance", [1.0, 0.0, 0.0]),
                     ("MaxScatteringDepth", 4), ("GradientShading", 1), ("Shininess", 5.0),
                     ("ChannelAlbedos", [0.2, 0.2, 0.2]), ("ChannelAnisotropies", [0.5, 0.5, 0.5])]:
     expect_property(name, value, False, "%s with Shade off" % name)
 expect("Shade", setter("Shade", 1), True)
 reference = image()
-for name, value in [("ShadowMode", "None"), ("AmbientRadiance", [1.0, 0.0, 0.0]), ("MaxScatteringDepth", 4),
-                    ("GradientShading", 1), ("ChannelAlbedos", [0.2, 0.2, 0.2]),
+for name, value in [("ShadowMode", "None"), ("ShadowMode", "Cached"), ("AmbientRadiance", [1.0, 0.0, 0.0]),
+                    ("MaxScatteringDepth", 4), ("GradientShading", 1), ("ChannelAlbedos", [0.2, 0.2, 0.2]),
                     ("ChannelAnisotropies", [0.6, 0.6, 0.6])]:
     expect_property(name, value, True, "%s with Shade on" % name)
+# The cache's spacing matters only to cached shadows.
+expect_property("ShadowCacheSpacing", 4.0, False, "ShadowCacheSpacing with ratio-tracking shadows")
+rep.ShadowMode = "Cached"
+reference = image()
+expect_property("ShadowCacheSpacing", 4.0, True, "ShadowCacheSpacing with cached shadows")
+rep.ShadowMode = "Ratio Tracking"
 rep.Shade = 0
 reference = image()
 

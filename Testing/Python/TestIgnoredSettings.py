@@ -135,6 +135,21 @@ mapper.CroppingOff()
 mapper.RemoveAllClippingPlanes()
 expect_clean("both off")
 
+# Cached shadows where they do not apply, under post-render composite
+# blending (lit: its shadow rays are tracked): named, the image unchanged.
+# On the CPU: the CUDA backend refuses lit composite blending altogether.
+mapper.SetBackendToCPU()
+prop.ShadeOn()
+mapper.SetChannelBlendMode(mapper.MC_COMPOSITE_BLEND)
+reference = first_render()
+mapper.SetShadowMode(mapper.CACHED_SHADOWS)
+expect_ignored("cached shadows under composite blending", ["cached shadows", "composite"])
+mapper.SetShadowMode(mapper.RATIO_TRACKING_SHADOWS)
+expect_clean("ratio-tracking shadows under composite blending")
+mapper.SetChannelBlendMode(mapper.MC_DENSITY_BLEND)
+prop.ShadeOff()
+use_test_backend(mapper)
+
 # The ray-marching reference takes the same stages: the same warning.
 march = vtkMultiChannelRayMarchMapper()
 march_window = scene(march)

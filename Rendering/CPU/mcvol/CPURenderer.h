@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 
+#include "mcvol/HostShadowCache.h"
 #include "mcvol/Renderer.h"
 
 namespace mcvol
@@ -25,7 +26,12 @@ public:
   /// 0 = OpenMP's default.
   void setThreads(int n) { this->Threads = n; }
 
+  /// The cached shadows (LightingDesc::cacheShadows) its renders and
+  /// marches share.
+  const HostShadowCache& shadowCache() const { return this->Cache; }
+
 private:
   int Threads = 0;
+  HostShadowCache Cache;
 };
 } // namespace mcvol

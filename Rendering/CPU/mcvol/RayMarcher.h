@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 
+#include "mcvol/HostShadowCache.h"
 #include "mcvol/MarchSetup.h"
 #include "mcvol/ray/RayMarch.h"
 #include "mcvol/Renderer.h"
@@ -27,7 +28,13 @@ public:
   /// The step a render with these settings uses (marchEffectiveStep()).
   static double effectiveStep(const Camera& camera, const MarchSettings& settings);
 
+  /// Cached shadows (LightingDesc::cacheShadows) kept elsewhere (the
+  /// CPURenderer's, shared with its renders); null: this marcher's own.
+  void setShadowCache(HostShadowCache* cache) { this->SharedCache = cache; }
+
 private:
   int Threads = 0;
+  HostShadowCache Cache;
+  HostShadowCache* SharedCache = nullptr;
 };
 } // namespace mcvol

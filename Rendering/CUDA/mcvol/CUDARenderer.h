@@ -42,6 +42,7 @@ struct CudaUpdateCounters
   uint64_t levelBuilds = 0;           ///< classifyLevel() calls that built a level
   double lastLevelMs = 0.0;           ///< wall time of the last classifyLevel() (uploads and read-back included)
   size_t lastLevelPeakBytes = 0;      ///< device memory of the last classifyLevel() at its peak
+  uint64_t shadowCaches = 0;          ///< cached shadows' grids filled (LightingDesc::cacheShadows)
 };
 
 /**

@@ -94,6 +94,19 @@ struct LightingDesc
   std::vector<float> anisotropy;   ///< per channel, (-1, 1) (missing: 0)
   bool shadows = true;
   bool deltaShadows = false; ///< delta tracking instead of ratio tracking
+  /**
+   * Cached shadows (mcvol/ray/ShadowCache.h): each directional light's
+   * transmittance is computed once on a grid of nodes `cacheSpacing` voxels
+   * apart ([0.5, 64]) and interpolated, instead of a shadow ray per
+   * scattering event. Biased (shadow edges finer than the spacing blur)
+   * and much cheaper; the grid is rebuilt when the data, a transfer
+   * function, the blend or a light's direction changes. Point lights, the
+   * ambient light, post-render compositing, a piece of a split volume
+   * (setOutside) and light rays under the visibility optimization keep
+   * their tracked shadow rays. False (default): every shadow is tracked.
+   */
+  bool cacheShadows = false;
+  float cacheSpacing = 2.f;
   int maxDepth = 1;          ///< scattering events per path (1 = single scattering)
   bool gradientShading = false;
   float shininess = 32.f;

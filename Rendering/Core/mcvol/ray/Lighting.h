@@ -5,6 +5,7 @@
 #include "mcvol/ray/DDA.h"
 #include "mcvol/ray/Importance.h"
 #include "mcvol/ray/Random.h"
+#include "mcvol/ray/ShadowCache.h"
 #include "mcvol/ray/Tracking.h"
 
 #include <cmath>
@@ -334,14 +335,15 @@ MCVOL_HOT bool towardsLight(const LightingView& L, int l, Vec3f x, LightDirectio
 
 /**
  * Whether every light path of `L` ends at the camera ray's collision: no
- * shadow rays and one scattering vertex. Its radiance is then a function of
- * that point alone, so the lit kernels that leave the other rays' code out
- * (litPathFrom()'s Local) render it, with the same random numbers and the
- * same image as the full path.
+ * shadow rays (none asked for, or every shadow cached: LightingView::
+ * cachedOnly) and one scattering vertex. Its radiance is then a function
+ * of that point alone, so the lit kernels that leave the other rays' code
+ * out (litPathFrom()'s Local) render it, with the same random numbers and
+ * the same image as the full path.
  */
 MCVOL_FUNC bool localLighting(const LightingView& L)
 {
-  return L.enabled && !L.shadows && L.maxDepth <= 1;
+  return L.enabled && (!L.shadows || L.cachedOnly) && L.maxDepth <= 1;
 }
 
 /// Most shadow rays one deferred scattering vertex holds (DeferredShadows):
@@ -385,7 +387,8 @@ struct DeferredShadows
 MCVOL_FUNC bool deferrableShadows(const SceneView& s, Sampler sampler)
 {
   const LightingView& L = s.lighting;
-  if (!L.enabled || !L.shadows || L.maxDepth > 1 || s.outside || (s.importance.enabled && s.importance.lightRays))
+  if (!L.enabled || !L.shadows || L.cachedOnly || L.maxDepth > 1 || s.outside ||
+    (s.importance.enabled && s.importance.lightRays))
   {
     return false;
   }
@@ -567,15 +570,21 @@ MCVOL_HOT Vec3f litPathFrom(const SceneView& s, const SceneView& light, Tracker 
       {
         continue;
       }
-      if (Defer && L.shadows)
+      float T = 1.f;
+      if (L.shadows && shadowCached(L, l))
+      {
+        // Looked up, no ray: the cache belongs to the view the path started
+        // in, which is the only view that has one (no stand-in).
+        T = cachedTransmittance(L, l, x);
+      }
+      else if (Defer && L.shadows)
       {
         ++c.shadowRays;
         recordShadowRay(*defer, rng, x, dl, minf(boxExit(v->volume, x, dl), dist), throughput * L.lightRadiance[l], f,
           falloff, lightWeight);
         continue;
       }
-      float T = 1.f;
-      if (!Local && L.shadows)
+      else if (!Local && L.shadows)
       {
         ++c.shadowRays;
         const float tPiece = boxExit(v->volume, x, dl);
@@ -861,9 +870,10 @@ MCVOL_HOT Hit scatteringChannelAt(const SceneView& s, Vec3f p, float u)
 /**
  * The light arriving at index point x and scattered towards the camera
  * (world direction w: -w towards the eye) by a Henyey-Greenstein phase of
- * anisotropy g, without shadows: every light's radiance times its phase
- * value and falloff, plus the ambient light (its phase integral is 1). The
- * expected value over litPathFrom()'s choice of one light
+ * anisotropy g, without shadow rays: every light's radiance times its phase
+ * value, falloff and, with cached shadows (LightingView::cachedOnly), its
+ * cached transmittance, plus the ambient light (its phase integral is 1).
+ * The expected value over litPathFrom()'s choice of one light
  * (LightingDesc::sampleOneLight) is this sum.
  */
 MCVOL_HOT Vec3f unshadowedRadiance(const LightingView& L, float g, Vec3f w, Vec3f x)
@@ -874,7 +884,8 @@ MCVOL_HOT Vec3f unshadowedRadiance(const LightingView& L, float g, Vec3f w, Vec3
     LightDirection ld;
     if (towardsLight(L, l, x, ld))
     {
-      r += L.lightRadiance[l] * (hgPhase(dot(w, ld.wl), g) * ld.falloff);
+      const float T = L.shadows ? cachedTransmittance(L, l, x) : 1.f;
+      r += L.lightRadiance[l] * (hgPhase(dot(w, ld.wl), g) * ld.falloff * T);
     }
   }
   return r;
@@ -1034,7 +1045,8 @@ MCVOL_HOT Vec4f traceLitExpected(const SceneView& s, const SceneView& light, Tra
     {
       pointLights = pointLights || lv.lightType[l] != 0;
     }
-    const bool perPoint = pointLights || !uniform;
+    // Cached shadows vary along the ray: the light is looked up per point.
+    const bool perPoint = pointLights || !uniform || lv.shadows;
     const Vec3f perRay = perPoint ? Vec3f() : unshadowedRadiance(lv, g, w, o);
     return trackExpectedOf<Mode>(s, o, d, 0.f, tmax, rng, c, UnshadowedOptics<Mode>{ s, w, g, perPoint, perRay });
   }

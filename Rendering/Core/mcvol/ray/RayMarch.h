@@ -477,7 +477,11 @@ MCVOL_HOT void gatherLights(const SceneView& s, const LitRay& r, const LitSample
     const float tPiece = boxExit(s.volume, ls.x, dl);
     const float tl = minf(tPiece, dist);
     float Tl = 1.f;
-    if (L.shadows)
+    if (L.shadows && shadowCached(L, l))
+    {
+      Tl = cachedTransmittance(L, l, ls.x); // the Monte Carlo mapper's lookup
+    }
+    else if (L.shadows)
     {
       Tl = marchLightRay<Mode>(s, r.optimized, ls.x, dl, tl, r.step);
       if (s.outside)

@@ -121,6 +121,23 @@ struct LightingView
   float scatterRoulette = 0.5f;    ///< LightingDesc::scatterRoulette
   bool gradientShading = false;    ///< Blinn-Phong on the extinction gradient (Lerzer and Dachsbacher)
   float shininess = 32.f;
+  /**
+   * Cached shadows (LightingDesc::cacheShadows; mcvol/ray/ShadowCache.h):
+   * the transmittance towards each directional light on a grid of nodes
+   * aligned with the light, looked up by a shadow ray instead of tracked.
+   * Set per render by the backend: shadowCache[l] is light l's grid (its
+   * frame, then the nodes; a host or a device address), null where its
+   * shadow rays are tracked (a point light, no cache asked for, a piece of
+   * a split volume, post-render compositing, or the visibility
+   * optimization of light rays).
+   */
+  bool cacheShadows = false;
+  float cacheSpacing = 2.f; ///< asked-for node spacing, voxels
+  const float* shadowCache[kMaxLights] = {};
+  /// Every light's shadow is looked up and there is no ambient light: no
+  /// shadow ray is tracked, and the radiance scattered at a point is a
+  /// function of the point (localLighting()).
+  bool cachedOnly = false;
   /// Set per render by the backend from the camera: world-to-index linear
   /// part (row-major), its inverse, and the translation.
   float toIndex[9];

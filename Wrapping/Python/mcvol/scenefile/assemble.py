@@ -524,7 +524,8 @@ def setup_lighting(renderer, prop, mapper, lighting):
     prop.ShadeOn()
     mapper.SetAmbientRadiance(*lighting["ambient"])
     mapper.SetShadowMode({"none": mapper.NO_SHADOWS, "ratio": mapper.RATIO_TRACKING_SHADOWS,
-                          "delta": mapper.DELTA_TRACKING_SHADOWS}[lighting["shadows"]])
+                          "delta": mapper.DELTA_TRACKING_SHADOWS,
+                          "cached": mapper.CACHED_SHADOWS}[lighting["shadows"]])
     mapper.SetMaxScatteringDepth(lighting["max_scattering_depth"])
     mapper.SetGradientShading(lighting["gradient_shading"])
     mapper.SetShininess(lighting["shininess"])

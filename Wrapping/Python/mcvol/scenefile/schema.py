@@ -25,7 +25,7 @@ BACKENDS = ("auto", "cpu", "cuda")
 RENDERERS = ("montecarlo", "raymarch")
 COMPOSITING = ("extinction", "opacity")
 LOD_FILTERS = ("box4", "box2", "bspline")  # the first is the default
-SHADOWS = ("ratio", "delta", "none")
+SHADOWS = ("ratio", "delta", "cached", "none")
 MAX_CHANNELS = 32
 # Array types the mapper reads in place (VTK type names as GetDataTypeAsString
 # gives them): what a channel's array may hold.
