@@ -92,6 +92,17 @@ ArgParser makeParser(Options& o)
           throw std::invalid_argument("--scatter-roulette takes a number in (0, 1]");
         }
       })
+    .add("--cached-shadows", 1, "S",
+      "lit scenes: cached shadows at node spacing S voxels (LightingDesc::cacheShadows; 0, the default: tracked); "
+      "converge scores them against the tracked shadows' reference",
+      [&](const Args& v)
+      {
+        o.cacheSpacing = std::stof(v[0]);
+        if (!(o.cacheSpacing == 0.f || (o.cacheSpacing >= 0.5f && o.cacheSpacing <= 64.f)))
+        {
+          throw std::invalid_argument("--cached-shadows takes 0 or a spacing in [0.5, 64]");
+        }
+      })
     .add("--block", 2, "X Y", "CUDA: render-kernel block size (default 8 8)",
       [&](const Args& v)
       {
@@ -242,8 +253,19 @@ void Setup::configure(const Options& o, int channels, int macrocell, bool hostAc
     this->scene.setTransferFunction(
       n, demoTransferFunction(this->volume, n, this->ranges[size_t(n)], o.tableSize, o.density));
   }
-  this->scene.setLighting(lightingPreset(o.lighting, channels, o.scatterRoulette));
+  this->scene.setLighting(benchLighting(o, channels));
   this->scene.update();
+}
+
+mcvol::LightingDesc benchLighting(const Options& o, int channels, bool cached)
+{
+  mcvol::LightingDesc d = lightingPreset(o.lighting, channels, o.scatterRoulette);
+  if (cached && o.cacheSpacing > 0.f)
+  {
+    d.cacheShadows = true;
+    d.cacheSpacing = o.cacheSpacing;
+  }
+  return d;
 }
 
 mcvol::Camera benchCamera(const Options& o, const mcvol::Scene& scene)

@@ -43,6 +43,7 @@ struct Options
   bool inlineShadows = false;  ///< CUDA: shadow rays traced in the camera rays' kernel (no deferral)
   int deferredBatch = 0;       ///< CUDA: setDeferredBatch() (0: the renderer's default)
   float scatterRoulette = 0.f; ///< LightingDesc::scatterRoulette of the lit scenes (0: its default)
+  float cacheSpacing = 0.f;    ///< --cached-shadows: LightingDesc::cacheSpacing of the lit scenes (0: tracked shadows)
   int blockX = 8;
   int blockY = 8;
   double psnr = 35.0;
@@ -122,6 +123,9 @@ struct FrameStats
 };
 
 mcvol::Camera benchCamera(const Options& o, const mcvol::Scene& scene);
+/// The lit scenes' lighting: --lighting's preset, --scatter-roulette, and
+/// with `cached` --cached-shadows (tracked shadows without it).
+mcvol::LightingDesc benchLighting(const Options& o, int channels, bool cached = true);
 
 /// Times frames of 1 spp. Device backends: render() + finish() per frame with
 /// the image left on the device; then a few frames with it copied back.

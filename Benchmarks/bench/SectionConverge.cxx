@@ -38,6 +38,12 @@ void runConverge(Bench& bench)
   // --pixel-centres a second one at pixel centres, for the same
   // configurations at pixel centres (each scored against its own limit).
   mcvol::Accumulator ref;
+  // Cached shadows are scored against tracked shadows: their bias counts.
+  const bool cached = s.scene.view().lighting.cacheShadows;
+  if (cached)
+  {
+    s.scene.setLighting(benchLighting(o, s.scene.numChannels(), false));
+  }
   const std::vector<float> refImg = o.centresOnly ? std::vector<float>() : renderReference(o, r, s.scene, cam, ref);
   std::vector<float> refCentres;
   uint32_t refSamples = ref.samples();
@@ -48,6 +54,10 @@ void runConverge(Bench& bench)
     rc.jitterPixels = false;
     refCentres = renderReference(o, r, s.scene, cam, refC, rc);
     refSamples = refC.samples();
+  }
+  if (cached)
+  {
+    s.scene.setLighting(benchLighting(o, s.scene.numChannels()));
   }
   std::printf("## Time to converge: %s, %dx%d, 1 spp per frame, target PSNR %.1f dB (peak 1, RGB over black) "
               "against %u spp\n\n| estimator, tracker, sampler | frames | ms (rendering only) | PSNR reached | ms per frame back to back "

@@ -44,6 +44,16 @@ void runEffects(Bench& bench)
     e.desc.deltaShadows = true;
     effects.push_back(e);
   }
+  // Cached shadows (LightingDesc::cacheShadows) at three node spacings.
+  for (float spacing : { 1.f, 2.f, 4.f })
+  {
+    char name[64];
+    std::snprintf(name, sizeof(name), "1 light, cached shadows (node spacing %g)", double(spacing));
+    Effect e{ name, base() };
+    e.desc.cacheShadows = true;
+    e.desc.cacheSpacing = spacing;
+    effects.push_back(e);
+  }
   {
     Effect e{ "1 light, ratio shadows, gradient shading", base() };
     e.desc.gradientShading = true;
@@ -96,10 +106,30 @@ void runEffects(Bench& bench)
               "| gradients/ray | image change | 1-spp noise |\n|---|---|---|---|---|---|---|---|---|---|\n",
     ds.c_str(), o.macrocell, o.width, o.height, o.referenceSpp, o.referenceSpp, o.referenceSpp);
   std::vector<float> unlit;
+  std::vector<float> ratio; // the converged image with ratio-tracking shadows
   double unlitMs = 0, unlitExpectedMs = 0;
+  struct CacheRow
+  {
+    std::string name;
+    double buildMs, bias, noise;
+  };
+  std::vector<CacheRow> cacheRows;
   for (const Effect& e : effects)
   {
     s.scene.setLighting(e.desc);
+    double buildMs = 0;
+    if (e.desc.cacheShadows)
+    {
+      // The grid's fill: the first render after the change, less a frame.
+      mcvol::Accumulator first;
+      mcvol::RenderSettings rs;
+      rs.readBack = false;
+      r.finish();
+      const auto t0 = Clock::now();
+      r.render(s.scene, cam, rs, nullptr, first);
+      r.finish();
+      buildMs = 1e3 * seconds(t0);
+    }
     const FrameStats f = timeFrames(o, r, s.scene, mcvol::Tracker::OneDDA);
     const FrameStats fe = timeFrames(o, r, s.scene, mcvol::Tracker::OneDDA, mcvol::Estimator::ExpectedValue);
     const std::vector<float> conv = converged(4242);
@@ -115,6 +145,16 @@ void runEffects(Bench& bench)
     r.render(s.scene, cam, rs, nullptr, one);
     const double change = rmse(conv, unlit.data());
     const double noise = rmse(conv, one.rgba());
+    if (e.name == "1 light, ratio-tracking shadows")
+    {
+      ratio = conv;
+    }
+    if (e.desc.cacheShadows && !ratio.empty())
+    {
+      cacheRows.push_back({ e.name, buildMs - f.medianMs, rmse(conv, ratio.data()), noise });
+      bench.row("effects", ds, nch, o.macrocell, e.name, buildMs - f.medianMs, "cache_fill_ms", "");
+      bench.row("effects", ds, nch, o.macrocell, e.name, rmse(conv, ratio.data()), "rmse_vs_ratio_shadows", "");
+    }
     std::printf("| %s | %.3f | %.2fx | %.3f | %.2fx | %.3f | %.3f | %.3f | %.4f | %.4f |\n", e.name.c_str(),
       f.medianMs, f.medianMs / unlitMs, fe.medianMs, fe.medianMs / unlitExpectedMs, f.scatterPerRay, f.shadowPerRay,
       f.gradientPerRay, change, noise);
@@ -126,5 +166,16 @@ void runEffects(Bench& bench)
   }
   s.scene.setLighting(mcvol::LightingDesc());
   std::printf("\n");
+  if (!cacheRows.empty())
+  {
+    std::printf("Cached shadows: the grid's fill (the first frame after the change, less a frame) and the bias "
+                "(RMSE of the converged image against the converged image with ratio-tracking shadows).\n\n"
+                "| effect | fill ms | bias RMSE | 1-spp noise |\n|---|---|---|---|\n");
+    for (const CacheRow& c : cacheRows)
+    {
+      std::printf("| %s | %.3f | %.5f | %.4f |\n", c.name.c_str(), c.buildMs, c.bias, c.noise);
+    }
+    std::printf("\n");
+  }
 }
 } // namespace mcvolbench
