@@ -357,6 +357,7 @@ struct CUDARenderer::Internal
   /// Cached shadows (LightingDesc::cacheShadows): each light's grid and the
   /// key it was filled for (CUDAShadowCache.cu).
   DeviceBuffer<float> ShadowGrids[kMaxLights];
+  ShadowCacheFrame ShadowFrames[kMaxLights];
   ShadowCacheKey ShadowKeys[kMaxLights];
   bool ShadowValid[kMaxLights] = {};
 

@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 //
 // Cached shadows on the device (LightingDesc::cacheShadows): each light's
-// grid is marched ray by ray (mcvol/ray/ShadowCache.h), one thread per ray
-// of the grid, from the same per-ray code as the host's.
+// grid is filled in the two passes of mcvol/ray/ShadowCache.h, one thread
+// per segment and then one per ray, from the same code as the host's.
 #include "CUDAInternal.h"
 
 #include "mcvol/ray/ShadowCache.h"
@@ -13,16 +13,30 @@ namespace
 {
 constexpr int kShadowCacheBlock = 128;
 
+/// The first pass: one thread per segment.
 template <BlendMode Mode>
-__global__ void shadowCacheKernel(
+__global__ void shadowCacheSegmentKernel(
   const __grid_constant__ SceneView s, ShadowCacheFrame f, float worldPerIndex, float* __restrict__ nodes)
 {
-  const int ray = int(blockIdx.x * blockDim.x + threadIdx.x);
-  if (ray >= f.dims[0] * f.dims[1])
+  const int rays = f.dims[0] * f.dims[1];
+  const int64_t q = int64_t(blockIdx.x) * blockDim.x + threadIdx.x;
+  if (q >= int64_t(rays) * (f.dims[2] - 1))
   {
     return;
   }
-  shadowCacheRay<Mode>(s, f, worldPerIndex, nodes, ray % f.dims[0], ray / f.dims[0]);
+  const int r = int(q % rays);
+  nodes[q] = shadowCacheSegment<Mode>(s, f, worldPerIndex, r % f.dims[0], r / f.dims[0], int(q / rays));
+}
+
+/// The second pass: one thread per ray.
+__global__ void shadowCacheSumKernel(ShadowCacheFrame f, float* __restrict__ nodes)
+{
+  const int r = int(blockIdx.x * blockDim.x + threadIdx.x);
+  if (r >= f.dims[0] * f.dims[1])
+  {
+    return;
+  }
+  shadowCacheSum(f, nodes, r % f.dims[0], r / f.dims[0]);
 }
 } // namespace
 
@@ -45,23 +59,25 @@ void CUDARenderer::Internal::linkShadowCaches(const Scene& scene, SceneView& s)
       this->ShadowValid[l] = false;
       const Vec3f dl = shadowCacheDirection(L, l);
       const ShadowCacheFrame f = ShadowCacheFrame::of(s.volume, dl, L.cacheSpacing);
-      grid.resize(size_t(kShadowCacheHeader) + f.nodes());
-      float header[kShadowCacheHeader];
-      f.write(header);
-      MCVOL_CUDA(cudaMemcpy(grid.ptr, header, sizeof(header), cudaMemcpyHostToDevice));
-      const int rays = f.dims[0] * f.dims[1];
-      const unsigned blocks = unsigned((rays + kShadowCacheBlock - 1) / kShadowCacheBlock);
+      this->ShadowFrames[l] = f;
+      grid.resize(f.nodes());
+      const int64_t rays = int64_t(f.dims[0]) * f.dims[1];
+      const int64_t segments = rays * (f.dims[2] - 1);
       const float worldPerIndex = shadowCacheWorldPerIndex(dl);
       withBlendMode(s.blend.mode, [&](auto mode) {
-        shadowCacheKernel<decltype(mode)::value>
-          <<<blocks, kShadowCacheBlock>>>(s, f, worldPerIndex, grid.ptr + kShadowCacheHeader);
+        shadowCacheSegmentKernel<decltype(mode)::value>
+          <<<unsigned((segments + kShadowCacheBlock - 1) / kShadowCacheBlock), kShadowCacheBlock>>>(
+            s, f, worldPerIndex, grid.ptr);
       });
+      shadowCacheSumKernel<<<unsigned((rays + kShadowCacheBlock - 1) / kShadowCacheBlock), kShadowCacheBlock>>>(
+        f, grid.ptr);
       MCVOL_CUDA(cudaGetLastError());
       this->ShadowKeys[l] = key;
       this->ShadowValid[l] = true;
       ++this->Updates.shadowCaches;
     }
     L.shadowCache[l] = grid.ptr;
+    this->ShadowFrames[l].write(L, l);
   }
   mcvol::linkShadowCaches(L);
 }

@@ -70,13 +70,25 @@ float shadowCacheWorldPerIndex(Vec3f dl)
 namespace
 {
 template <BlendMode Mode>
-void marchRays(const SceneView& s, const ShadowCacheFrame& f, float worldPerIndex, float* nodes, int threads)
+void fill(const SceneView& s, const ShadowCacheFrame& f, float worldPerIndex, float* nodes, int threads)
 {
   const int rays = f.dims[0] * f.dims[1];
-#pragma omp parallel for num_threads(threads > 0 ? threads : omp_get_max_threads()) schedule(dynamic, 64)
-  for (int r = 0; r < rays; ++r)
+  const int64_t segments = int64_t(rays) * int64_t(f.dims[2] - 1);
+  const int nt = threads > 0 ? threads : omp_get_max_threads();
+#pragma omp parallel num_threads(nt)
   {
-    shadowCacheRay<Mode>(s, f, worldPerIndex, nodes, r % f.dims[0], r / f.dims[0]);
+#pragma omp for schedule(static)
+    for (int64_t q = 0; q < segments; ++q)
+    {
+      const int r = int(q % rays);
+      const int k = int(q / rays);
+      nodes[size_t(q)] = shadowCacheSegment<Mode>(s, f, worldPerIndex, r % f.dims[0], r / f.dims[0], k);
+    }
+#pragma omp for schedule(static)
+    for (int r = 0; r < rays; ++r)
+    {
+      shadowCacheSum(f, nodes, r % f.dims[0], r / f.dims[0]);
+    }
   }
 }
 } // namespace
@@ -96,24 +108,23 @@ void HostShadowCache::prepare(const Scene& scene, SceneView& s, int threads)
     }
     const ShadowCacheKey key = shadowCacheKey(scene, s, l);
     std::vector<float>& grid = this->Grids[size_t(l)];
+    ShadowCacheFrame& f = this->Frames[size_t(l)];
     if (!this->Valid[size_t(l)] || this->Keys[size_t(l)] != key)
     {
       const Vec3f dl = shadowCacheDirection(L, l);
-      const ShadowCacheFrame f = ShadowCacheFrame::of(s.volume, dl, L.cacheSpacing);
-      grid.assign(size_t(kShadowCacheHeader) + f.nodes(), 1.f);
-      f.write(grid.data());
-      float* nodes = grid.data() + kShadowCacheHeader;
+      f = ShadowCacheFrame::of(s.volume, dl, L.cacheSpacing);
+      grid.assign(f.nodes(), 1.f);
       const float worldPerIndex = shadowCacheWorldPerIndex(dl);
       switch (s.blend.mode)
       {
         case BlendMode::Max:
-          marchRays<BlendMode::Max>(s, f, worldPerIndex, nodes, threads);
+          fill<BlendMode::Max>(s, f, worldPerIndex, grid.data(), threads);
           break;
         case BlendMode::Mix:
-          marchRays<BlendMode::Mix>(s, f, worldPerIndex, nodes, threads);
+          fill<BlendMode::Mix>(s, f, worldPerIndex, grid.data(), threads);
           break;
         default:
-          marchRays<BlendMode::Density>(s, f, worldPerIndex, nodes, threads);
+          fill<BlendMode::Density>(s, f, worldPerIndex, grid.data(), threads);
           break;
       }
       this->Keys[size_t(l)] = key;
@@ -121,6 +132,7 @@ void HostShadowCache::prepare(const Scene& scene, SceneView& s, int threads)
       ++this->LastRebuilt;
     }
     L.shadowCache[l] = grid.data();
+    f.write(L, l);
   }
   this->LastSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   linkShadowCaches(L);

@@ -238,10 +238,9 @@ TEST(ShadowCache, HardCasesStayFinite)
     configure(scene, v, { flatTF(opacityFor(0.3, 1.0), 1, 1, 1) }, 4);
     HostShadowCache cache;
     const SceneView s = cachedView(scene, cam, sunTowards(0, 0, 1), 2.f, cache);
-    const float* frame = s.lighting.shadowCache[0];
-    EXPECT_EQ(frame[12], 2.f);
-    EXPECT_EQ(frame[13], 2.f);
-    EXPECT_EQ(frame[14], 2.f);
+    EXPECT_EQ(s.lighting.cacheDims[0][0], 2);
+    EXPECT_EQ(s.lighting.cacheDims[0][1], 2);
+    EXPECT_EQ(s.lighting.cacheDims[0][2], 2);
     // Exact at the nodes (the light along z), linear between them.
     EXPECT_NEAR(cachedTransmittance(s.lighting, 0, Vec3f(0.5f, -0.5f, -0.5f)), std::exp(-0.3), 1e-5);
     EXPECT_EQ(cachedTransmittance(s.lighting, 0, Vec3f(-0.5f, 0.5f, 0.5f)), 1.f);

@@ -56,6 +56,7 @@ public:
 
 private:
   std::array<std::vector<float>, kMaxLights> Grids;
+  std::array<ShadowCacheFrame, kMaxLights> Frames{};
   std::array<ShadowCacheKey, kMaxLights> Keys{};
   std::array<bool, kMaxLights> Valid{};
   int LastRebuilt = 0;

@@ -125,15 +125,19 @@ struct LightingView
    * Cached shadows (LightingDesc::cacheShadows; mcvol/ray/ShadowCache.h):
    * the transmittance towards each directional light on a grid of nodes
    * aligned with the light, looked up by a shadow ray instead of tracked.
-   * Set per render by the backend: shadowCache[l] is light l's grid (its
-   * frame, then the nodes; a host or a device address), null where its
-   * shadow rays are tracked (a point light, no cache asked for, a piece of
-   * a split volume, post-render compositing, or the visibility
-   * optimization of light rays).
+   * Set per render by the backend: shadowCache[l] is light l's grid of
+   * nodes (a host or a device address), null where its shadow rays are
+   * tracked (a point light, no cache asked for, a piece of a split volume,
+   * post-render compositing, or the visibility optimization of light
+   * rays), and cacheFrame[l] and cacheDims[l] place its nodes
+   * (ShadowCacheFrame::write()): in the view, so that the GPU's lookups
+   * read them from the kernel's constant parameters.
    */
   bool cacheShadows = false;
   float cacheSpacing = 2.f; ///< asked-for node spacing, voxels
   const float* shadowCache[kMaxLights] = {};
+  float cacheFrame[kMaxLights][12];
+  int cacheDims[kMaxLights][3];
   /// Every light's shadow is looked up and there is no ambient light: no
   /// shadow ray is tracked, and the radiance scattered at a point is a
   /// function of the point (localLighting()).

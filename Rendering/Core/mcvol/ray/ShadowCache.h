@@ -17,15 +17,17 @@ namespace mcvol
  * (Documentation/performance.md). Per-ray code, shared by the backends.
  *
  * The grid's third axis points to the light, and its nodes along that axis
- * lie on rays towards the light: each ray is marched once, from the
- * light's side, the transmittance at a node being the one at the node
- * before it times that of the segment between them (the extinction
- * integrated by the midpoint rule at kShadowCacheSamplesPerVoxel points per
- * voxel; outside the volume's box nothing absorbs). A value is therefore
- * exact up to that rule along each ray, and a lookup interpolates once
- * across rays: no error accumulates from node to node, as it would in a
- * grid aligned with the volume filled slice by slice. The rays are
- * independent: the backends march them in parallel from the same code.
+ * lie on rays towards the light. The grid is filled in two passes: each
+ * segment between neighbouring nodes of a ray gets its optical depth (the
+ * extinction integrated by the midpoint rule at kShadowCacheSamplesPerVoxel
+ * points per voxel; outside the volume's box nothing absorbs), all
+ * segments in parallel; then each ray sums its segments from the light's
+ * side, the transmittance at a node being exp(-sum) of the segments
+ * between it and the light. A value is therefore exact up to that rule
+ * along each ray, and a lookup interpolates once across rays: no error
+ * accumulates from node to node, as it would in a grid aligned with the
+ * volume filled slice by slice. Both passes are the same code on both
+ * backends.
  */
 
 /// Points per voxel of length at which a ray of the grid samples the extinction.
@@ -33,9 +35,6 @@ constexpr float kShadowCacheSamplesPerVoxel = 2.f;
 /// The node spacing's range, voxels (LightingDesc::cacheSpacing).
 constexpr float kShadowCacheMinSpacing = 0.5f;
 constexpr float kShadowCacheMaxSpacing = 64.f;
-/// Floats before the nodes in a grid's buffer: its frame (ShadowCacheFrame::write()).
-constexpr int kShadowCacheHeader = 16;
-
 /**
  * A light's grid: node (i, j, k) at index point origin + i step[0] axis[0]
  * + j step[1] axis[1] + k step[2] axis[2], axis[2] the unit index-space
@@ -91,10 +90,12 @@ struct ShadowCacheFrame
   {
     return size_t(i) + size_t(dims[0]) * (size_t(j) + size_t(dims[1]) * size_t(k));
   }
-  /// The header cachedTransmittance() reads: the origin, each axis divided
-  /// by its step (a point's node coordinates are dot products), the dims.
-  MCVOL_FUNC void write(float* h) const
+  /// Light l's frame in L, as cachedTransmittance() reads it: the origin,
+  /// each axis divided by its step (a point's node coordinates are then
+  /// dot products), the dims.
+  MCVOL_FUNC void write(LightingView& L, int l) const
   {
+    float* h = L.cacheFrame[l];
     h[0] = origin.x;
     h[1] = origin.y;
     h[2] = origin.z;
@@ -104,9 +105,8 @@ struct ShadowCacheFrame
       h[3 + 3 * e] = a.x;
       h[4 + 3 * e] = a.y;
       h[5 + 3 * e] = a.z;
-      h[12 + e] = float(dims[e]);
+      L.cacheDims[l][e] = dims[e];
     }
-    h[15] = 0.f;
   }
 };
 
@@ -118,44 +118,52 @@ MCVOL_FUNC bool insideBox(const VolumeView& v, Vec3f p)
 }
 
 /**
- * Marches the grid's ray (i, j) from the light's side: `nodes` (after the
- * header) gets its transmittance at every node. worldPerIndex is the world
+ * The first pass: the optical depth of the segment from node (i, j, k) to
+ * node (i, j, k + 1), k below the last node. worldPerIndex is the world
  * length of a unit of index length along the light (1 / |dl|). Extinction
- * that is NaN or negative counts as 0; every value is finite, in [0, 1].
+ * that is NaN or negative counts as 0; the result is >= 0 (infinite where
+ * the extinction is).
  */
 template <BlendMode Mode>
-MCVOL_HOT void shadowCacheRay(
-  const SceneView& s, const ShadowCacheFrame& f, float worldPerIndex, float* nodes, int i, int j)
+MCVOL_HOT float shadowCacheSegment(
+  const SceneView& s, const ShadowCacheFrame& f, float worldPerIndex, int i, int j, int k)
 {
-  const Vec3f base = f.origin + f.axis[0] * (float(i) * f.step[0]) + f.axis[1] * (float(j) * f.step[1]);
+  const Vec3f base = f.origin + f.axis[0] * (float(i) * f.step[0]) + f.axis[1] * (float(j) * f.step[1]) +
+    f.axis[2] * (float(k) * f.step[2]);
   int n = int(ceilf(f.step[2] * kShadowCacheSamplesPerVoxel));
   n = n < 1 ? 1 : n;
   const float dt = f.step[2] / float(n); // index length
-  const float dtWorld = dt * worldPerIndex;
-  float T = 1.f;
+  float tau = 0.f;
+  for (int m = 0; m < n; ++m)
+  {
+    const Vec3f p = base + f.axis[2] * ((float(m) + 0.5f) * dt);
+    if (insideBox(s.volume, p))
+    {
+      const float sigma = blendedOptics<Mode>(s, s.active, s.numActive, p).sigma;
+      if (sigma > 0.f)
+      {
+        tau += sigma;
+      }
+    }
+  }
+  return tau * (dt * worldPerIndex);
+}
+
+/**
+ * The second pass over ray (i, j): `nodes` holds each segment's optical
+ * depth at its lower node (the last node holds nothing); afterwards each
+ * node holds its transmittance towards the light, in [0, 1].
+ */
+MCVOL_FUNC void shadowCacheSum(const ShadowCacheFrame& f, float* nodes, int i, int j)
+{
   const int last = f.dims[2] - 1;
+  float tau = 0.f;
   nodes[f.index(i, j, last)] = 1.f;
   for (int k = last - 1; k >= 0; --k)
   {
-    const float w0 = float(k) * f.step[2];
-    float tau = 0.f;
-    for (int m = 0; m < n; ++m)
-    {
-      const Vec3f p = base + f.axis[2] * (w0 + (float(m) + 0.5f) * dt);
-      if (insideBox(s.volume, p))
-      {
-        const float sigma = blendedOptics<Mode>(s, s.active, s.numActive, p).sigma;
-        if (sigma > 0.f)
-        {
-          tau += sigma * dtWorld;
-        }
-      }
-    }
-    if (tau > 0.f)
-    {
-      T *= expf(-tau);
-    }
-    nodes[f.index(i, j, k)] = T;
+    float& v = nodes[f.index(i, j, k)];
+    tau += v;
+    v = tau > 0.f ? expf(-tau) : 1.f;
   }
 }
 
@@ -164,14 +172,13 @@ MCVOL_HOT void shadowCacheRay(
 /// the grid read its border.
 MCVOL_HOT float cachedTransmittance(const LightingView& L, int l, Vec3f x)
 {
-  const float* h = L.shadowCache[l];
+  const float* h = L.cacheFrame[l];
+  const int* dims = L.cacheDims[l];
   const Vec3f r = x - Vec3f(h[0], h[1], h[2]);
   int lo[3];
   float f[3];
-  int dims[3];
   for (int a = 0; a < 3; ++a)
   {
-    dims[a] = int(h[12 + a]);
     float u = dot(r, Vec3f(h[3 + 3 * a], h[4 + 3 * a], h[5 + 3 * a]));
     const float top = float(dims[a] - 1);
     u = u > 0.f ? (u < top ? u : top) : 0.f; // also NaN to 0
@@ -182,7 +189,7 @@ MCVOL_HOT float cachedTransmittance(const LightingView& L, int l, Vec3f x)
   }
   const size_t sy = size_t(dims[0]);
   const size_t sz = sy * size_t(dims[1]);
-  const float* c = h + kShadowCacheHeader + size_t(lo[0]) + sy * size_t(lo[1]) + sz * size_t(lo[2]);
+  const float* c = L.shadowCache[l] + size_t(lo[0]) + sy * size_t(lo[1]) + sz * size_t(lo[2]);
   const float x00 = c[0] + f[0] * (c[1] - c[0]);
   const float x10 = c[sy] + f[0] * (c[sy + 1] - c[sy]);
   const float x01 = c[sz] + f[0] * (c[sz + 1] - c[sz]);
