@@ -527,6 +527,37 @@ inline Moments renderMoments(
 }
 
 /**
+ * Per RGBA component, the image-mean z statistic of K renders against a
+ * reference image: `sum` and `sumSq` hold each pixel value's sum and sum of
+ * squares over the renders; z = sum_p (mean_p - ref_p) / sqrt(sum_p
+ * var(mean_p)), about standard normal when the renders converge to the
+ * reference (pixels independent). `meanDiff` (optional) gets the mean of
+ * mean_p - ref_p.
+ */
+inline std::array<double, 4> imageMeanZ(const std::vector<double>& sum, const std::vector<double>& sumSq, int K,
+  const float* ref, std::array<double, 4>* meanDiff = nullptr)
+{
+  std::array<double, 4> z{};
+  const size_t P = sum.size();
+  for (int c = 0; c < 4; ++c)
+  {
+    double D = 0, V = 0;
+    for (size_t i = size_t(c); i < P; i += 4)
+    {
+      const double m = sum[i] / K;
+      D += m - ref[i];
+      V += std::max(0.0, (sumSq[i] - K * m * m) / (K - 1)) / K;
+    }
+    z[size_t(c)] = V > 0 ? D / std::sqrt(V) : 0.0;
+    if (meanDiff)
+    {
+      (*meanDiff)[size_t(c)] = D / double(P / 4);
+    }
+  }
+  return z;
+}
+
+/**
  * Tests that per-pixel differences D_p with estimated variances V_p (of D_p)
  * are consistent with zero mean, per component (R, G, B, A), three ways, each
  * at significance `alpha`:
