@@ -426,8 +426,8 @@ struct CUDARenderer::Internal
   /// without one. Call after the lighting frame of `s` is set.
   void linkOutside(const Scene& scene, const Camera& camera, SceneView& s);
   /// CUDAShadowCache.cu: the cached shadows `s` asks for (cachesShadow()),
-  /// filled when their key changed, and s's lighting pointing at them.
-  /// Call after linkOutside().
+  /// filled when their key changed, and s's lighting pointing at them; the
+  /// grids it does not ask for are freed. Call after linkOutside().
   void linkShadowCaches(const Scene& scene, SceneView& s);
   size_t shadowCacheBytes() const;
   /// The Scene's importance tables on the device (uploaded when they changed).

@@ -46,12 +46,15 @@ void CUDARenderer::Internal::linkShadowCaches(const Scene& scene, SceneView& s)
   for (int l = 0; l < kMaxLights; ++l)
   {
     L.shadowCache[l] = nullptr;
+    DeviceBuffer<float>& grid = this->ShadowGrids[l];
     if (!cachesShadow(s, l))
     {
+      // Off costs nothing: a grid no longer asked for is freed.
+      grid.release();
+      this->ShadowValid[l] = false;
       continue;
     }
     const ShadowCacheKey key = shadowCacheKey(scene, s, l);
-    DeviceBuffer<float>& grid = this->ShadowGrids[l];
     if (!this->ShadowValid[l] || this->ShadowKeys[l] != key)
     {
       // Invalid until the rays are queued: a failed launch leaves no

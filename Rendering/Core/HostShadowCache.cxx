@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// Cached shadows on the host: which lights, their keys, the sweep.
+// Cached shadows on the host: which lights, their keys, the fill.
 #include "mcvol/HostShadowCache.h"
 
 #include "mcvol/ray/Lighting.h"
@@ -102,12 +102,15 @@ void HostShadowCache::prepare(const Scene& scene, SceneView& s, int threads)
   for (int l = 0; l < kMaxLights; ++l)
   {
     L.shadowCache[l] = nullptr;
+    std::vector<float>& grid = this->Grids[size_t(l)];
     if (!cachesShadow(s, l))
     {
+      // Off costs nothing: a grid no longer asked for is freed.
+      std::vector<float>().swap(grid);
+      this->Valid[size_t(l)] = false;
       continue;
     }
     const ShadowCacheKey key = shadowCacheKey(scene, s, l);
-    std::vector<float>& grid = this->Grids[size_t(l)];
     ShadowCacheFrame& f = this->Frames[size_t(l)];
     if (!this->Valid[size_t(l)] || this->Keys[size_t(l)] != key)
     {

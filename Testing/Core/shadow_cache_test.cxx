@@ -382,7 +382,8 @@ TEST(ShadowCache, CachedShadowsAreCloseToTrackedOnes)
 
 // The grid is filled once and kept: a second render rebuilds nothing; a new
 // light direction, transfer function or node spacing rebuilds it, and the
-// image then equals a fresh renderer's (bit for bit, same seed). A point
+// image then equals a fresh renderer's (bit for bit, same seed); turned
+// off, it is freed. A point
 // light and cacheShadows off build no grid (no memory), and so do
 // post-render composite blending and a stand-in of other pieces.
 TEST(ShadowCache, RebuiltWhenItsInputsChange)
@@ -425,6 +426,15 @@ TEST(ShadowCache, RebuiltWhenItsInputsChange)
   scene.setLighting(ld);
   EXPECT_EQ(render(r), fresh()) << "new node spacing";
   EXPECT_EQ(r.shadowCache().lastRebuilt(), 1) << "new node spacing";
+  // Turned off, the grid is freed; turned on again, filled again.
+  LightingDesc tracked = ld;
+  tracked.cacheShadows = false;
+  scene.setLighting(tracked);
+  render(r);
+  EXPECT_EQ(r.shadowCache().bytes(), 0u) << "cached shadows turned off";
+  scene.setLighting(ld);
+  EXPECT_EQ(render(r), fresh()) << "cached shadows turned on again";
+  EXPECT_EQ(r.shadowCache().lastRebuilt(), 1) << "cached shadows turned on again";
 
   // No grid where none is asked for or none applies.
   for (int variant = 0; variant < 3; ++variant)

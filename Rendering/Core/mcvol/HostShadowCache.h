@@ -42,7 +42,8 @@ void linkShadowCaches(LightingView& L);
 /**
  * The host's cached shadows (the CPU backend and the CPU ray marcher):
  * prepare() fills the grids a render needs, when their key changed, and
- * points the view's lighting at them.
+ * points the view's lighting at them; a grid a render does not need is
+ * freed.
  */
 class HostShadowCache
 {
