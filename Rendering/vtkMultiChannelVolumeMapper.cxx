@@ -2105,6 +2105,12 @@ void vtkMultiChannelVolumeMapper::SetShininess(double value)
 }
 
 //------------------------------------------------------------------------------
+void vtkMultiChannelVolumeMapper::SetShadowCacheSpacing(double voxels)
+{
+  mcvol::adapter::SetClamped(this, "SetShadowCacheSpacing", voxels, 0.5, 64.0, this->ShadowCacheSpacing);
+}
+
+//------------------------------------------------------------------------------
 void vtkMultiChannelVolumeMapper::SetLightIntensityScale(double value)
 {
   mcvol::adapter::SetClamped(this, "SetLightIntensityScale", value, 0.0, 1e6, this->LightIntensityScale);

@@ -642,8 +642,9 @@ public:
   vtkGetMacro(ShadowMode, int);
   /// Node spacing of the CACHED_SHADOWS grid, voxels: clamped to [0.5, 64],
   /// default 2. Smaller is sharper and costs more memory (4 bytes a node,
-  /// per directional light) and time per rebuild.
-  vtkSetClampMacro(ShadowCacheSpacing, double, 0.5, 64.0);
+  /// per directional light) and time per rebuild. NaN is an error (the
+  /// value stays).
+  virtual void SetShadowCacheSpacing(double voxels);
   vtkGetMacro(ShadowCacheSpacing, double);
   /// Scattering events per path: 1 is single scattering (default).
   vtkSetClampMacro(MaxScatteringDepth, int, 1, 1024);

@@ -40,7 +40,7 @@ SETTERS = {
         "InteractiveUpdateRate", "MinimumSamplesPerVoxel", "MarchSamplesPerVoxel", "InteractiveFrameTime",
         "TargetError", "Shininess", "DeviationWeight", "OcclusionWeight", "ClutterWeight", "ImportanceEmphasis",
         "ImportanceMergeDistance", "MemoryBudget", "LightIntensityScale",
-        "LightingStandInMemoryLimit"],
+        "LightingStandInMemoryLimit", "ShadowCacheSpacing"],
     vtkMultiChannelRayMarchMapper: ["StepSize", "TerminationTransmittance"],
 }
 
